@@ -1,0 +1,9 @@
+"""clutter-gym: Gymnasium environments for robots in cluttered worlds. Importing it registers every env."""
+
+from gymnasium.envs.registration import register
+
+ENV_IDS = ("ClutterNav-v0",)
+
+register(id="ClutterNav-v0", entry_point="clutter_gym.nav:ClutterNavEnv", max_episode_steps=400)
+
+__all__ = ["ENV_IDS"]

@@ -1,0 +1,183 @@
+"""ClutterEnv: a Gymnasium env composed of a Sim, a robot, an arena, sensors, a collision checker and a task.
+
+It only wires the parts together (DESIGN.md, "One env.step, end to end"); every decision about physics, layout,
+sensing, collision or reward lives in the part that owns it.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from clutter_gym.collision import CollisionChecker
+from clutter_gym.robots import DiffDriveRobot, RobotState
+from clutter_gym.sensors import Sensor
+from clutter_gym.sim import Sim
+from clutter_gym.tasks import NavigateTask
+from clutter_gym.transforms import yaw_quat
+from clutter_gym.worlds import ClutterArena, Scene
+
+RENDER_MODES = ("human", "rgb_array")
+
+
+class ClutterEnv(gym.Env):
+    """Composition of the parts; see :class:`clutter_gym.nav.ClutterNavEnv` for a documented env.
+
+    Args:
+        sim: the physics client (owned: closed by :meth:`close`).
+        robot: loaded into ``sim`` here.
+        arena: loaded into ``sim`` here; chooses and places each episode's scene.
+        sensors: read after every step, in order; their names are observation keys.
+        checker: FCL model of the robot against the scene.
+        task: reward, termination and the goal observation.
+        control_hz: actions per simulated second; ``sim.physics_hz`` must be a multiple of it.
+        render_mode: None, "rgb_array" or "human".
+        render_size: (width, height) of rgb_array frames in pixels.
+    """
+
+    metadata = {"render_modes": list(RENDER_MODES), "render_fps": 20}
+
+    def __init__(
+        self,
+        sim: Sim,
+        robot: DiffDriveRobot,
+        arena: ClutterArena,
+        sensors: Sequence[Sensor],
+        checker: CollisionChecker,
+        task: NavigateTask,
+        control_hz: float,
+        render_mode: str | None = None,
+        render_size: tuple[int, int] = (320, 240),
+    ) -> None:
+        self.sim, self.robot, self.arena, self.checker, self.task = sim, robot, arena, checker, task
+        self.sensors = tuple(sensors)
+        self.render_mode = render_mode
+        self.render_size = render_size
+        self.metadata = {**self.metadata, "render_fps": int(round(control_hz))}
+        self._substeps = int(round(sim.physics_hz / control_hz))
+        arena.load(sim)
+        robot.load(sim)
+        self._goal_marker = sim.add_marker("goal", task.success_radius, (0.1, 0.8, 0.2, 0.9))
+        self.action_space = robot.action_space
+        self.observation_space = spaces.Dict(
+            {
+                **{s.name: s.observation_space for s in self.sensors},
+                task.name: task.observation_space,
+                "velocity": robot.observation_space,
+            }
+        )
+        self.scene: Scene | None = None
+        self._obstacle_bodies: frozenset[int] = frozenset()
+
+    # ------------------------------------------------------------------------------------------ episode
+    def reset(
+        self, *, seed: int | None = None, options: Mapping[str, Any] | None = None
+    ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        """Start an episode on a new seeded layout, or on ``options["scene"]`` (see README, "Scene format")."""
+        super().reset(seed=seed)
+        scene = self.arena.choose_scene(self.np_random, options)
+        obstacles, bodies = self.arena.place(scene)
+        self.checker.set_scene(obstacles, bodies)
+        self.robot.reset_pose(*scene.start)
+        self.sim.set_pose(self._goal_marker, (*scene.goal, 0.005), yaw_quat(0.0))
+        self.scene = scene
+        state = self.robot.state()
+        for sensor in self.sensors:
+            sensor.reset(state)
+        self.task.reset(scene.goal, state)
+        report = self.checker.check(state, self.sim.contact_distances(self.robot.body))
+        obs, info = self._observe(state)
+        info.update(min_clearance=report.min_clearance, n_contacts=report.n_contacts, is_success=False)
+        if self.render_mode == "human":
+            self.render()
+        return obs, info
+
+    def step(self, action: Any) -> tuple[dict[str, np.ndarray], float, bool, bool, dict[str, Any]]:
+        """Apply one action for one control period.
+
+        Raises:
+            ValueError: the action has the wrong shape or holds NaN/Inf. Finite values outside [-1, 1] are
+                clipped, not rejected.
+        """
+        if self.scene is None:
+            raise RuntimeError("call reset() before step()")
+        a = self._checked_action(action)
+        self.robot.apply_action(a)
+        self.sim.step(self._substeps)
+        state = self.robot.state()
+        report = self.checker.check(state, self.sim.contact_distances(self.robot.body))
+        obs, info = self._observe(state)
+        outcome = self.task.evaluate(state, report, a)
+        info.update(
+            reward_terms=outcome.terms,
+            cost=outcome.cost,
+            is_success=outcome.is_success,
+            min_clearance=report.min_clearance,
+            n_contacts=report.n_contacts,
+            pybullet_contacts=report.pybullet_contacts,
+            contact_disagreement=report.disagreement,
+        )
+        if not math.isfinite(outcome.reward):
+            raise FloatingPointError(f"non-finite reward {outcome.reward} from terms {outcome.terms}")
+        if self.render_mode == "human":
+            self.render()
+        return obs, float(outcome.reward), outcome.terminated, False, info
+
+    def _checked_action(self, action: Any) -> np.ndarray:
+        a = np.asarray(action, dtype=np.float64)
+        shape = self.action_space.shape
+        if a.shape != shape:
+            raise ValueError(f"action must have shape {shape}, got {a.shape}")
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"action must be finite (no NaN/Inf), got {a.tolist()}")
+        return np.clip(a, self.action_space.low, self.action_space.high)
+
+    def _observe(self, state: RobotState) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        obs: dict[str, np.ndarray] = {}
+        info: dict[str, Any] = {}
+        for sensor in self.sensors:
+            reading = sensor.read(self.sim, state)
+            obs[sensor.name] = sensor.observe(reading)
+            if sensor.info_key is not None:
+                info[sensor.info_key] = reading
+        obs[self.task.name] = self.task.observe(state)
+        obs["velocity"] = self.robot.observe(state)
+        for key, value in obs.items():
+            if not np.all(np.isfinite(value)):
+                raise FloatingPointError(f"observation {key!r} is not finite: {value}")
+        return obs, info
+
+    # ---------------------------------------------------------------------------------------- rendering
+    def render(self) -> np.ndarray | None:
+        """rgb_array: an overview of the arena (H, W, 3) uint8; human: points the GUI camera at the robot."""
+        if self.render_mode is None:
+            gym.logger.warn("render() called without a render_mode; pass render_mode= to gym.make")
+            return None
+        arena = self.arena.spec.arena_size
+        if self.render_mode == "human":
+            position = self.robot.state().position if self.scene is not None else (0.0, 0.0, 0.0)
+            self.sim.follow_camera(position, 0.9 * arena, 0.0, -60.0)
+            return None
+        width, height = self.render_size
+        return self.sim.render(width, height, eye=(0.0, -0.75 * arena, 1.1 * arena), target=(0.0, -0.05 * arena, 0.0))
+
+    def close(self) -> None:
+        self.sim.close()
+
+
+def check_render_mode(render_mode: str | None) -> None:
+    """Raise at make time for an unknown mode, or for "human" where no display can show a window."""
+    if render_mode is not None and render_mode not in RENDER_MODES:
+        raise ValueError(f"render_mode must be None or one of {RENDER_MODES}, got {render_mode!r}")
+    if render_mode == "human" and sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
+        raise RuntimeError(
+            "render_mode='human' opens the pybullet GUI and needs a display (DISPLAY is not set); "
+            "use render_mode='rgb_array' on a headless machine"
+        )

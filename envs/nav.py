@@ -1,0 +1,166 @@
+"""ClutterNav: a differential-drive robot crosses a cluttered walled arena to a goal without touching anything."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+from clutter_gym.collision import CollisionChecker, load_collision_elements
+from clutter_gym.core import ClutterEnv, check_render_mode
+from clutter_gym.robots import DiffDriveConfig, DiffDriveRobot
+from clutter_gym.sensors import SENSOR_NAMES, Imu, ImuConfig, Lidar, LidarConfig, Sensor
+from clutter_gym.sim import Sim
+from clutter_gym.tasks import NavigateTask, NavRewardWeights
+from clutter_gym.worlds import ClutterArena, ClutterSpec
+
+
+class ClutterNavEnv(ClutterEnv):
+    """## Description
+
+    A TurtleBot-sized differential-drive robot (``assets/robots/diffbot.urdf``) starts at a random pose in a
+    walled square arena strewn with boxes, cylinders and wall segments, and must drive to a goal point. Every
+    layout is seeded and guaranteed solvable for the robot's footprint (occupancy-grid path check). Contacts with
+    obstacles are penalised and reported as a Safety-Gymnasium style ``info["cost"]``; FCL measures the exact
+    clearance and pybullet's contact points cross-check it.
+
+    ## Action space
+
+    ``Box(-1, 1, (2,), float32)``: (linear, angular) velocity command, normalised by ``max_linear_speed`` (m/s)
+    and ``max_angular_speed`` (rad/s, counter-clockwise positive). Finite values outside [-1, 1] are clipped;
+    NaN/Inf or a wrong shape raise ``ValueError``. Wheel motors track the command under a 1.5 N m torque limit.
+
+    ## Observation space
+
+    ``Dict``, every entry float32:
+
+    | key | shape | content | units, frame | bounds |
+    |---|---|---|---|---|
+    | ``lidar`` | (n_rays,) | range / lidar_range, beams CCW from the robot's +x | -, lidar link | [0, 1] |
+    | ``imu`` | (6,) | specific force (f_x, f_y, f_z), angular rate (w_x, w_y, w_z) | m/s^2, rad/s; IMU link | +-156.9, +-34.9 |
+    | ``goal`` | (3,) | distance, sin(bearing), cos(bearing) | m, -, -; robot frame | [0, arena diagonal], [-1, 1] |
+    | ``velocity`` | (2,) | forward speed, yaw rate | m/s, rad/s; base frame | +-2x the commanded maxima |
+
+    ``lidar`` and ``imu`` are present only when listed in ``sensors``. The IMU reads +9.81 m/s^2 on z at rest.
+
+    ## Rewards
+
+    Sum of signed terms, each in ``info["reward_terms"]``; weights are constructor arguments:
+    ``progress`` (+progress_weight per metre closer to the goal), ``success`` (+success_weight once),
+    ``contact`` (-contact_weight per step in contact), ``clearance`` (-clearance_weight * (margin - clearance) /
+    margin per step when clearance < clearance_margin), ``control`` (-control_weight * |a|^2),
+    ``time`` (-time_weight per step). ``info["cost"]`` is 1.0 in a step with contact, else 0.0.
+
+    ## Starting state
+
+    A new layout per reset from the env's ``np_random`` (or exactly ``options["scene"]``): robot at rest at the
+    start pose, goal at least 0.4 * arena_size away, both with 0.15 m spare clearance.
+
+    ## Episode end
+
+    ``terminated`` on success (base within ``success_radius`` of the goal), on flipping (tilt > 60 degrees),
+    and on the first contact when ``terminate_on_collision=True``. ``truncated`` by the TimeLimit wrapper at
+    ``max_episode_steps`` (400 steps = 20 s at the default 20 Hz).
+
+    ## Info
+
+    ``reward_terms``, ``cost``, ``is_success``, ``min_clearance`` (m, FCL, negative = penetration),
+    ``n_contacts`` (FCL link/obstacle pairs within ``contact_tolerance``), ``pybullet_contacts`` (pybullet
+    contact points within the same tolerance), ``contact_disagreement`` (exactly one engine sees contact),
+    ``lidar_ranges`` (m).
+
+    ## Arguments
+
+    ``render_mode`` (None, "rgb_array", "human"); ``sensors`` (subset of ("lidar", "imu")); ``arena_size`` m
+    [2, 30]; ``obstacle_density`` floor fraction [0, 0.3]; ``n_rays`` [1, 4096]; ``lidar_fov`` rad (0, 2 pi];
+    ``lidar_range`` m; ``lidar_mount_height`` m above the lidar link; ``physics_hz`` (a multiple of
+    ``control_hz``); ``control_hz``; ``solver_iterations``; ``max_linear_speed`` m/s; ``max_angular_speed`` rad/s;
+    ``success_radius`` m; ``clearance_margin`` m; ``terminate_on_collision``; ``contact_tolerance`` m;
+    ``*_weight`` reward weights. Defaults are in the signature.
+
+    ## Version history
+
+    * v0: initial release.
+    """
+
+    def __init__(
+        self,
+        render_mode: str | None = None,
+        sensors: Sequence[str] = ("lidar", "imu"),
+        arena_size: float = 6.0,
+        obstacle_density: float = 0.12,
+        n_rays: int = 64,
+        lidar_fov: float = 2 * math.pi,
+        lidar_range: float = 5.0,
+        lidar_mount_height: float = 0.0,
+        physics_hz: float = 120.0,
+        control_hz: float = 20.0,
+        solver_iterations: int = 10,
+        max_linear_speed: float = 0.5,
+        max_angular_speed: float = 2.0,
+        success_radius: float = 0.3,
+        clearance_margin: float = 0.1,
+        terminate_on_collision: bool = False,
+        contact_tolerance: float = 1e-3,
+        progress_weight: float = 10.0,
+        success_weight: float = 10.0,
+        contact_weight: float = 1.0,
+        clearance_weight: float = 0.5,
+        control_weight: float = 0.01,
+        time_weight: float = 0.01,
+    ) -> None:
+        check_render_mode(render_mode)
+        _check_rates(physics_hz, control_hz, solver_iterations)
+        if not (math.isfinite(contact_tolerance) and 0.0 <= contact_tolerance <= 0.05):
+            raise ValueError(f"contact_tolerance must be in [0, 0.05] metres, got {contact_tolerance!r}")
+        robot = DiffDriveRobot(DiffDriveConfig(max_linear_speed=max_linear_speed, max_angular_speed=max_angular_speed))
+        spec = ClutterSpec(arena_size=arena_size, obstacle_density=obstacle_density)
+        lidar = LidarConfig(n_rays=n_rays, fov=lidar_fov, max_range=lidar_range, mount_height=lidar_mount_height)
+        chosen = _check_sensors(sensors)
+        factories = {"lidar": lambda: Lidar(lidar), "imu": lambda: Imu(ImuConfig(dt=1.0 / control_hz))}
+        sensor_objects: list[Sensor] = [factories[name]() for name in chosen]
+        task = NavigateTask(
+            NavRewardWeights(progress_weight, success_weight, contact_weight, clearance_weight, control_weight,
+                             time_weight),
+            success_radius=success_radius,
+            clearance_margin=clearance_margin,
+            terminate_on_collision=terminate_on_collision,
+            max_goal_distance=math.sqrt(2.0) * arena_size,
+        )
+        checker = CollisionChecker(
+            load_collision_elements(robot.urdf_path), base_link="base_link", contact_tolerance=contact_tolerance
+        )
+        super().__init__(
+            sim=Sim(physics_hz=physics_hz, solver_iterations=solver_iterations, gui=render_mode == "human"),
+            robot=robot,
+            arena=ClutterArena(spec, robot.config.footprint_radius),
+            sensors=sensor_objects,
+            checker=checker,
+            task=task,
+            control_hz=control_hz,
+            render_mode=render_mode,
+        )
+
+
+def _check_rates(physics_hz: float, control_hz: float, solver_iterations: int) -> None:
+    if not (math.isfinite(control_hz) and 0.0 < control_hz <= 1000.0):
+        raise ValueError(f"control_hz must be in (0, 1000] Hz, got {control_hz!r}")
+    if not (math.isfinite(physics_hz) and control_hz <= physics_hz <= 10000.0):
+        raise ValueError(f"physics_hz must be in [control_hz={control_hz}, 10000] Hz, got {physics_hz!r}")
+    ratio = physics_hz / control_hz
+    if abs(ratio - round(ratio)) > 1e-9 * ratio:
+        raise ValueError(
+            f"physics_hz must be an integer multiple of control_hz; {physics_hz} / {control_hz} = {ratio:.6g}"
+        )
+    if isinstance(solver_iterations, bool) or not isinstance(solver_iterations, int) or not 1 <= solver_iterations <= 1000:
+        raise ValueError(f"solver_iterations must be an integer in [1, 1000], got {solver_iterations!r}")
+
+
+def _check_sensors(sensors: Sequence[str]) -> tuple[str, ...]:
+    if isinstance(sensors, str) or not isinstance(sensors, Sequence):
+        raise ValueError(f"sensors must be a tuple of names from {SENSOR_NAMES}, got {sensors!r}")
+    unknown = [s for s in sensors if s not in SENSOR_NAMES]
+    if unknown:
+        raise ValueError(f"unknown sensors {unknown}; allowed: {SENSOR_NAMES}")
+    if len(set(sensors)) != len(sensors):
+        raise ValueError(f"sensors must not repeat a name, got {tuple(sensors)}")
+    return tuple(sensors)

@@ -1,0 +1,126 @@
+"""Differential-drive base (assets/robots/diffbot.urdf): two driven wheels, two frictionless casters."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from gymnasium import spaces
+
+from clutter_gym.assets import asset_path
+from clutter_gym.robots.state import RobotState
+from clutter_gym.sim import Sim
+from clutter_gym.transforms import quat_to_matrix, yaw_quat
+
+#: Links whose poses are read every step: the sensor mounts and every link with collision geometry.
+TRACKED_LINKS = ("left_wheel", "right_wheel", "front_caster", "rear_caster", "lidar_link", "imu_link")
+
+
+@dataclass(frozen=True)
+class DiffDriveConfig:
+    """Drive limits and wheel geometry.
+
+    Attributes:
+        max_linear_speed: forward speed commanded by action[0] = 1, m/s.
+        max_angular_speed: yaw rate commanded by action[1] = 1, rad/s (counter-clockwise positive).
+        max_wheel_torque: motor torque limit per wheel, N m.
+        wheel_radius: metres; must match the URDF.
+        wheel_separation: distance between the wheel contact centres, metres; must match the URDF.
+        footprint_radius: radius of the circle that encloses the robot seen from above, metres.
+    """
+
+    max_linear_speed: float = 0.5
+    max_angular_speed: float = 2.0
+    max_wheel_torque: float = 1.5
+    wheel_radius: float = 0.05
+    wheel_separation: float = 0.29
+    footprint_radius: float = 0.17
+
+    def __post_init__(self) -> None:
+        for field, hi in (("max_linear_speed", 2.0), ("max_angular_speed", 10.0), ("max_wheel_torque", 20.0)):
+            value = getattr(self, field)
+            if not (np.isfinite(value) and 0.0 < value <= hi):
+                raise ValueError(f"{field} must be in (0, {hi}], got {value!r}")
+
+
+class DiffDriveRobot:
+    """Velocity-commanded differential drive.
+
+    Action: Box(-1, 1, (2,)) = (linear, angular) velocity command normalised by the configured maxima. Values
+    outside [-1, 1] are clipped by the env before they reach :meth:`apply_action`. The command becomes wheel
+    speeds through the unicycle model ``w_l = (v - w L/2) / r``, ``w_r = (v + w L/2) / r`` and is tracked by
+    pybullet's velocity motors under the torque limit, so the robot accelerates and slips realistically.
+    """
+
+    name = "diffbot"
+    urdf = "robots/diffbot.urdf"
+
+    def __init__(self, config: DiffDriveConfig | None = None) -> None:
+        self.config = config or DiffDriveConfig()
+        self.action_space = spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
+        c = self.config
+        self.velocity_bound = np.array([2.0 * c.max_linear_speed, 2.0 * c.max_angular_speed], dtype=np.float32)
+        self.observation_space = spaces.Box(-self.velocity_bound, self.velocity_bound, dtype=np.float32)
+        self._sim: Sim | None = None
+        self._body = -1
+
+    @property
+    def urdf_path(self):
+        return asset_path(self.urdf)
+
+    @property
+    def body(self) -> int:
+        return self._body
+
+    def load(self, sim: Sim) -> int:
+        """Load the URDF into ``sim`` (once per env) and look up joint and link indices."""
+        self._sim = sim
+        self._body = sim.load_urdf("robot", self.urdf_path)
+        sim.hide_from_rays(self._body)
+        joints = sim.joint_indices(self._body)
+        self._wheels = [joints["left_wheel_joint"], joints["right_wheel_joint"]]
+        links = sim.link_indices(self._body)
+        self.link_names = TRACKED_LINKS
+        self._tracked = [links[name] for name in TRACKED_LINKS]
+        self._com_offset = sim.base_inertial_offset(self._body)
+        c = self.config
+        self._torques = [c.max_wheel_torque, c.max_wheel_torque]
+        return self._body
+
+    def reset_pose(self, x: float, y: float, yaw: float) -> None:
+        """Place the robot at rest on the floor at (x, y) with heading ``yaw`` (rad), wheels stopped."""
+        q = yaw_quat(yaw)
+        com = np.array([x, y, self.config.wheel_radius]) + quat_to_matrix(np.array(q)) @ self._com_offset
+        self._sim.set_pose(self._body, com, q)
+        self._sim.reset_joints(self._body, self._wheels)
+        self._sim.set_joint_velocities(self._body, self._wheels, [0.0, 0.0], self._torques)
+
+    def apply_action(self, action: np.ndarray) -> None:
+        """Command wheel speeds from a clipped, normalised (linear, angular) action."""
+        c = self.config
+        v = float(action[0]) * c.max_linear_speed
+        w = float(action[1]) * c.max_angular_speed
+        half = 0.5 * c.wheel_separation
+        left = (v - w * half) / c.wheel_radius
+        right = (v + w * half) / c.wheel_radius
+        self._sim.set_joint_velocities(self._body, self._wheels, [left, right], self._torques)
+
+    def state(self) -> RobotState:
+        """Ground-truth state from three batched pybullet reads."""
+        com, quat, lin, ang = self._sim.base_state(self._body)
+        rot = quat_to_matrix(np.asarray(quat))
+        return RobotState(
+            position=np.asarray(com) - rot @ self._com_offset,
+            quaternion=np.asarray(quat),
+            rotation=rot,
+            linear_velocity=np.asarray(lin),
+            angular_velocity=np.asarray(ang),
+            links=self._sim.link_states(self._body, self._tracked),
+            link_names=self.link_names,
+        )
+
+    def observe(self, state: RobotState) -> np.ndarray:
+        """(forward speed m/s, yaw rate rad/s) in the base frame, clipped to twice the commanded maxima."""
+        v = state.rotation[:, 0] @ state.linear_velocity
+        w = state.rotation[:, 2] @ state.angular_velocity
+        return np.clip(np.array([v, w], dtype=np.float32), -self.velocity_bound, self.velocity_bound)

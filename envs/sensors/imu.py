@@ -1,0 +1,63 @@
+"""IMU: specific force and angular rate in the IMU link frame, from the link's velocities.
+
+Specific force is what an accelerometer measures: ``f = R^T (a - g)`` with ``g = (0, 0, -9.81)`` m/s^2, so a
+sensor at rest reads ``+9.81`` along its up axis. ``a`` is the finite difference of the link's world velocity
+over one control period, i.e. the mean acceleration over the period, which is what an IMU whose output is
+averaged to the control rate reports. The angular rate is ``R^T w``. Both saturate at the full-scale range.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from gymnasium import spaces
+
+from clutter_gym.robots.state import RobotState
+from clutter_gym.sim import Sim
+
+
+@dataclass(frozen=True)
+class ImuConfig:
+    """Attributes:
+        dt: sample period in seconds (the env's control period).
+        gravity: m/s^2, the same value the simulation uses.
+        accel_range: accelerometer full scale, m/s^2 (16 g, a common MEMS setting).
+        gyro_range: gyroscope full scale, rad/s (2000 deg/s).
+        link: URDF link the IMU is mounted on.
+    """
+
+    dt: float
+    gravity: float = 9.81
+    accel_range: float = 16 * 9.80665
+    gyro_range: float = np.deg2rad(2000.0)
+    link: str = "imu_link"
+
+
+class Imu:
+    """Observation: (f_x, f_y, f_z) in m/s^2 then (w_x, w_y, w_z) in rad/s, IMU link frame, clipped at full scale."""
+
+    name = "imu"
+    info_key = None
+
+    def __init__(self, config: ImuConfig) -> None:
+        self.config = c = config
+        self._bound = np.array([c.accel_range] * 3 + [c.gyro_range] * 3, dtype=np.float32)
+        self.observation_space = spaces.Box(-self._bound, self._bound, dtype=np.float32)
+        self._gravity = np.array([0.0, 0.0, -c.gravity])
+        self._previous_velocity = np.zeros(3)
+
+    def reset(self, state: RobotState) -> None:
+        """Start the finite difference from the current velocity (the first sample reads zero acceleration)."""
+        self._previous_velocity = state.links.linear_velocity[state.link(self.config.link)].copy()
+
+    def read(self, sim: Sim, state: RobotState) -> np.ndarray:
+        row = state.link(self.config.link)
+        velocity = state.links.linear_velocity[row]
+        accel = (velocity - self._previous_velocity) / self.config.dt
+        self._previous_velocity = velocity.copy()
+        rot = state.links.rotation[row]
+        return np.concatenate([rot.T @ (accel - self._gravity), rot.T @ state.links.angular_velocity[row]])
+
+    def observe(self, reading: np.ndarray) -> np.ndarray:
+        return np.clip(reading, -self._bound, self._bound).astype(np.float32)

@@ -1,0 +1,358 @@
+"""The one gateway to pybullet (DESIGN.md rule 5): a physics client, bodies by name, batched reads.
+
+Every pybullet call in clutter-gym goes through :class:`Sim`. It talks to pybullet directly with its own
+``physicsClientId`` rather than through ``pybullet_utils.BulletClient``, whose ``__getattr__`` builds a
+``functools.partial`` on every call: measurable in a step that makes about ten calls.
+
+pybullet prints its build banner (stderr) and URDF/shape warnings (stdout) from C, straight to the file
+descriptors; :func:`quiet_c_output` silences them around the calls that print, so output stays readable.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import math
+import os
+import sys
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from clutter_gym.transforms import quat_to_matrix
+
+
+_LIBC = ctypes.CDLL(None)
+
+
+@contextlib.contextmanager
+def quiet_c_output() -> Iterator[None]:
+    """Send C-level writes to stdout and stderr (fds 1 and 2) to /dev/null for the duration of the block.
+
+    pybullet 3.2.7 prints its build banner to stderr and its URDF/shape warnings to stdout. libc buffers a
+    stream that is not a terminal, so the C buffers are flushed before the descriptors are restored; otherwise
+    the silenced text would surface later, at exit.
+    """
+    sys.stdout.flush()
+    sys.stderr.flush()
+    try:
+        saved = [os.dup(1), os.dup(2)]
+    except OSError:  # no usable fds (some embedded interpreters): nothing to silence
+        yield
+        return
+    try:
+        with open(os.devnull, "w") as devnull:
+            os.dup2(devnull.fileno(), 1)
+            os.dup2(devnull.fileno(), 2)
+            yield
+    finally:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        _LIBC.fflush(None)
+        for fd, copy in zip((1, 2), saved):
+            os.dup2(copy, fd)
+            os.close(copy)
+
+
+with quiet_c_output():
+    import pybullet as pb
+
+
+CYLINDER_SIDES = 64
+#: Collision-filter group of bodies that rays do not report (the robot: a LIDAR never sees its own chassis).
+#: pybullet applies the ray mask after the narrow phase, so this is about correctness, not speed.
+RAY_INVISIBLE_GROUP = 4
+_RAY_MASK = -1 ^ RAY_INVISIBLE_GROUP
+
+
+def _prism_mesh(radius: float, height: float, sides: int) -> tuple[list[list[float]], list[int]]:
+    """Closed triangle mesh of an upright ``sides``-gon prism centred at the origin with the circle's area.
+
+    The polygon's circumradius is ``r * sqrt(2 pi / (n sin(2 pi / n)))``, so that on average it neither grows
+    nor shrinks the cylinder it stands for. Triangles wind counter-clockwise seen from outside.
+    """
+    n = sides
+    big_r = radius * math.sqrt(2 * math.pi / (n * math.sin(2 * math.pi / n)))
+    a = 2 * math.pi * np.arange(n) / n
+    ring = np.stack([big_r * np.cos(a), big_r * np.sin(a)], axis=1)
+    h = 0.5 * height
+    vertices = np.vstack(
+        [np.c_[ring, np.full(n, -h)], np.c_[ring, np.full(n, h)], [[0.0, 0.0, -h], [0.0, 0.0, h]]]
+    )
+    i = np.arange(n)
+    j = (i + 1) % n
+    bottom, top = np.full(n, 2 * n), np.full(n, 2 * n + 1)
+    faces = np.concatenate(
+        [np.stack([i, j, n + j], 1), np.stack([i, n + j, n + i], 1), np.stack([bottom, j, i], 1),
+         np.stack([top, n + i, n + j], 1)]
+    )
+    return vertices.tolist(), faces.ravel().tolist()
+
+
+@dataclass(frozen=True)
+class LinkStates:
+    """Batched link states, world frame, one row per requested link.
+
+    Attributes:
+        position: (n, 3) link frame origins in metres (the URDF link frame, not the inertial frame).
+        quaternion: (n, 4) link frame orientations, (x, y, z, w).
+        rotation: (n, 3, 3) the same orientations as matrices (columns are the link axes in world coordinates).
+        linear_velocity: (n, 3) velocity of the link's centre of mass in m/s.
+        angular_velocity: (n, 3) angular velocity in rad/s.
+    """
+
+    position: np.ndarray
+    quaternion: np.ndarray
+    rotation: np.ndarray
+    linear_velocity: np.ndarray
+    angular_velocity: np.ndarray
+
+
+class Sim:
+    """One pybullet physics client.
+
+    Args:
+        physics_hz: physics rate in Hz (one ``stepSimulation`` per physics tick).
+        solver_iterations: constraint solver iterations per physics tick.
+        gravity: gravitational acceleration in m/s^2 (points along -z).
+        gui: open the pybullet GUI window (needs a display) instead of a DIRECT client.
+    """
+
+    def __init__(
+        self,
+        physics_hz: float = 120.0,
+        solver_iterations: int = 10,
+        gravity: float = 9.81,
+        gui: bool = False,
+    ) -> None:
+        with quiet_c_output():
+            self._cid = pb.connect(pb.GUI if gui else pb.DIRECT)
+        if self._cid < 0:
+            raise RuntimeError("pybullet could not open a physics client")
+        self.bodies: dict[str, int] = {}
+        self.physics_hz = float(physics_hz)
+        pb.setPhysicsEngineParameter(
+            fixedTimeStep=1.0 / self.physics_hz,
+            numSolverIterations=int(solver_iterations),
+            deterministicOverlappingPairs=1,
+            physicsClientId=self._cid,
+        )
+        pb.setGravity(0.0, 0.0, -float(gravity), physicsClientId=self._cid)
+        if gui:
+            pb.configureDebugVisualizer(pb.COV_ENABLE_GUI, 0, physicsClientId=self._cid)
+
+    # ----------------------------------------------------------------------------------------- lifecycle
+    @property
+    def connected(self) -> bool:
+        return self._cid >= 0 and pb.isConnected(physicsClientId=self._cid)
+
+    def close(self) -> None:
+        """Disconnect the client; safe to call twice."""
+        if self._cid >= 0:
+            with contextlib.suppress(pb.error):
+                pb.disconnect(physicsClientId=self._cid)
+            self._cid = -1
+
+    # ------------------------------------------------------------------------------------------- bodies
+    def add_ground(self, name: str = "ground") -> int:
+        """An infinite static plane at z = 0 (one collision primitive, no mesh)."""
+        # pybullet warns from C that a plane has no default visual (at createMultiBody), then draws one anyway
+        with quiet_c_output():
+            shape = pb.createCollisionShape(pb.GEOM_PLANE, physicsClientId=self._cid)
+            visual = pb.createVisualShape(
+                pb.GEOM_PLANE, rgbaColor=(0.85, 0.85, 0.8, 1.0), physicsClientId=self._cid
+            )
+            body = pb.createMultiBody(0.0, shape, visual, physicsClientId=self._cid)
+        return self._register(name, body)
+
+    def load_urdf(self, name: str, path: str | Path, position: Sequence[float] = (0.0, 0.0, 0.0)) -> int:
+        """Load a URDF once and address it by ``name``.
+
+        Raises:
+            FileNotFoundError: ``path`` does not exist.
+            ValueError: pybullet could not parse the URDF.
+        """
+        path = Path(path)
+        if not path.is_file():
+            raise FileNotFoundError(f"URDF not found: {path}")
+        try:
+            with quiet_c_output():
+                body = pb.loadURDF(str(path), position, physicsClientId=self._cid)
+        except pb.error as exc:
+            raise ValueError(f"pybullet could not load URDF {path}: {exc}") from exc
+        return self._register(name, body)
+
+    def add_static_box(self, half_extents: Sequence[float], rgba: Sequence[float]) -> int:
+        """A static (mass 0) box with its centre at the origin; move it with :meth:`set_pose`."""
+        col = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=half_extents, physicsClientId=self._cid)
+        vis = pb.createVisualShape(
+            pb.GEOM_BOX, halfExtents=half_extents, rgbaColor=rgba, physicsClientId=self._cid
+        )
+        return pb.createMultiBody(0.0, col, vis, physicsClientId=self._cid)
+
+    def add_static_cylinder(self, radius: float, height: float, rgba: Sequence[float]) -> int:
+        """A static (mass 0) upright cylinder with its centre at the origin.
+
+        Its collision shape is a concave triangle mesh of a ``CYLINDER_SIDES``-gon prism with the circle's
+        area, not Bullet's cylinder primitive: rays against the primitive go through GJK convex casting
+        (about 10 us per ray per cylinder, 7x a scan's cost with 20 cylinders) and still miss the exact circle by
+        up to 2.8 mm, while the 64-gon prism is hit by BVH ray-triangle tests with at most 0.52 mm error and no
+        mean bias (measured in benchmarks/cylinder_rays.py). The visual shape stays a true cylinder.
+        """
+        vertices, indices = _prism_mesh(radius, height, CYLINDER_SIDES)
+        col = pb.createCollisionShape(
+            pb.GEOM_MESH,
+            vertices=vertices,
+            indices=indices,
+            flags=pb.GEOM_FORCE_CONCAVE_TRIMESH,
+            physicsClientId=self._cid,
+        )
+        vis = pb.createVisualShape(
+            pb.GEOM_CYLINDER, radius=radius, length=height, rgbaColor=rgba, physicsClientId=self._cid
+        )
+        return pb.createMultiBody(0.0, col, vis, physicsClientId=self._cid)
+
+    def add_marker(self, name: str, radius: float, rgba: Sequence[float]) -> int:
+        """A visual-only disc (no collision shape: rays, contacts and FCL never see it), e.g. a goal marker."""
+        vis = pb.createVisualShape(
+            pb.GEOM_CYLINDER, radius=radius, length=0.01, rgbaColor=rgba, physicsClientId=self._cid
+        )
+        return self._register(name, pb.createMultiBody(0.0, -1, vis, physicsClientId=self._cid))
+
+    def _register(self, name: str, body: int) -> int:
+        if name in self.bodies:
+            raise ValueError(f"a body named {name!r} already exists")
+        self.bodies[name] = body
+        return body
+
+    def hide_from_rays(self, body: int) -> None:
+        """Put every link of ``body`` in :data:`RAY_INVISIBLE_GROUP`: rays pass through it, contacts do not.
+
+        Bullet's default masks (all bits for dynamic bodies, all but the static bit for static ones) include this
+        group, so contacts with the ground and obstacles are unchanged.
+        """
+        for link in range(-1, pb.getNumJoints(body, physicsClientId=self._cid)):
+            pb.setCollisionFilterGroupMask(body, link, RAY_INVISIBLE_GROUP, -1, physicsClientId=self._cid)
+
+    def set_pose(self, body: int, position: Sequence[float], quaternion: Sequence[float]) -> None:
+        """Teleport a body's base (its inertial frame) and zero its velocity."""
+        pb.resetBasePositionAndOrientation(body, position, quaternion, physicsClientId=self._cid)
+        pb.resetBaseVelocity(body, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), physicsClientId=self._cid)
+
+    def reset_joints(self, body: int, joints: Sequence[int]) -> None:
+        """Joint angles and velocities to zero."""
+        for j in joints:
+            pb.resetJointState(body, j, 0.0, 0.0, physicsClientId=self._cid)
+
+    # ------------------------------------------------------------------------------------ introspection
+    def link_indices(self, body: int) -> dict[str, int]:
+        """URDF link name -> pybullet link index (-1 for the base)."""
+        base_name = pb.getBodyInfo(body, physicsClientId=self._cid)[0].decode()
+        out = {base_name: -1}
+        for j in range(pb.getNumJoints(body, physicsClientId=self._cid)):
+            info = pb.getJointInfo(body, j, physicsClientId=self._cid)
+            out[info[12].decode()] = j
+        return out
+
+    def joint_indices(self, body: int) -> dict[str, int]:
+        """URDF joint name -> pybullet joint index."""
+        return {
+            pb.getJointInfo(body, j, physicsClientId=self._cid)[1].decode(): j
+            for j in range(pb.getNumJoints(body, physicsClientId=self._cid))
+        }
+
+    def base_inertial_offset(self, body: int) -> np.ndarray:
+        """Position of the base's centre of mass in the base link frame, metres.
+
+        pybullet reports and sets base poses at the centre of mass, not at the URDF base frame.
+        """
+        return np.asarray(pb.getDynamicsInfo(body, -1, physicsClientId=self._cid)[3], dtype=float)
+
+    def set_friction(self, body: int, link: int, lateral: float) -> None:
+        pb.changeDynamics(body, link, lateralFriction=lateral, physicsClientId=self._cid)
+
+    # ---------------------------------------------------------------------------------------- hot path
+    def step(self, n: int = 1) -> None:
+        """Advance ``n`` physics ticks."""
+        for _ in range(n):
+            pb.stepSimulation(physicsClientId=self._cid)
+
+    def set_joint_velocities(
+        self, body: int, joints: Sequence[int], velocities: Sequence[float], max_forces: Sequence[float]
+    ) -> None:
+        """Velocity-controlled motors: target joint velocities (rad/s) under a torque limit (N m)."""
+        pb.setJointMotorControlArray(
+            body,
+            joints,
+            pb.VELOCITY_CONTROL,
+            targetVelocities=velocities,
+            forces=max_forces,
+            physicsClientId=self._cid,
+        )
+
+    def base_state(self, body: int) -> tuple[tuple, tuple, tuple, tuple]:
+        """(position of the centre of mass, quaternion xyzw, linear velocity, angular velocity), world."""
+        pos, quat = pb.getBasePositionAndOrientation(body, physicsClientId=self._cid)
+        lin, ang = pb.getBaseVelocity(body, physicsClientId=self._cid)
+        return pos, quat, lin, ang
+
+    def link_states(self, body: int, links: Sequence[int]) -> LinkStates:
+        """One batched ``getLinkStates`` call with velocities; see :class:`LinkStates`."""
+        rows = pb.getLinkStates(
+            body, links, computeLinkVelocity=1, computeForwardKinematics=1, physicsClientId=self._cid
+        )
+        quaternion = np.array([r[5] for r in rows])
+        return LinkStates(
+            position=np.array([r[4] for r in rows]),
+            quaternion=quaternion,
+            rotation=quat_to_matrix(quaternion),
+            linear_velocity=np.array([r[6] for r in rows]),
+            angular_velocity=np.array([r[7] for r in rows]),
+        )
+
+    def ray_hit_fractions(self, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
+        """Cast a batch of rays in one ``rayTestBatch``; returns the hit fraction per ray (1.0 = no hit).
+
+        Bodies hidden with :meth:`hide_from_rays` are not hit.
+
+        Rays are passed as lists: pybullet converts a list about twice as fast as an ndarray.
+        """
+        hits = pb.rayTestBatch(
+            starts.tolist(), ends.tolist(), numThreads=1, collisionFilterMask=_RAY_MASK, physicsClientId=self._cid
+        )
+        return np.fromiter((h[2] for h in hits), dtype=float, count=len(hits))
+
+    def contact_distances(self, body: int) -> list[tuple[int, float]]:
+        """(other body id, signed contact distance in metres) of every contact point of ``body``."""
+        return [
+            (c[2], c[8]) for c in pb.getContactPoints(bodyA=body, physicsClientId=self._cid)
+        ]
+
+    # ---------------------------------------------------------------------------------------- rendering
+    def render(
+        self,
+        width: int,
+        height: int,
+        eye: Sequence[float],
+        target: Sequence[float],
+        fov_deg: float = 60.0,
+    ) -> np.ndarray:
+        """An RGB image (height, width, 3) uint8 from TinyRenderer looking from ``eye`` to ``target``."""
+        view = pb.computeViewMatrix(eye, target, (0.0, 0.0, 1.0), physicsClientId=self._cid)
+        proj = pb.computeProjectionMatrixFOV(fov_deg, width / height, 0.05, 50.0, physicsClientId=self._cid)
+        _, _, rgba, _, _ = pb.getCameraImage(
+            width,
+            height,
+            view,
+            proj,
+            renderer=pb.ER_TINY_RENDERER,
+            flags=pb.ER_NO_SEGMENTATION_MASK,
+            physicsClientId=self._cid,
+        )
+        return np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)[:, :, :3].copy()
+
+    def follow_camera(self, target: Sequence[float], distance: float, yaw_deg: float, pitch_deg: float) -> None:
+        """Point the GUI camera (render_mode="human")."""
+        pb.resetDebugVisualizerCamera(distance, yaw_deg, pitch_deg, target, physicsClientId=self._cid)

@@ -1,0 +1,5 @@
+"""Tasks turn ground-truth state into named, weighted reward terms and episode-ending flags."""
+
+from clutter_gym.tasks.navigate import NavigateTask, NavRewardWeights, StepOutcome
+
+__all__ = ["NavRewardWeights", "NavigateTask", "StepOutcome"]

@@ -1,0 +1,63 @@
+"""A walled arena with pooled clutter: chooses each episode's scene and puts it into the Sim."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from clutter_gym.sim import Sim
+from clutter_gym.worlds.clutter import ClutterSpec, sample_scene
+from clutter_gym.worlds.pool import ObstaclePool
+from clutter_gym.worlds.scene import Obstacle, Scene, parse_scene
+
+RESET_OPTIONS = ("scene",)
+
+
+class ClutterArena:
+    """Ground plane, four walls and the obstacle pool of one env.
+
+    Args:
+        spec: layout parameters (arena size, density, size ranges).
+        robot_radius: footprint radius used for reachability and start checks, metres.
+    """
+
+    def __init__(self, spec: ClutterSpec, robot_radius: float) -> None:
+        self.spec = spec
+        self.robot_radius = robot_radius
+        self._pool: ObstaclePool | None = None
+
+    def load(self, sim: Sim) -> None:
+        """Create the ground and walls (once per env)."""
+        sim.add_ground()
+        self._pool = ObstaclePool(sim, self.spec.arena_size, self.spec.obstacle_height, self.spec.wall_thickness)
+
+    @property
+    def walls(self) -> tuple[Obstacle, ...]:
+        return self._pool.walls
+
+    @property
+    def pool_size(self) -> int:
+        return self._pool.size
+
+    def choose_scene(self, rng: np.random.Generator, options: Mapping[str, Any] | None) -> Scene:
+        """The user's scene from ``options["scene"]`` if given, else a seeded random layout.
+
+        Raises:
+            ValueError: unknown option keys or a malformed scene (the message names the field).
+        """
+        options = options or {}
+        if not isinstance(options, Mapping):
+            raise ValueError(f"reset options must be a dict, got {type(options).__name__}")
+        unknown = set(options) - set(RESET_OPTIONS)
+        if unknown:
+            raise ValueError(f"unknown reset options {sorted(unknown)}; allowed: {list(RESET_OPTIONS)}")
+        if "scene" in options:
+            return parse_scene(options["scene"], self.spec.arena_size, self.robot_radius)
+        return sample_scene(rng, self.spec, self.robot_radius)
+
+    def place(self, scene: Scene) -> tuple[tuple[Obstacle, ...], list[int]]:
+        """Move pooled bodies into ``scene``; returns every obstacle (walls included) and its body ids."""
+        bodies = self._pool.place(scene.obstacles)
+        return scene.obstacles + self.walls, bodies + self._pool.wall_bodies

@@ -1,0 +1,170 @@
+"""Seeded clutter layouts with a reachability guarantee for the robot's footprint.
+
+Sampling, per attempt:
+
+1. Obstacles (boxes, cylinders, wall segments) at uniform positions until their footprints cover
+   ``obstacle_density`` of the arena floor. Sizes come from a grid with ``SIZE_STEP`` spacing, so that the body
+   pool (``worlds/pool.py``) holds a bounded number of distinct shapes.
+2. A clearance field on an occupancy grid of ``resolution`` metres: the exact signed distance from each cell
+   centre to the nearest obstacle footprint or wall, evaluated only in each obstacle's window.
+3. A cell is *free* when its clearance exceeds ``r + resolution / 2`` (r = footprint radius). The distance is
+   1-Lipschitz and every point of a segment between 4-neighbour centres lies within ``resolution / 2`` of one
+   of them, so a 4-connected chain of free cells is a collision-free path for the disc: same free component
+   means reachable.
+4. Start and goal come from free cells with the extra ``spawn_clearance``, in one component and at least
+   ``min_goal_distance`` apart. No such pair: a new attempt.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+from scipy import ndimage
+
+from clutter_gym.worlds.scene import Obstacle, Scene
+
+SIZE_STEP = 0.05  # metres; generated sizes are multiples of this
+MAX_DENSITY = 0.3  # beyond this a walled arena cannot reliably keep a free path for the robot
+
+
+@dataclass(frozen=True)
+class ClutterSpec:
+    """What a generated layout looks like.
+
+    Attributes:
+        arena_size: side of the square arena inside the walls, metres, in [2, 30].
+        obstacle_density: fraction of the floor covered by obstacle footprints, in [0, 0.3].
+        obstacle_height: metres; taller than the LIDAR plane so every obstacle is seen.
+        box_side: (min, max) side of a box footprint, metres.
+        cylinder_radius: (min, max) metres.
+        wall_length: (min, max) length of a wall segment, metres (thickness ``wall_thickness``).
+        shape_probs: probabilities of (box, cylinder, wall segment).
+        resolution: occupancy-grid cell size for the reachability check, metres.
+        spawn_clearance: extra free space around start and goal beyond the footprint, metres.
+        min_goal_distance: straight-line start-goal distance as a fraction of ``arena_size``.
+        max_attempts: layouts tried before giving up.
+    """
+
+    arena_size: float = 6.0
+    obstacle_density: float = 0.12
+    obstacle_height: float = 0.5
+    box_side: tuple[float, float] = (0.2, 0.6)
+    cylinder_radius: tuple[float, float] = (0.1, 0.3)
+    wall_length: tuple[float, float] = (0.8, 2.0)
+    wall_thickness: float = 0.1
+    shape_probs: tuple[float, float, float] = (0.45, 0.35, 0.2)
+    resolution: float = 0.05
+    spawn_clearance: float = 0.15
+    min_goal_distance: float = 0.4
+    max_attempts: int = 50
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.arena_size) and 2.0 <= self.arena_size <= 30.0):
+            raise ValueError(f"arena_size must be in [2, 30] metres, got {self.arena_size!r}")
+        if not (math.isfinite(self.obstacle_density) and 0.0 <= self.obstacle_density <= MAX_DENSITY):
+            raise ValueError(
+                f"obstacle_density must be in [0, {MAX_DENSITY}] (fraction of the floor covered), "
+                f"got {self.obstacle_density!r}"
+            )
+        if not 0.0 < self.min_goal_distance < 1.0:
+            raise ValueError(f"min_goal_distance must be in (0, 1) (fraction of arena_size), got {self.min_goal_distance!r}")
+
+    @cached_property
+    def cell_centres(self) -> np.ndarray:
+        """(n,) cell-centre coordinates along one axis, metres."""
+        half = 0.5 * self.arena_size
+        n = int(round(self.arena_size / self.resolution))
+        return -half + (np.arange(n) + 0.5) * self.arena_size / n
+
+    @cached_property
+    def wall_clearance(self) -> np.ndarray:
+        """(n, n) distance from each cell centre to the arena walls, indexed [ix, iy]."""
+        d = 0.5 * self.arena_size - np.abs(self.cell_centres)
+        return np.minimum(d[:, None], d[None, :])
+
+
+def _grid_value(rng: np.random.Generator, lo: float, hi: float) -> float:
+    steps = int(round((hi - lo) / SIZE_STEP))
+    return round(lo + SIZE_STEP * int(rng.integers(0, steps + 1)), 6)
+
+
+def _sample_obstacle(rng: np.random.Generator, spec: ClutterSpec) -> Obstacle:
+    kind = rng.choice(3, p=spec.shape_probs)
+    h = spec.obstacle_height
+    if kind == 0:
+        a, b = _grid_value(rng, *spec.box_side), _grid_value(rng, *spec.box_side)
+        size = (max(a, b), min(a, b), h)
+    elif kind == 1:
+        r = _grid_value(rng, *spec.cylinder_radius)
+        size = (2 * r, 2 * r, h)
+    else:
+        size = (_grid_value(rng, *spec.wall_length), spec.wall_thickness, h)
+    yaw = 0.0 if kind == 1 else float(rng.uniform(-math.pi, math.pi))
+    shape = "cylinder" if kind == 1 else "box"
+    half = 0.5 * spec.arena_size
+    xy = rng.uniform(-half, half, size=2)
+    return Obstacle(shape, size, (float(xy[0]), float(xy[1])), yaw)
+
+
+def clearance_field(obstacles: tuple[Obstacle, ...], spec: ClutterSpec, cap: float) -> np.ndarray:
+    """Distance from every cell centre to the nearest obstacle or wall, capped at ``cap`` metres.
+
+    Each obstacle is evaluated only on the cells within ``cap`` of its enclosing circle; beyond that the capped
+    field is unaffected by it.
+    """
+    field = np.minimum(spec.wall_clearance, cap)
+    c = spec.cell_centres
+    n, res, half = len(c), spec.arena_size / len(c), 0.5 * spec.arena_size
+    for o in obstacles:
+        reach = o.radius + cap
+        lo = np.clip(np.floor((np.array(o.position) - reach + half) / res).astype(int), 0, n)
+        hi = np.clip(np.ceil((np.array(o.position) + reach + half) / res).astype(int), 0, n)
+        if lo[0] >= hi[0] or lo[1] >= hi[1]:
+            continue
+        d = o.distance(c[lo[0]:hi[0], None], c[None, lo[1]:hi[1]])
+        window = field[lo[0]:hi[0], lo[1]:hi[1]]
+        np.minimum(window, d, out=window)
+    return field
+
+
+def sample_scene(rng: np.random.Generator, spec: ClutterSpec, robot_radius: float) -> Scene:
+    """A random layout whose goal is reachable for a disc of ``robot_radius`` (see the module docstring).
+
+    Raises:
+        RuntimeError: no valid layout in ``spec.max_attempts`` tries (density too high for the robot).
+    """
+    area = spec.arena_size**2
+    free_margin = robot_radius + 0.5 * spec.resolution
+    spawn_margin = robot_radius + spec.spawn_clearance
+    c = spec.cell_centres
+    for _ in range(spec.max_attempts):
+        obstacles: list[Obstacle] = []
+        covered = 0.0
+        while covered < spec.obstacle_density * area:
+            o = _sample_obstacle(rng, spec)
+            obstacles.append(o)
+            covered += o.area
+        field = clearance_field(tuple(obstacles), spec, cap=spawn_margin + spec.resolution)
+        labels, _ = ndimage.label(field > free_margin)
+        spawn = np.flatnonzero((field > spawn_margin).ravel())
+        if spawn.size < 2:
+            continue
+        start_cell = int(rng.choice(spawn))
+        component = labels.ravel()[start_cell]
+        ix, iy = np.unravel_index(spawn, field.shape)
+        sx, sy = c[start_cell // len(c)], c[start_cell % len(c)]
+        far = np.hypot(c[ix] - sx, c[iy] - sy) >= spec.min_goal_distance * spec.arena_size
+        goals = spawn[far & (labels.ravel()[spawn] == component)]
+        if goals.size == 0:
+            continue
+        goal_cell = int(rng.choice(goals))
+        gx, gy = c[goal_cell // len(c)], c[goal_cell % len(c)]
+        yaw = float(rng.uniform(-math.pi, math.pi))
+        return Scene(tuple(obstacles), (float(sx), float(sy), yaw), (float(gx), float(gy)))
+    raise RuntimeError(
+        f"no layout with a reachable goal in {spec.max_attempts} attempts at obstacle_density="
+        f"{spec.obstacle_density} in a {spec.arena_size} m arena; lower the density or enlarge the arena"
+    )

@@ -1,0 +1,181 @@
+"""Scenes as plain data: obstacles, start and goal; parsing and validation of user-given scenes.
+
+Coordinates are metres in the world frame: the arena is the square [-L/2, L/2]^2 on the floor (z = 0), walled on
+all four sides. Obstacles stand on the floor; ``position`` is the centre of the footprint, sizes are full extents.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+SHAPES = ("box", "cylinder")
+MAX_OBSTACLE_HEIGHT = 5.0  # metres; anything taller only costs render time
+
+
+@dataclass(frozen=True)
+class Obstacle:
+    """A static obstacle standing on the floor.
+
+    Attributes:
+        shape: "box" or "cylinder".
+        size: full extents (sx, sy, sz) in metres; a cylinder has sx = sy = 2 * radius.
+        position: footprint centre (x, y) in metres.
+        yaw: rotation about +z in radians (ignored by the geometry of a cylinder).
+    """
+
+    shape: str
+    size: tuple[float, float, float]
+    position: tuple[float, float]
+    yaw: float = 0.0
+
+    @property
+    def radius(self) -> float:
+        """Cylinder radius, or the radius of the circle enclosing a box footprint."""
+        if self.shape == "cylinder":
+            return 0.5 * self.size[0]
+        return 0.5 * math.hypot(self.size[0], self.size[1])
+
+    @property
+    def area(self) -> float:
+        """Footprint area in m^2."""
+        if self.shape == "cylinder":
+            return math.pi * self.radius**2
+        return self.size[0] * self.size[1]
+
+    def distance(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """Signed 2D distance (metres) from points (x, y) to the footprint; negative inside."""
+        dx, dy = x - self.position[0], y - self.position[1]
+        if self.shape == "cylinder":
+            return np.hypot(dx, dy) - self.radius
+        c, s = math.cos(self.yaw), math.sin(self.yaw)
+        qx = np.abs(c * dx + s * dy) - 0.5 * self.size[0]
+        qy = np.abs(-s * dx + c * dy) - 0.5 * self.size[1]
+        outside = np.hypot(np.maximum(qx, 0.0), np.maximum(qy, 0.0))
+        return outside + np.minimum(np.maximum(qx, qy), 0.0)
+
+    def to_dict(self) -> dict[str, Any]:
+        if self.shape == "cylinder":
+            return {"shape": "cylinder", "radius": self.radius, "height": self.size[2],
+                    "position": list(self.position)}
+        return {"shape": "box", "size": list(self.size), "position": list(self.position), "yaw": self.yaw}
+
+
+@dataclass(frozen=True)
+class Scene:
+    """One layout: obstacles, robot start (x, y, yaw) and goal (x, y)."""
+
+    obstacles: tuple[Obstacle, ...]
+    start: tuple[float, float, float]
+    goal: tuple[float, float]
+
+    def to_dict(self) -> dict[str, Any]:
+        """The reset-options format: ``env.reset(options={"scene": scene.to_dict()})`` reproduces it."""
+        return {"obstacles": [o.to_dict() for o in self.obstacles], "start": list(self.start),
+                "goal": list(self.goal)}
+
+    def clearance(self, x: float, y: float, arena_size: float) -> float:
+        """Distance (metres) from point (x, y) to the nearest obstacle footprint or arena wall."""
+        half = 0.5 * arena_size
+        d = min(half - abs(x), half - abs(y))
+        for o in self.obstacles:
+            d = min(d, float(o.distance(np.array(x), np.array(y))))
+        return d
+
+
+# ------------------------------------------------------------------------------------------------ parsing
+def _numbers(value: Any, n: int, field: str, what: str) -> tuple[float, ...]:
+    if isinstance(value, (str, bytes)) or not isinstance(value, Sequence) or len(value) != n:
+        raise ValueError(f"{field} must be a list of {n} numbers ({what}), got {value!r}")
+    try:
+        out = tuple(float(v) for v in value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{field} must be a list of {n} numbers ({what}), got {value!r}") from None
+    if not all(math.isfinite(v) for v in out):
+        raise ValueError(f"{field} must be finite, got {value!r}")
+    return out
+
+
+def _number(value: Any, field: str, lo: float, hi: float, what: str) -> float:
+    try:
+        out = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{field} must be a number ({what}), got {value!r}") from None
+    if not (math.isfinite(out) and lo < out <= hi):
+        raise ValueError(f"{field} must be in ({lo}, {hi}] ({what}), got {value!r}")
+    return out
+
+
+def _inside(point: Sequence[float], field: str, limit: float) -> None:
+    if max(abs(point[0]), abs(point[1])) > limit:
+        raise ValueError(
+            f"{field} must lie inside the arena: |x|, |y| <= {limit:.3f} m, got ({point[0]}, {point[1]})"
+        )
+
+
+def parse_obstacle(spec: Any, field: str, arena_size: float) -> Obstacle:
+    """One obstacle from its dict form; errors name ``field`` and the allowed values."""
+    if not isinstance(spec, Mapping):
+        raise ValueError(f"{field} must be a dict with a 'shape' key, got {spec!r}")
+    shape = spec.get("shape")
+    allowed = {"box": {"shape", "size", "position", "yaw"}, "cylinder": {"shape", "radius", "height", "position"}}
+    if shape not in allowed:
+        raise ValueError(f"{field}.shape must be one of {SHAPES}, got {shape!r}")
+    unknown = set(spec) - allowed[shape]
+    if unknown:
+        raise ValueError(f"{field} has unknown keys {sorted(unknown)}; a {shape} takes {sorted(allowed[shape])}")
+    missing = (allowed[shape] - {"yaw"}) - set(spec)
+    if missing:
+        raise ValueError(f"{field} is missing {sorted(missing)}")
+    position = _numbers(spec["position"], 2, f"{field}.position", "x, y in metres")
+    _inside(position, f"{field}.position", 0.5 * arena_size)
+    if shape == "box":
+        size = _numbers(spec["size"], 3, f"{field}.size", "full extents sx, sy, sz in metres")
+        for axis, v in zip("xyz", size):
+            limit = MAX_OBSTACLE_HEIGHT if axis == "z" else arena_size
+            if not 0.0 < v <= limit:
+                raise ValueError(f"{field}.size {axis} must be in (0, {limit}] m, got {v}")
+        yaw = _number(spec.get("yaw", 0.0), f"{field}.yaw", -math.inf, math.inf, "radians")
+        return Obstacle("box", size, position, yaw)
+    radius = _number(spec["radius"], f"{field}.radius", 0.0, 0.5 * arena_size, "metres")
+    height = _number(spec["height"], f"{field}.height", 0.0, MAX_OBSTACLE_HEIGHT, "metres")
+    return Obstacle("cylinder", (2 * radius, 2 * radius, height), position, 0.0)
+
+
+def parse_scene(spec: Any, arena_size: float, robot_radius: float) -> Scene:
+    """Validate a user scene (the ``reset(options={"scene": ...})`` format) and turn it into a :class:`Scene`.
+
+    The start must leave the robot's footprint clear of every obstacle and wall; reachability of the goal is
+    the user's choice and is not checked.
+
+    Raises:
+        ValueError: naming the offending field and its allowed range.
+    """
+    if not isinstance(spec, Mapping):
+        raise ValueError(f"scene must be a dict with keys 'obstacles', 'start', 'goal', got {type(spec).__name__}")
+    unknown = set(spec) - {"obstacles", "start", "goal"}
+    if unknown:
+        raise ValueError(f"scene has unknown keys {sorted(unknown)}; allowed: ['goal', 'obstacles', 'start']")
+    for key in ("start", "goal"):
+        if key not in spec:
+            raise ValueError(f"scene.{key} is required")
+    raw = spec.get("obstacles", [])
+    if isinstance(raw, (str, bytes, Mapping)) or not isinstance(raw, Sequence):
+        raise ValueError(f"scene.obstacles must be a list of obstacle dicts, got {raw!r}")
+    obstacles = tuple(parse_obstacle(o, f"scene.obstacles[{i}]", arena_size) for i, o in enumerate(raw))
+    start = _numbers(spec["start"], 3, "scene.start", "x, y in metres and yaw in radians")
+    goal = _numbers(spec["goal"], 2, "scene.goal", "x, y in metres")
+    _inside(start, "scene.start", 0.5 * arena_size - robot_radius)
+    _inside(goal, "scene.goal", 0.5 * arena_size)
+    scene = Scene(obstacles, start, goal)
+    clearance = scene.clearance(start[0], start[1], arena_size)
+    if clearance < robot_radius:
+        raise ValueError(
+            f"scene.start ({start[0]}, {start[1]}) is {clearance:.3f} m from the nearest obstacle or wall; "
+            f"the robot needs at least its footprint radius {robot_radius} m"
+        )
+    return scene

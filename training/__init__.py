@@ -1,0 +1,1 @@
+"""Policies and training tooling for clutter-gym envs (installed as ``clutter_gym.training``)."""

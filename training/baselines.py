@@ -1,0 +1,63 @@
+"""Scripted baselines: reference behaviour to compare learned policies with, and the demo's driver."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+
+import gymnasium as gym
+import numpy as np
+
+
+class PotentialFieldNavigator:
+    """Goal attraction plus LIDAR repulsion (Khatib-style potential field) for ClutterNav.
+
+    The heading is the sum of a unit vector towards the goal and, for every beam closer than ``influence``
+    metres, a push away from it weighted by ``1/r - 1/influence``. Angular command = ``turn_gain`` x heading
+    error; forward command shrinks with the heading error and with free space ahead. It gets stuck in local
+    minima (U-shaped clutter) by design: it is a baseline, not a planner.
+
+    Args:
+        lidar_angles: beam angles in the robot frame, radians (None: goal seeking only).
+        lidar_range: metres, to undo the observation's normalisation.
+        influence: distance below which obstacles repel, metres.
+        repulsion: weight of the repulsive sum relative to the unit goal vector.
+        turn_gain: angular command per radian of heading error.
+    """
+
+    def __init__(
+        self,
+        lidar_angles: np.ndarray | None,
+        lidar_range: float,
+        influence: float = 0.7,
+        repulsion: float = 0.25,
+        turn_gain: float = 1.5,
+    ) -> None:
+        self.angles = None if lidar_angles is None else np.asarray(lidar_angles, dtype=float)
+        self.lidar_range = lidar_range
+        self.influence, self.repulsion, self.turn_gain = influence, repulsion, turn_gain
+
+    @classmethod
+    def for_env(cls, env: gym.Env) -> PotentialFieldNavigator:
+        """Configured from a ClutterNav env's LIDAR (or goal seeking only when it has none)."""
+        lidar = next((s for s in env.unwrapped.sensors if s.name == "lidar"), None)
+        if lidar is None:
+            return cls(None, 1.0)
+        return cls(lidar.config.angles, lidar.config.max_range)
+
+    def __call__(self, obs: Mapping[str, np.ndarray]) -> np.ndarray:
+        _, sin_b, cos_b = (float(v) for v in obs["goal"])
+        heading = np.array([cos_b, sin_b])
+        ahead = 1.0
+        if self.angles is not None and "lidar" in obs:
+            ranges = np.asarray(obs["lidar"], dtype=float) * self.lidar_range
+            close = ranges < self.influence
+            push = (1.0 / np.maximum(ranges[close], 1e-3) - 1.0 / self.influence)
+            angles = self.angles[close]
+            heading -= self.repulsion * np.array([push @ np.cos(angles), push @ np.sin(angles)])
+            front = np.abs(self.angles) < math.radians(30)
+            ahead = float(np.clip((ranges[front].min() - 0.2) / 0.6, 0.0, 1.0)) if front.any() else 1.0
+        error = math.atan2(heading[1], heading[0])
+        angular = float(np.clip(self.turn_gain * error, -1.0, 1.0))
+        linear = float(np.clip(math.cos(error), 0.0, 1.0)) * max(ahead, 0.15)
+        return np.array([linear, angular], dtype=np.float32)
