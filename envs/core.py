@@ -86,7 +86,7 @@ class ClutterEnv(gym.Env):
         obstacles, bodies = self.arena.place(scene)
         self.checker.set_scene(obstacles, bodies)
         self.robot.reset_pose(*scene.start)
-        self.sim.set_pose(self._goal_marker, (*scene.goal, 0.005), yaw_quat(0.0))
+        self.sim.move_static(self._goal_marker, (*scene.goal, 0.005), yaw_quat(0.0))
         self.scene = scene
         state = self.robot.state()
         for sensor in self.sensors:
@@ -166,7 +166,7 @@ class ClutterEnv(gym.Env):
             self.sim.follow_camera(position, 0.9 * arena, 0.0, -60.0)
             return None
         width, height = self.render_size
-        return self.sim.render(width, height, eye=(0.0, -0.75 * arena, 1.1 * arena), target=(0.0, -0.05 * arena, 0.0))
+        return self.sim.render(width, height, eye=(0.0, -0.62 * arena, 0.78 * arena), target=(0.0, -0.04 * arena, 0.0))
 
     def close(self) -> None:
         self.sim.close()

@@ -151,7 +151,7 @@ class Sim:
     def close(self) -> None:
         """Disconnect the client; safe to call twice."""
         if self._cid >= 0:
-            with contextlib.suppress(pb.error):
+            with contextlib.suppress(pb.error), quiet_c_output():  # the GUI prints its thread shutdown
                 pb.disconnect(physicsClientId=self._cid)
             self._cid = -1
 
@@ -185,7 +185,7 @@ class Sim:
         return self._register(name, body)
 
     def add_static_box(self, half_extents: Sequence[float], rgba: Sequence[float]) -> int:
-        """A static (mass 0) box with its centre at the origin; move it with :meth:`set_pose`."""
+        """A static (mass 0) box with its centre at the origin; move it with :meth:`move_static`."""
         col = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=half_extents, physicsClientId=self._cid)
         vis = pb.createVisualShape(
             pb.GEOM_BOX, halfExtents=half_extents, rgbaColor=rgba, physicsClientId=self._cid
@@ -235,6 +235,10 @@ class Sim:
         """
         for link in range(-1, pb.getNumJoints(body, physicsClientId=self._cid)):
             pb.setCollisionFilterGroupMask(body, link, RAY_INVISIBLE_GROUP, -1, physicsClientId=self._cid)
+
+    def move_static(self, body: int, position: Sequence[float], quaternion: Sequence[float]) -> None:
+        """Teleport a static body (its base inertial frame); it has no velocity to reset."""
+        pb.resetBasePositionAndOrientation(body, position, quaternion, physicsClientId=self._cid)
 
     def set_pose(self, body: int, position: Sequence[float], quaternion: Sequence[float]) -> None:
         """Teleport a body's base (its inertial frame) and zero its velocity."""

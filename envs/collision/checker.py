@@ -77,7 +77,9 @@ class CollisionChecker:
         self._obstacle_manager: fcl.DynamicAABBTreeCollisionManager | None = None
         self._obstacle_objects: list[fcl.CollisionObject] = []
         self._obstacle_bodies: frozenset[int] = frozenset()
-        self._request = fcl.DistanceRequest(enable_signed_distance=True)
+        # FCL's own GJK, not libccd: over 3000 random chassis/obstacle placements libccd missed the closed-form
+        # distance by up to 7.2 mm (GST_INDEP: 13 um) at the same cost (benchmarks/fcl_solver.py).
+        self._request = fcl.DistanceRequest(enable_signed_distance=True, gjk_solver_type=fcl.GJKSolverType.GST_INDEP)
         self._rows: np.ndarray | None = None
 
     def set_scene(self, obstacles: Sequence[Obstacle], bodies: Sequence[int]) -> None:

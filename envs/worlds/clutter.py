@@ -56,7 +56,7 @@ class ClutterSpec:
     wall_length: tuple[float, float] = (0.8, 2.0)
     wall_thickness: float = 0.1
     shape_probs: tuple[float, float, float] = (0.45, 0.35, 0.2)
-    resolution: float = 0.05
+    resolution: float = 0.1
     spawn_clearance: float = 0.15
     min_goal_distance: float = 0.4
     max_attempts: int = 50
@@ -86,47 +86,71 @@ class ClutterSpec:
         return np.minimum(d[:, None], d[None, :])
 
 
-def _grid_value(rng: np.random.Generator, lo: float, hi: float) -> float:
-    steps = int(round((hi - lo) / SIZE_STEP))
-    return round(lo + SIZE_STEP * int(rng.integers(0, steps + 1)), 6)
+def _grid_values(rng: np.random.Generator, bounds: tuple[float, float], n: int) -> np.ndarray:
+    """``n`` values uniform on the SIZE_STEP grid from bounds[0] to bounds[1] inclusive."""
+    steps = int(round((bounds[1] - bounds[0]) / SIZE_STEP))
+    return np.round(bounds[0] + SIZE_STEP * rng.integers(0, steps + 1, size=n), 6)
 
 
-def _sample_obstacle(rng: np.random.Generator, spec: ClutterSpec) -> Obstacle:
-    kind = rng.choice(3, p=spec.shape_probs)
-    h = spec.obstacle_height
-    if kind == 0:
-        a, b = _grid_value(rng, *spec.box_side), _grid_value(rng, *spec.box_side)
-        size = (max(a, b), min(a, b), h)
-    elif kind == 1:
-        r = _grid_value(rng, *spec.cylinder_radius)
-        size = (2 * r, 2 * r, h)
-    else:
-        size = (_grid_value(rng, *spec.wall_length), spec.wall_thickness, h)
-    yaw = 0.0 if kind == 1 else float(rng.uniform(-math.pi, math.pi))
-    shape = "cylinder" if kind == 1 else "box"
-    half = 0.5 * spec.arena_size
-    xy = rng.uniform(-half, half, size=2)
-    return Obstacle(shape, size, (float(xy[0]), float(xy[1])), yaw)
+def _sample_obstacles(rng: np.random.Generator, spec: ClutterSpec) -> tuple[Obstacle, ...]:
+    """Obstacles drawn in batches until their footprints cover ``obstacle_density`` of the floor."""
+    target = spec.obstacle_density * spec.arena_size**2
+    obstacles: list[Obstacle] = []
+    covered, half, h = 0.0, 0.5 * spec.arena_size, spec.obstacle_height
+    batch = 32
+    while covered < target:
+        kind = rng.choice(3, size=batch, p=spec.shape_probs)
+        side_a, side_b = _grid_values(rng, spec.box_side, batch), _grid_values(rng, spec.box_side, batch)
+        radius, length = _grid_values(rng, spec.cylinder_radius, batch), _grid_values(rng, spec.wall_length, batch)
+        yaw = rng.uniform(-math.pi, math.pi, size=batch)
+        xy = rng.uniform(-half, half, size=(batch, 2))
+        for i in range(batch):
+            if covered >= target:
+                break
+            if kind[i] == 0:
+                o = Obstacle("box", (max(side_a[i], side_b[i]), min(side_a[i], side_b[i]), h), (xy[i, 0], xy[i, 1]),
+                             float(yaw[i]))
+            elif kind[i] == 1:
+                o = Obstacle("cylinder", (2 * radius[i], 2 * radius[i], h), (xy[i, 0], xy[i, 1]), 0.0)
+            else:
+                o = Obstacle("box", (length[i], spec.wall_thickness, h), (xy[i, 0], xy[i, 1]), float(yaw[i]))
+            obstacles.append(o)
+            covered += o.area
+    return tuple(obstacles)
 
 
 def clearance_field(obstacles: tuple[Obstacle, ...], spec: ClutterSpec, cap: float) -> np.ndarray:
     """Distance from every cell centre to the nearest obstacle or wall, capped at ``cap`` metres.
 
-    Each obstacle is evaluated only on the cells within ``cap`` of its enclosing circle; beyond that the capped
-    field is unaffected by it.
+    Each obstacle only matters within ``cap`` of its enclosing circle, so all obstacles are evaluated at once on
+    equal-sized windows around them (one numpy expression: the signed distance of a rounded rectangle, which is
+    a box for rounding 0 and a disc for a square of half-side r rounded by r), then merged by minimum.
     """
     field = np.minimum(spec.wall_clearance, cap)
+    if not obstacles:
+        return field
     c = spec.cell_centres
     n, res, half = len(c), spec.arena_size / len(c), 0.5 * spec.arena_size
-    for o in obstacles:
-        reach = o.radius + cap
-        lo = np.clip(np.floor((np.array(o.position) - reach + half) / res).astype(int), 0, n)
-        hi = np.clip(np.ceil((np.array(o.position) + reach + half) / res).astype(int), 0, n)
-        if lo[0] >= hi[0] or lo[1] >= hi[1]:
-            continue
-        d = o.distance(c[lo[0]:hi[0], None], c[None, lo[1]:hi[1]])
-        window = field[lo[0]:hi[0], lo[1]:hi[1]]
-        np.minimum(window, d, out=window)
+    centre = np.array([o.position for o in obstacles], dtype=float)
+    radius = np.array([o.radius for o in obstacles])
+    cyl = np.array([o.shape == "cylinder" for o in obstacles])
+    half_ext = np.array([(0.5 * o.size[0], 0.5 * o.size[1]) for o in obstacles])
+    rounding = np.where(cyl, radius, 0.0)
+    cos_y = np.cos([o.yaw for o in obstacles])[:, None, None]
+    sin_y = np.sin([o.yaw for o in obstacles])[:, None, None]
+    width = int(math.ceil(2 * (radius.max() + cap) / res)) + 2
+    lo = np.clip(np.floor((centre - radius[:, None] - cap + half) / res).astype(int), 0, max(n - width, 0))
+    ix = np.minimum(lo[:, 0, None] + np.arange(width), n - 1)  # (k, w) cell indices of each window
+    iy = np.minimum(lo[:, 1, None] + np.arange(width), n - 1)
+    dx = c[ix][:, :, None] - centre[:, 0, None, None]
+    dy = c[iy][:, None, :] - centre[:, 1, None, None]
+    qx = np.abs(cos_y * dx + sin_y * dy) - (half_ext[:, 0] - rounding)[:, None, None]
+    qy = np.abs(-sin_y * dx + cos_y * dy) - (half_ext[:, 1] - rounding)[:, None, None]
+    d = (np.hypot(np.maximum(qx, 0.0), np.maximum(qy, 0.0)) + np.minimum(np.maximum(qx, qy), 0.0)
+         - rounding[:, None, None])
+    for k in range(len(obstacles)):
+        window = field[lo[k, 0]:lo[k, 0] + width, lo[k, 1]:lo[k, 1] + width]
+        np.minimum(window, d[k, : window.shape[0], : window.shape[1]], out=window)
     return field
 
 
@@ -136,18 +160,12 @@ def sample_scene(rng: np.random.Generator, spec: ClutterSpec, robot_radius: floa
     Raises:
         RuntimeError: no valid layout in ``spec.max_attempts`` tries (density too high for the robot).
     """
-    area = spec.arena_size**2
     free_margin = robot_radius + 0.5 * spec.resolution
     spawn_margin = robot_radius + spec.spawn_clearance
     c = spec.cell_centres
     for _ in range(spec.max_attempts):
-        obstacles: list[Obstacle] = []
-        covered = 0.0
-        while covered < spec.obstacle_density * area:
-            o = _sample_obstacle(rng, spec)
-            obstacles.append(o)
-            covered += o.area
-        field = clearance_field(tuple(obstacles), spec, cap=spawn_margin + spec.resolution)
+        obstacles = _sample_obstacles(rng, spec)
+        field = clearance_field(obstacles, spec, cap=spawn_margin + spec.resolution)
         labels, _ = ndimage.label(field > free_margin)
         spawn = np.flatnonzero((field > spawn_margin).ravel())
         if spawn.size < 2:
@@ -163,7 +181,7 @@ def sample_scene(rng: np.random.Generator, spec: ClutterSpec, robot_radius: floa
         goal_cell = int(rng.choice(goals))
         gx, gy = c[goal_cell // len(c)], c[goal_cell % len(c)]
         yaw = float(rng.uniform(-math.pi, math.pi))
-        return Scene(tuple(obstacles), (float(sx), float(sy), yaw), (float(gx), float(gy)))
+        return Scene(obstacles, (float(sx), float(sy), yaw), (float(gx), float(gy)))
     raise RuntimeError(
         f"no layout with a reachable goal in {spec.max_attempts} attempts at obstacle_density="
         f"{spec.obstacle_density} in a {spec.arena_size} m arena; lower the density or enlarge the arena"

@@ -42,7 +42,7 @@ class ObstaclePool:
         self.wall_bodies = []
         for w in walls:
             body = self._sim.add_static_box([0.5 * s for s in w.size], _COLOURS["wall"])
-            self._sim.set_pose(body, (*w.position, 0.5 * w.size[2]), yaw_quat(0.0))
+            self._sim.move_static(body, (*w.position, 0.5 * w.size[2]), yaw_quat(0.0))
             self.wall_bodies.append(body)
         return walls
 
@@ -66,9 +66,9 @@ class ObstaclePool:
         for o in obstacles:
             key = _key(o)
             body = self._free[key].pop() if self._free[key] else self._create(o)
-            self._sim.set_pose(body, (*o.position, 0.5 * o.size[2]), yaw_quat(o.yaw))
+            self._sim.move_static(body, (*o.position, 0.5 * o.size[2]), yaw_quat(o.yaw))
             self._active.append((key, body))
             bodies.append(body)
         for body in released.difference(bodies):
-            self._sim.set_pose(body, PARK_POSITION, (0.0, 0.0, 0.0, 1.0))
+            self._sim.move_static(body, PARK_POSITION, (0.0, 0.0, 0.0, 1.0))
         return bodies

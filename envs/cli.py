@@ -1,0 +1,115 @@
+"""`clutter-gym` command line: ``demo`` now; train, eval, sweep and bench arrive with their issues."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import gymnasium as gym
+import imageio.v2 as imageio
+import numpy as np
+
+import clutter_gym  # noqa: F401  (registers the envs)
+from clutter_gym import ENV_IDS
+from clutter_gym.training.baselines import PotentialFieldNavigator
+
+
+def _positive_int(text: str) -> int:
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be a positive integer, got {text}")
+    return value
+
+
+def write_gif_atomically(path: Path, frames: list[np.ndarray], fps: float) -> None:
+    """Write ``frames`` as a looping GIF; the file appears complete or not at all (temp file + rename)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(suffix=".gif", dir=path.parent)
+    os.close(fd)
+    try:
+        imageio.mimsave(tmp, frames, format="GIF", duration=1000.0 / fps, loop=0)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def demo(args: argparse.Namespace) -> dict:
+    """Roll out the scripted potential-field policy, write a GIF and return the episode summary."""
+    env = gym.make(args.env, render_mode="rgb_array")
+    try:
+        obs, info = env.reset(seed=args.seed)
+        policy = PotentialFieldNavigator.for_env(env)
+        frames = [env.render()]
+        episode_return, contact_steps, min_clearance = 0.0, 0, info["min_clearance"]
+        step_time, steps, terminated, truncated = 0.0, 0, False, False
+        while not (terminated or truncated) and steps < args.max_steps:
+            action = policy(obs)
+            t0 = time.perf_counter()
+            obs, reward, terminated, truncated, info = env.step(action)
+            step_time += time.perf_counter() - t0
+            steps += 1
+            episode_return += reward
+            contact_steps += info["n_contacts"] > 0
+            min_clearance = min(min_clearance, info["min_clearance"])
+            if steps % args.frame_every == 0:
+                frames.append(env.render())
+        frames.append(env.render())
+        gif = Path(args.out) / f"{args.env}-seed{args.seed}.gif"
+        write_gif_atomically(gif, frames, fps=env.metadata["render_fps"] / args.frame_every)
+    finally:
+        env.close()
+    return {
+        "env": args.env,
+        "seed": args.seed,
+        "steps": steps,
+        "return": round(episode_return, 3),
+        "success": bool(info["is_success"]),
+        "contact_steps": int(contact_steps),
+        "min_clearance_m": round(float(min_clearance), 4),
+        "steps_per_s": round(steps / step_time, 1) if step_time > 0 else None,
+        "gif": str(gif),
+    }
+
+
+def _print_demo(summary: dict) -> None:
+    print(f"{summary['env']} seed {summary['seed']}: scripted potential-field policy")
+    print(f"  steps          {summary['steps']}  ({'goal reached' if summary['success'] else 'goal not reached'})")
+    print(f"  return         {summary['return']:.2f}")
+    print(f"  contact steps  {summary['contact_steps']}")
+    print(f"  min clearance  {summary['min_clearance_m']:.3f} m")
+    print(f"  env steps/s    {summary['steps_per_s']} (env.step only, rendering excluded)")
+    print(f"  episode GIF    {summary['gif']}")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="clutter-gym", description=__doc__)
+    sub = parser.add_subparsers(dest="command", required=True)
+    p = sub.add_parser("demo", help="roll out a scripted policy, write an episode GIF and print a summary")
+    p.add_argument("--env", choices=ENV_IDS, default="ClutterNav-v0")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--max-steps", type=_positive_int, default=400, help="stop the episode after this many steps")
+    p.add_argument("--frame-every", type=_positive_int, default=2, help="keep every k-th frame in the GIF")
+    p.add_argument("--out", default="out/demo", help="folder for the GIF")
+    p.add_argument("--json", action="store_true", help="print the summary as JSON")
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    if args.command == "demo":
+        summary = demo(args)
+        if args.json:
+            print(json.dumps(summary))
+        else:
+            _print_demo(summary)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,28 @@
+"""Shared fixtures: envs that are always closed, and a standard open scene for analytic checks."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import pytest
+
+import clutter_gym  # noqa: F401  (registers the envs)
+
+
+@pytest.fixture
+def make_env():
+    """Factory for gym.make(...) envs that closes every env it made."""
+    made = []
+
+    def factory(env_id: str = "ClutterNav-v0", **kwargs):
+        env = gym.make(env_id, **kwargs)
+        made.append(env)
+        return env
+
+    yield factory
+    for env in made:
+        env.close()
+
+
+def empty_scene(start=(0.0, 0.0, 0.0), goal=(2.5, 2.5), obstacles=()) -> dict:
+    """A scene in the reset-options format."""
+    return {"obstacles": list(obstacles), "start": list(start), "goal": list(goal)}

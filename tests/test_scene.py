@@ -1,0 +1,94 @@
+"""Explicit scenes: exact placement, round trips, pooled bodies, and errors that name the field."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import empty_scene
+
+from clutter_gym.sim import pb
+
+CHASSIS_RADIUS = 0.17  # diffbot.urdf: the chassis cylinder encloses every other link seen from above
+LIDAR_X = 0.05  # lidar_link origin ahead of the base frame
+
+
+def test_explicit_scene_is_placed_exactly(make_env):
+    env = make_env()
+    wall = {"shape": "box", "size": [0.2, 2.0, 0.5], "position": [1.0, 0.0], "yaw": 0.0}
+    post = {"shape": "cylinder", "radius": 0.3, "height": 0.5, "position": [0.0, 1.5]}
+    obs, info = env.reset(options={"scene": empty_scene(obstacles=[wall, post])})
+    scene = env.unwrapped.scene
+    assert [o.shape for o in scene.obstacles] == ["box", "cylinder"]
+    # FCL: nearest obstacle is the wall face at x = 0.9, the chassis edge at x = 0.17.
+    assert info["min_clearance"] == pytest.approx(0.9 - CHASSIS_RADIUS, abs=1e-6)
+    ranges = info["lidar_ranges"]
+    angles = env.unwrapped.sensors[0].config.angles
+    front = np.argmin(np.abs(angles))
+    assert ranges[front] == pytest.approx(0.9 - LIDAR_X, abs=1e-3)
+    left = np.argmin(np.abs(angles - np.pi / 2))
+    # beam from (0.05, 0) along +y meets the circle x^2 + (y - 1.5)^2 = 0.3^2
+    expected = 1.5 - np.sqrt(0.3**2 - LIDAR_X**2)
+    assert ranges[left] == pytest.approx(expected, abs=1e-3)
+
+
+def test_scene_round_trip_reproduces_the_layout(make_env):
+    a, b = make_env(), make_env()
+    obs_a, _ = a.reset(seed=21)
+    obs_b, _ = b.reset(options={"scene": a.unwrapped.scene.to_dict()})
+    for key in obs_a:
+        np.testing.assert_allclose(obs_a[key], obs_b[key], atol=1e-9)
+
+
+def test_new_layouts_move_pooled_bodies_without_reloading(make_env):
+    env = make_env()
+    env.reset(seed=0)
+    unwrapped = env.unwrapped
+    robot = unwrapped.robot.body
+    for _ in range(50):
+        env.reset()
+    cid = unwrapped.sim._cid
+    n_bodies = pb.getNumBodies(physicsClientId=cid)
+    # ground + 4 walls + robot + goal marker + pooled obstacles: nothing else was ever created
+    assert n_bodies == 7 + unwrapped.arena.pool_size
+    assert unwrapped.robot.body == robot
+    for _ in range(30):  # the same layouts again: the pool has every shape already
+        env.reset(seed=0)
+    assert pb.getNumBodies(physicsClientId=cid) == n_bodies
+
+
+@pytest.mark.parametrize(
+    "scene, pattern",
+    [
+        ([1, 2], r"scene must be a dict"),
+        ({"start": [0, 0, 0]}, r"scene.goal is required"),
+        ({"start": [0, 0, 0], "goal": [1, 1], "walls": []}, r"unknown keys \['walls'\]"),
+        ({"start": [0, 0], "goal": [1, 1]}, r"scene.start must be a list of 3 numbers"),
+        ({"start": [0, 0, 0], "goal": [9, 0]}, r"scene.goal must lie inside the arena"),
+        ({"start": [2.9, 0, 0], "goal": [1, 1]}, r"scene.start must lie inside the arena: \|x\|, \|y\| <= 2.830"),
+        ({"start": [0, float("nan"), 0], "goal": [1, 1]}, r"scene.start must be finite"),
+        ({"start": [0, 0, 0], "goal": [1, 1], "obstacles": {"shape": "box"}}, r"scene.obstacles must be a list"),
+        ({"start": [0, 0, 0], "goal": [1, 1], "obstacles": [{"shape": "sphere"}]},
+         r"scene.obstacles\[0\].shape must be one of \('box', 'cylinder'\)"),
+        ({"start": [0, 0, 0], "goal": [1, 1],
+          "obstacles": [{"shape": "box", "size": [1, -1, 1], "position": [2, 2]}]},
+         r"scene.obstacles\[0\].size y must be in \(0, 6.0\] m"),
+        ({"start": [0, 0, 0], "goal": [1, 1],
+          "obstacles": [{"shape": "cylinder", "radius": 0.2, "position": [2, 2]}]},
+         r"scene.obstacles\[0\] is missing \['height'\]"),
+        ({"start": [0, 0, 0], "goal": [1, 1],
+          "obstacles": [{"shape": "cylinder", "radius": 0.2, "height": 0.5, "position": [2, 2], "yaw": 1}]},
+         r"scene.obstacles\[0\] has unknown keys \['yaw'\]"),
+        ({"start": [0, 0, 0], "goal": [1, 1],
+          "obstacles": [{"shape": "box", "size": [1, 1, 1], "position": [0.3, 0]}]},
+         r"scene.start \(0.0, 0.0\) is -0.200 m from the nearest obstacle"),
+    ],
+)
+def test_malformed_scenes_raise_naming_the_field(scene, pattern, make_env):
+    env = make_env()
+    with pytest.raises(ValueError, match=pattern):
+        env.reset(options={"scene": scene})
+
+
+def test_unknown_reset_option_is_named(make_env):
+    with pytest.raises(ValueError, match=r"unknown reset options \['layout'\]; allowed: \['scene'\]"):
+        make_env().reset(options={"layout": {}})

@@ -1,0 +1,60 @@
+"""Reward terms, success and weights of the navigation task."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import empty_scene
+
+
+def test_goal_within_reach_is_a_success(make_env):
+    env = make_env(success_weight=7.0)
+    env.reset(options={"scene": empty_scene(goal=(0.2, 0.0))})
+    _, reward, terminated, truncated, info = env.step(np.zeros(2))
+    assert terminated and not truncated and info["is_success"]
+    assert info["reward_terms"]["success"] == 7.0
+
+
+def test_goal_observation_is_distance_and_bearing_in_the_robot_frame(make_env):
+    env = make_env()
+    obs, _ = env.reset(options={"scene": empty_scene(start=(0.0, 0.0, np.pi / 2), goal=(2.0, 0.0))})
+    distance, sin_b, cos_b = obs["goal"]
+    assert distance == pytest.approx(2.0, abs=1e-6)
+    # the goal lies along world +x; the robot faces +y, so the goal is 90 degrees to its right
+    assert sin_b == pytest.approx(-1.0, abs=1e-6) and cos_b == pytest.approx(0.0, abs=1e-6)
+
+
+def test_terms_at_a_known_clearance(make_env):
+    """The robot starts 0.05 m from a wall: clearance term = -w * (0.1 - 0.05) / 0.1 = -0.25 for w = 0.5."""
+    box = {"shape": "box", "size": [0.2, 2.0, 0.5], "position": [0.32, 0.0], "yaw": 0.0}
+    env = make_env(clearance_weight=0.5, clearance_margin=0.1, control_weight=0.01, time_weight=0.01)
+    env.reset(options={"scene": empty_scene(obstacles=[box])})
+    _, reward, _, _, info = env.step(np.array([0.0, 0.0]))
+    terms = info["reward_terms"]
+    assert info["min_clearance"] == pytest.approx(0.05, abs=2e-3)
+    assert terms["clearance"] == pytest.approx(-0.25, abs=0.01)
+    assert terms["time"] == -0.01 and terms["control"] == 0.0 and terms["contact"] == 0.0
+    assert reward == pytest.approx(sum(terms.values()))
+
+
+def test_progress_and_control_terms(make_env):
+    env = make_env(progress_weight=10.0, control_weight=0.02)
+    env.reset(options={"scene": empty_scene(goal=(2.5, 0.0))})
+    before = env.unwrapped.robot.state().position[0]
+    _, _, _, _, info = env.step(np.array([1.0, 0.5]))
+    after = env.unwrapped.robot.state().position
+    progress = 2.5 - before - np.hypot(2.5 - after[0], after[1])
+    assert info["reward_terms"]["progress"] == pytest.approx(10.0 * progress, rel=1e-6)
+    assert info["reward_terms"]["control"] == pytest.approx(-0.02 * 1.25)
+
+
+def test_weights_scale_their_terms(make_env):
+    a, b = make_env(contact_weight=1.0), make_env(contact_weight=3.0)
+    box = {"shape": "box", "size": [0.2, 2.0, 0.5], "position": [0.3, 0.0], "yaw": 0.0}
+    for env in (a, b):
+        env.reset(options={"scene": empty_scene(start=(0.0, 0.0, 0.0), obstacles=[box])})
+    for _ in range(15):
+        info_a = a.step(np.array([1.0, 0.0]))[4]
+        info_b = b.step(np.array([1.0, 0.0]))[4]
+    assert info_a["n_contacts"] > 0
+    assert info_b["reward_terms"]["contact"] == 3 * info_a["reward_terms"]["contact"]
