@@ -91,6 +91,9 @@ def _prism_mesh(radius: float, height: float, sides: int) -> tuple[list[list[flo
     return vertices.tolist(), faces.ravel().tolist()
 
 
+_UNIT_PRISM = _prism_mesh(1.0, 1.0, CYLINDER_SIDES)
+
+
 @dataclass(frozen=True)
 class LinkStates:
     """Batched link states, world frame, one row per requested link.
@@ -132,6 +135,7 @@ class Sim:
         if self._cid < 0:
             raise RuntimeError("pybullet could not open a physics client")
         self.bodies: dict[str, int] = {}
+        self._filters: dict[int, tuple[int, int]] = {}  # body -> (collision group, mask) set by this Sim
         self.physics_hz = float(physics_hz)
         pb.setPhysicsEngineParameter(
             fixedTimeStep=1.0 / self.physics_hz,
@@ -201,11 +205,12 @@ class Sim:
         up to 2.8 mm, while the 64-gon prism is hit by BVH ray-triangle tests with at most 0.52 mm error and no
         mean bias (measured in benchmarks/cylinder_rays.py). The visual shape stays a true cylinder.
         """
-        vertices, indices = _prism_mesh(radius, height, CYLINDER_SIDES)
+        vertices, indices = _UNIT_PRISM  # one shared list: pybullet keeps a reference to every list it is given
         col = pb.createCollisionShape(
             pb.GEOM_MESH,
             vertices=vertices,
             indices=indices,
+            meshScale=[radius, radius, height],
             flags=pb.GEOM_FORCE_CONCAVE_TRIMESH,
             physicsClientId=self._cid,
         )
@@ -233,8 +238,26 @@ class Sim:
         Bullet's default masks (all bits for dynamic bodies, all but the static bit for static ones) include this
         group, so contacts with the ground and obstacles are unchanged.
         """
+        self._filters[body] = (RAY_INVISIBLE_GROUP, -1)
+        self._apply_filter(body)
+
+    def forget_contacts(self, body: int) -> None:
+        """Drop Bullet's cached contact manifolds of ``body`` (call after teleporting it).
+
+        Bullet keeps a pair's contact points, and the impulses it warm-starts the solver with, for as long as the
+        points stay within the breaking threshold. A body reset to where it just was would start its episode
+        warm-started from the last one, so the same seed would not give the same trajectory. Re-applying the
+        collision filter re-registers the link colliders with the broad phase, which deletes their pairs. Only
+        bodies whose filter this Sim set (:meth:`hide_from_rays`) can be re-registered.
+        """
+        if body not in self._filters:
+            raise ValueError(f"body {body} has no recorded collision filter; call hide_from_rays first")
+        self._apply_filter(body)
+
+    def _apply_filter(self, body: int) -> None:
+        group, mask = self._filters[body]
         for link in range(-1, pb.getNumJoints(body, physicsClientId=self._cid)):
-            pb.setCollisionFilterGroupMask(body, link, RAY_INVISIBLE_GROUP, -1, physicsClientId=self._cid)
+            pb.setCollisionFilterGroupMask(body, link, group, mask, physicsClientId=self._cid)
 
     def move_static(self, body: int, position: Sequence[float], quaternion: Sequence[float]) -> None:
         """Teleport a static body (its base inertial frame); it has no velocity to reset."""

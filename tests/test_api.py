@@ -70,6 +70,19 @@ def test_same_seed_after_a_different_history(env_id, make_env):
 
 
 @pytest.mark.parametrize("env_id", ENV_IDS)
+def test_reset_to_the_same_start_right_after_a_step_repeats_the_first_step(env_id, make_env):
+    """Bullet keeps contact manifolds of a body reset to where it just was; reset must drop them."""
+    env, fresh = make_env(env_id), make_env(env_id)
+    action = np.array([0.3, -0.2], dtype=np.float32)
+    env.reset(seed=123)
+    first = env.step(action)[0]
+    env.reset(seed=123)
+    again = env.step(action)[0]
+    fresh.reset(seed=123)
+    assert_same([first, fresh.step(action)[0]], [again, again])
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
 def test_different_seeds_differ(env_id, make_env):
     env = make_env(env_id)
     first, _ = env.reset(seed=1)

@@ -92,6 +92,7 @@ class DiffDriveRobot:
         q = yaw_quat(yaw)
         com = np.array([x, y, self.config.wheel_radius]) + quat_to_matrix(np.array(q)) @ self._com_offset
         self._sim.set_pose(self._body, com, q)
+        self._sim.forget_contacts(self._body)  # the same seed must not warm-start from the last episode
         self._sim.reset_joints(self._body, self._wheels)
         self._sim.set_joint_velocities(self._body, self._wheels, [0.0, 0.0], self._torques)
 
