@@ -47,7 +47,7 @@ def ensure_installed() -> None:
     deps = _digest(("pyproject.toml", "constraints.txt"))
     if not deps_stamp.exists() or deps_stamp.read_text() != deps:
         print("installing dependencies into .venv (first run: a few minutes) ...", flush=True)
-        _pip(f"{ROOT}[test,train]")
+        _pip(f"{ROOT}[test,train,bench]")
         deps_stamp.write_text(deps)
     pkg = _digest(SOURCES)
     if not pkg_stamp.exists() or pkg_stamp.read_text() != pkg:

@@ -61,7 +61,7 @@ class ClutterEnv(gym.Env):
         self.render_mode = render_mode
         self.render_size = render_size
         self.metadata = {**self.metadata, "render_fps": int(round(control_hz))}
-        self._substeps = int(round(sim.physics_hz / control_hz))
+        self.substeps = int(round(sim.physics_hz / control_hz))  # physics ticks per action
         arena.load(sim)
         robot.load(sim)
         self._goal_marker = sim.add_marker("goal", task.success_radius, (0.1, 0.8, 0.2, 0.9))
@@ -74,7 +74,6 @@ class ClutterEnv(gym.Env):
             }
         )
         self.scene: Scene | None = None
-        self._obstacle_bodies: frozenset[int] = frozenset()
 
     # ------------------------------------------------------------------------------------------ episode
     def reset(
@@ -110,7 +109,7 @@ class ClutterEnv(gym.Env):
             raise RuntimeError("call reset() before step()")
         a = self._checked_action(action)
         self.robot.apply_action(a)
-        self.sim.step(self._substeps)
+        self.sim.step(self.substeps)
         state = self.robot.state()
         report = self.checker.check(state, self.sim.contact_distances(self.robot.body))
         obs, info = self._observe(state)
@@ -149,9 +148,9 @@ class ClutterEnv(gym.Env):
                 info[sensor.info_key] = reading
         obs[self.task.name] = self.task.observe(state)
         obs["velocity"] = self.robot.observe(state)
-        for key, value in obs.items():
-            if not np.all(np.isfinite(value)):
-                raise FloatingPointError(f"observation {key!r} is not finite: {value}")
+        if not math.isfinite(sum(float(v.sum()) for v in obs.values())):  # NaN/Inf anywhere poisons the sum
+            bad = [key for key, value in obs.items() if not np.all(np.isfinite(value))]
+            raise FloatingPointError(f"non-finite observation {bad}: {[obs[k] for k in bad]}")
         return obs, info
 
     # ---------------------------------------------------------------------------------------- rendering

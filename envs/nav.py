@@ -90,7 +90,7 @@ class ClutterNavEnv(ClutterEnv):
         obstacle_density: float = 0.12,
         n_rays: int = 64,
         lidar_fov: float = 2 * math.pi,
-        lidar_range: float = 5.0,
+        lidar_range: float = 3.5,
         lidar_mount_height: float = 0.0,
         physics_hz: float = 120.0,
         control_hz: float = 20.0,

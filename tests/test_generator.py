@@ -49,11 +49,12 @@ def test_layouts_meet_density_spawn_clearance_and_goal_distance():
         assert distance >= spec.min_goal_distance * spec.arena_size
 
 
-def test_sizes_lie_on_the_pool_grid():
+def test_generated_shapes_come_from_a_small_catalogue():
+    """3 levels per range: boxes (a >= b) 6 shapes, cylinders 3, wall segments 3."""
     rng = np.random.default_rng(0)
-    sizes = {round(v, 6) for _ in range(20) for o in sample_scene(rng, ClutterSpec(), ROBOT_RADIUS).obstacles
-             for v in o.size[:2]}
-    assert all(abs(v / 0.05 - round(v / 0.05)) < 1e-6 for v in sizes)
+    shapes = {(o.shape, *o.size) for _ in range(200) for o in sample_scene(rng, ClutterSpec(), ROBOT_RADIUS).obstacles}
+    assert len(shapes) == 12
+    assert {s[1] for s in shapes if s[0] == "cylinder"} == {0.2, 0.4, 0.6}  # diameters of radii 0.1, 0.2, 0.3
 
 
 def test_density_zero_gives_an_empty_arena():

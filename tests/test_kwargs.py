@@ -26,7 +26,7 @@ import pytest
         ({"obstacle_density": -0.1}, r"obstacle_density must be in \[0, 0.3\]"),
         ({"arena_size": 1.0}, r"arena_size must be in \[2, 30\] metres"),
         ({"arena_size": float("nan")}, r"arena_size must be in \[2, 30\] metres"),
-        ({"lidar_range": 0.01}, r"lidar_range must be in \(0.05, 100\] metres"),
+        ({"lidar_range": 0.01}, r"lidar_range must be in \(0.12, 100\] metres"),
         ({"lidar_fov": 7.0}, r"lidar_fov must be in \(0, 2\*pi\] radians"),
         ({"lidar_mount_height": 5.0}, r"lidar_mount_height must be in \[-0.5, 2\] metres"),
         ({"max_linear_speed": 0.0}, r"max_linear_speed must be in \(0, 2.0\]"),
@@ -37,6 +37,7 @@ import pytest
         ({"render_mode": "ascii"}, r"render_mode must be None or one of \('human', 'rgb_array'\)"),
     ],
 )
+@pytest.mark.filterwarnings("ignore:.*render_mode:UserWarning")
 def test_invalid_kwargs_raise_at_make(kwargs, pattern):
     with pytest.raises(ValueError, match=pattern):
         gym.make("ClutterNav-v0", **kwargs)

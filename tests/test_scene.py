@@ -48,10 +48,12 @@ def test_new_layouts_move_pooled_bodies_without_reloading(make_env):
         env.reset()
     cid = unwrapped.sim._cid
     n_bodies = pb.getNumBodies(physicsClientId=cid)
-    # ground + 4 walls + robot + goal marker + pooled obstacles: nothing else was ever created
+    # ground + 4 walls + robot + goal marker + pooled obstacles: nothing else is in the world
     assert n_bodies == 7 + unwrapped.arena.pool_size
     assert unwrapped.robot.body == robot
-    for _ in range(30):  # the same layouts again: the pool has every shape already
+    pool = unwrapped.arena._pool
+    assert pool.size <= len(unwrapped.scene.obstacles) + pool.max_parked  # parked bodies are capped
+    for _ in range(30):  # the same layout again: the pool has every shape already
         env.reset(seed=0)
     assert pb.getNumBodies(physicsClientId=cid) == n_bodies
 

@@ -102,7 +102,8 @@ class CollisionChecker:
         world_rot = rot @ self._local_rot
         world_pos = pos + (rot @ self._local_pos[:, :, None])[:, :, 0]
         for obj, r, t in zip(self._robot_objects, world_rot, world_pos):
-            obj.setTransform(fcl.Transform(r, t))
+            obj.setRotation(r)
+            obj.setTranslation(t)
         self._robot_manager.update()
 
     def min_clearance(self, state: RobotState) -> float:

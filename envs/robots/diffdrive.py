@@ -61,6 +61,7 @@ class DiffDriveRobot:
         c = self.config
         self.velocity_bound = np.array([2.0 * c.max_linear_speed, 2.0 * c.max_angular_speed], dtype=np.float32)
         self.observation_space = spaces.Box(-self.velocity_bound, self.velocity_bound, dtype=np.float32)
+        self._velocity_limits = (float(self.velocity_bound[0]), float(self.velocity_bound[1]))
         self._sim: Sim | None = None
         self._body = -1
 
@@ -72,6 +73,16 @@ class DiffDriveRobot:
     def body(self) -> int:
         return self._body
 
+    @property
+    def wheel_joints(self) -> list[int]:
+        """pybullet joint indices of the (left, right) wheels."""
+        return list(self._wheels)
+
+    @property
+    def tracked_links(self) -> list[int]:
+        """pybullet link indices read every step, in the order of ``TRACKED_LINKS``."""
+        return list(self._tracked)
+
     def load(self, sim: Sim) -> int:
         """Load the URDF into ``sim`` (once per env) and look up joint and link indices."""
         self._sim = sim
@@ -81,7 +92,7 @@ class DiffDriveRobot:
         self._wheels = [joints["left_wheel_joint"], joints["right_wheel_joint"]]
         links = sim.link_indices(self._body)
         self.link_names = TRACKED_LINKS
-        self._tracked = [links[name] for name in TRACKED_LINKS]
+        self._tracked = tuple(links[name] for name in TRACKED_LINKS)
         self._com_offset = sim.base_inertial_offset(self._body)
         c = self.config
         self._torques = [c.max_wheel_torque, c.max_wheel_torque]
@@ -108,20 +119,23 @@ class DiffDriveRobot:
 
     def state(self) -> RobotState:
         """Ground-truth state from three batched pybullet reads."""
-        com, quat, lin, ang = self._sim.base_state(self._body)
-        rot = quat_to_matrix(np.asarray(quat))
+        com, quat, rot, lin, ang = self._sim.base_state(self._body)
         return RobotState(
             position=np.asarray(com) - rot @ self._com_offset,
             quaternion=np.asarray(quat),
             rotation=rot,
-            linear_velocity=np.asarray(lin),
-            angular_velocity=np.asarray(ang),
+            linear_velocity=lin,
+            angular_velocity=ang,
             links=self._sim.link_states(self._body, self._tracked),
             link_names=self.link_names,
+            link_ids=self._tracked,
+            body=self._body,
         )
 
     def observe(self, state: RobotState) -> np.ndarray:
         """(forward speed m/s, yaw rate rad/s) in the base frame, clipped to twice the commanded maxima."""
-        v = state.rotation[:, 0] @ state.linear_velocity
-        w = state.rotation[:, 2] @ state.angular_velocity
-        return np.clip(np.array([v, w], dtype=np.float32), -self.velocity_bound, self.velocity_bound)
+        r, lin, ang = state.rotation, state.linear_velocity, state.angular_velocity
+        v = r[0, 0] * lin[0] + r[1, 0] * lin[1] + r[2, 0] * lin[2]
+        w = r[0, 2] * ang[0] + r[1, 2] * ang[1] + r[2, 2] * ang[2]
+        v_max, w_max = self._velocity_limits
+        return np.array([min(max(v, -v_max), v_max), min(max(w, -w_max), w_max)], dtype=np.float32)

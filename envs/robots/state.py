@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -9,7 +10,7 @@ import numpy as np
 from clutter_gym.sim import LinkStates
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class RobotState:
     """World-frame state of a robot after a physics step.
 
@@ -17,24 +18,28 @@ class RobotState:
         position: (3,) origin of the URDF base frame, metres.
         quaternion: (4,) base orientation (x, y, z, w).
         rotation: (3, 3) base orientation as a matrix (columns are the base axes in world coordinates).
-        linear_velocity: (3,) velocity of the base centre of mass, m/s.
-        angular_velocity: (3,) base angular velocity, rad/s.
+        linear_velocity: velocity of the base centre of mass (vx, vy, vz), m/s.
+        angular_velocity: base angular velocity (wx, wy, wz), rad/s.
         links: poses and velocities of the robot's tracked links (sensor mounts, collision links).
         link_names: names of the rows of ``links``.
+        link_ids: pybullet link indices of the rows of ``links``.
+        body: pybullet body id of the robot.
     """
 
     position: np.ndarray
     quaternion: np.ndarray
     rotation: np.ndarray
-    linear_velocity: np.ndarray
-    angular_velocity: np.ndarray
+    linear_velocity: tuple[float, float, float]
+    angular_velocity: tuple[float, float, float]
     links: LinkStates
     link_names: tuple[str, ...]
+    link_ids: tuple[int, ...]
+    body: int
 
     @property
     def yaw(self) -> float:
         """Heading of the base x axis about +z, radians in (-pi, pi]."""
-        return float(np.arctan2(self.rotation[1, 0], self.rotation[0, 0]))
+        return math.atan2(self.rotation[1, 0], self.rotation[0, 0])
 
     def link(self, name: str) -> int:
         """Row of ``links`` that holds link ``name``."""

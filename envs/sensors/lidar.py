@@ -14,7 +14,7 @@ from clutter_gym.sim import Sim
 
 @dataclass(frozen=True)
 class LidarConfig:
-    """Scan geometry.
+    """Scan geometry. Range defaults are the TurtleBot3 LDS-01's (0.12-3.5 m; shared/sensor-noise-reference.md L8).
 
     Attributes:
         n_rays: beams per scan, in [1, 4096].
@@ -28,8 +28,8 @@ class LidarConfig:
 
     n_rays: int = 64
     fov: float = 2 * math.pi
-    max_range: float = 5.0
-    min_range: float = 0.05
+    max_range: float = 3.5
+    min_range: float = 0.12
     mount_height: float = 0.0
     link: str = "lidar_link"
 
@@ -65,7 +65,11 @@ class Lidar:
         self.config = c = config or LidarConfig()
         self.observation_space = spaces.Box(0.0, 1.0, shape=(c.n_rays,), dtype=np.float32)
         a = c.angles
-        self._dirs = np.stack([np.cos(a), np.sin(a), np.zeros_like(a)], axis=1)  # mount frame
+        dirs = np.stack([np.cos(a), np.sin(a), np.zeros_like(a)], axis=1)
+        centre = np.array([0.0, 0.0, c.mount_height])
+        # beams in the mount link's frame: constant, pybullet moves them with the link
+        self.ray_starts = (centre + c.min_range * dirs).tolist()
+        self.ray_ends = (centre + c.max_range * dirs).tolist()
         self._span = c.max_range - c.min_range
 
     def reset(self, state: RobotState) -> None:
@@ -73,12 +77,9 @@ class Lidar:
 
     def read(self, sim: Sim, state: RobotState) -> np.ndarray:
         """Ranges (metres) measured from the mount origin, ``max_range`` where nothing is hit."""
-        c, row = self.config, state.link(self.config.link)
-        rot = state.links.rotation[row]
-        origin = state.links.position[row] + rot[:, 2] * c.mount_height
-        dirs = self._dirs @ rot.T
-        fractions = sim.ray_hit_fractions(origin + c.min_range * dirs, origin + c.max_range * dirs)
-        return c.min_range + fractions * self._span
+        link = state.link_ids[state.link(self.config.link)]
+        fractions = sim.ray_hit_fractions(self.ray_starts, self.ray_ends, body=state.body, link=link)
+        return self.config.min_range + fractions * self._span
 
     def observe(self, reading: np.ndarray) -> np.ndarray:
         return (reading / self.config.max_range).astype(np.float32)

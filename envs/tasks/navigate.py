@@ -87,11 +87,12 @@ class NavigateTask:
         low = np.array([0.0, -1.0, -1.0], dtype=np.float32)
         high = np.array([max_goal_distance, 1.0, 1.0], dtype=np.float32)
         self.observation_space = spaces.Box(low, high, dtype=np.float32)
+        self._max_goal_distance = float(high[0])
         self._goal = np.zeros(2)
         self._previous_distance = 0.0
 
     def reset(self, goal: tuple[float, float], state: RobotState) -> None:
-        self._goal = np.asarray(goal, dtype=float)
+        self._goal = (float(goal[0]), float(goal[1]))
         self._previous_distance = self._distance(state)
 
     def _distance(self, state: RobotState) -> float:
@@ -99,10 +100,10 @@ class NavigateTask:
 
     def observe(self, state: RobotState) -> np.ndarray:
         """(distance m, sin bearing, cos bearing); bearing is the goal direction in the robot frame, CCW from +x."""
-        dx, dy = self._goal - state.position[:2]
+        dx, dy = self._goal[0] - state.position[0], self._goal[1] - state.position[1]
         bearing = math.atan2(dy, dx) - state.yaw
-        obs = np.array([math.hypot(dx, dy), math.sin(bearing), math.cos(bearing)], dtype=np.float32)
-        return np.clip(obs, self.observation_space.low, self.observation_space.high)
+        distance = min(math.hypot(dx, dy), self._max_goal_distance)
+        return np.array([distance, math.sin(bearing), math.cos(bearing)], dtype=np.float32)
 
     def evaluate(self, state: RobotState, report: CollisionReport, action: np.ndarray) -> StepOutcome:
         """Reward terms and termination after a step, from ground truth only."""

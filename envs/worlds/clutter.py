@@ -2,9 +2,9 @@
 
 Sampling, per attempt:
 
-1. Obstacles (boxes, cylinders, wall segments) at uniform positions until their footprints cover
-   ``obstacle_density`` of the arena floor. Sizes come from a grid with ``SIZE_STEP`` spacing, so that the body
-   pool (``worlds/pool.py``) holds a bounded number of distinct shapes.
+1. Obstacles (boxes, cylinders, wall segments) at uniform positions and yaws until their footprints cover
+   ``obstacle_density`` of the arena floor. Sizes take one of ``size_levels`` evenly spaced values per range,
+   so that the body pool (``worlds/pool.py``) covers every layout with a few dozen bodies.
 2. A clearance field on an occupancy grid of ``resolution`` metres: the exact signed distance from each cell
    centre to the nearest obstacle footprint or wall, evaluated only in each obstacle's window.
 3. A cell is *free* when its clearance exceeds ``r + resolution / 2`` (r = footprint radius). The distance is
@@ -26,7 +26,6 @@ from scipy import ndimage
 
 from clutter_gym.worlds.scene import Obstacle, Scene
 
-SIZE_STEP = 0.05  # metres; generated sizes are multiples of this
 MAX_DENSITY = 0.3  # beyond this a walled arena cannot reliably keep a free path for the robot
 
 
@@ -42,6 +41,8 @@ class ClutterSpec:
         cylinder_radius: (min, max) metres.
         wall_length: (min, max) length of a wall segment, metres (thickness ``wall_thickness``).
         shape_probs: probabilities of (box, cylinder, wall segment).
+        size_levels: evenly spaced sizes per range, in [1, 10]: the number of distinct shapes, and with it the
+            body pool (whose parked bodies cost physics time), grows with it.
         resolution: occupancy-grid cell size for the reachability check, metres.
         spawn_clearance: extra free space around start and goal beyond the footprint, metres.
         min_goal_distance: straight-line start-goal distance as a fraction of ``arena_size``.
@@ -56,6 +57,7 @@ class ClutterSpec:
     wall_length: tuple[float, float] = (0.8, 2.0)
     wall_thickness: float = 0.1
     shape_probs: tuple[float, float, float] = (0.45, 0.35, 0.2)
+    size_levels: int = 3
     resolution: float = 0.1
     spawn_clearance: float = 0.15
     min_goal_distance: float = 0.4
@@ -69,6 +71,8 @@ class ClutterSpec:
                 f"obstacle_density must be in [0, {MAX_DENSITY}] (fraction of the floor covered), "
                 f"got {self.obstacle_density!r}"
             )
+        if isinstance(self.size_levels, bool) or not isinstance(self.size_levels, int) or not 1 <= self.size_levels <= 10:
+            raise ValueError(f"size_levels must be an integer in [1, 10], got {self.size_levels!r}")
         if not 0.0 < self.min_goal_distance < 1.0:
             raise ValueError(f"min_goal_distance must be in (0, 1) (fraction of arena_size), got {self.min_goal_distance!r}")
 
@@ -86,10 +90,10 @@ class ClutterSpec:
         return np.minimum(d[:, None], d[None, :])
 
 
-def _grid_values(rng: np.random.Generator, bounds: tuple[float, float], n: int) -> np.ndarray:
-    """``n`` values uniform on the SIZE_STEP grid from bounds[0] to bounds[1] inclusive."""
-    steps = int(round((bounds[1] - bounds[0]) / SIZE_STEP))
-    return np.round(bounds[0] + SIZE_STEP * rng.integers(0, steps + 1, size=n), 6)
+def _level_values(rng: np.random.Generator, bounds: tuple[float, float], levels: int, n: int) -> np.ndarray:
+    """``n`` values drawn uniformly from ``levels`` evenly spaced sizes in [bounds[0], bounds[1]] (1 mm grid)."""
+    choices = np.round(np.linspace(bounds[0], bounds[1], levels), 3)
+    return choices[rng.integers(0, levels, size=n)]
 
 
 def _sample_obstacles(rng: np.random.Generator, spec: ClutterSpec) -> tuple[Obstacle, ...]:
@@ -100,8 +104,10 @@ def _sample_obstacles(rng: np.random.Generator, spec: ClutterSpec) -> tuple[Obst
     batch = 32
     while covered < target:
         kind = rng.choice(3, size=batch, p=spec.shape_probs)
-        side_a, side_b = _grid_values(rng, spec.box_side, batch), _grid_values(rng, spec.box_side, batch)
-        radius, length = _grid_values(rng, spec.cylinder_radius, batch), _grid_values(rng, spec.wall_length, batch)
+        k = spec.size_levels
+        side_a, side_b = _level_values(rng, spec.box_side, k, batch), _level_values(rng, spec.box_side, k, batch)
+        radius = _level_values(rng, spec.cylinder_radius, k, batch)
+        length = _level_values(rng, spec.wall_length, k, batch)
         yaw = rng.uniform(-math.pi, math.pi, size=batch)
         xy = rng.uniform(-half, half, size=(batch, 2))
         for i in range(batch):

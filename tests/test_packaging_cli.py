@@ -1,0 +1,69 @@
+"""The installed package: registration, shipped assets, a wheel that carries them, and the CLI."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import gymnasium as gym
+import pytest
+
+import clutter_gym
+from clutter_gym.assets import asset_path
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def test_import_registers_every_env():
+    assert clutter_gym.ENV_IDS
+    for env_id in clutter_gym.ENV_IDS:
+        assert env_id in gym.registry
+
+
+def test_assets_resolve_inside_the_imported_package():
+    import clutter_gym.assets
+
+    urdf = asset_path("robots/diffbot.urdf")
+    assert urdf.is_file() and urdf.is_relative_to(Path(clutter_gym.assets.__file__).parent)
+
+
+def test_missing_asset_names_the_path():
+    with pytest.raises(FileNotFoundError, match="nope.urdf"):
+        asset_path("robots/nope.urdf")
+
+
+def test_wheel_carries_the_assets(tmp_path):
+    subprocess.run(
+        [sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q", "-w", str(tmp_path), str(REPO)],
+        check=True,
+    )
+    (wheel,) = tmp_path.glob("clutter_gym-*.whl")
+    names = zipfile.ZipFile(wheel).namelist()
+    assert "clutter_gym/assets/robots/diffbot.urdf" in names
+    assert "clutter_gym/training/baselines.py" in names
+    assert "clutter_gym/collision/checker.py" in names
+
+
+def test_demo_cli_writes_a_gif_and_a_clean_summary(tmp_path):
+    exe = shutil.which("clutter-gym", path=str(Path(sys.executable).parent))
+    assert exe, "the clutter-gym console script is not installed"
+    result = subprocess.run(
+        [exe, "demo", "--max-steps", "30", "--out", str(tmp_path), "--json"],
+        capture_output=True, text=True, check=True,
+    )
+    summary = json.loads(result.stdout)  # nothing else on stdout: pybullet's C output is silenced
+    assert summary["steps"] == 30 and Path(summary["gif"]).stat().st_size > 1000
+    assert summary["steps_per_s"] > 0
+    assert "b3Warning" not in result.stderr and "pybullet build time" not in result.stderr
+    assert not list(tmp_path.glob("*.tmp*")), "a temporary file was left behind"
+
+
+def test_demo_cli_rejects_bad_options():
+    result = subprocess.run(
+        [sys.executable, "-m", "clutter_gym.cli", "demo", "--max-steps", "0"], capture_output=True, text=True
+    )
+    assert result.returncode == 2 and "must be a positive integer" in result.stderr
