@@ -66,6 +66,8 @@ class ClutterEnv(gym.Env):
         robot.load(sim)
         self._goal_marker = sim.add_marker("goal", task.success_radius, (0.1, 0.8, 0.2, 0.9))
         self.action_space = robot.action_space
+        self._action_low = self.action_space.low.astype(np.float64)
+        self._action_high = self.action_space.high.astype(np.float64)
         self.observation_space = spaces.Dict(
             {
                 **{s.name: s.observation_space for s in self.sensors},
@@ -134,9 +136,9 @@ class ClutterEnv(gym.Env):
         shape = self.action_space.shape
         if a.shape != shape:
             raise ValueError(f"action must have shape {shape}, got {a.shape}")
-        if not np.all(np.isfinite(a)):
+        if not np.isfinite(a).all():
             raise ValueError(f"action must be finite (no NaN/Inf), got {a.tolist()}")
-        return np.clip(a, self.action_space.low, self.action_space.high)
+        return np.minimum(np.maximum(a, self._action_low), self._action_high)
 
     def _observe(self, state: RobotState) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
         obs: dict[str, np.ndarray] = {}

@@ -13,6 +13,7 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import math
+import operator
 import os
 import sys
 from collections.abc import Iterator, Sequence
@@ -89,6 +90,7 @@ def _prism_mesh(radius: float, height: float, sides: int) -> tuple[list[list[flo
 
 
 _UNIT_PRISM = _prism_mesh(1.0, 1.0, CYLINDER_SIDES)
+_HIT_FRACTION = operator.itemgetter(2)  # field 2 of a rayTestBatch result row
 
 
 @dataclass(frozen=True, slots=True)
@@ -376,7 +378,7 @@ class Sim:
             starts, ends, parentObjectUniqueId=body, parentLinkIndex=link, numThreads=1,
             collisionFilterMask=_RAY_MASK, physicsClientId=self._cid,
         )
-        return np.fromiter((h[2] for h in hits), dtype=float, count=len(hits))
+        return np.fromiter(map(_HIT_FRACTION, hits), dtype=float, count=len(hits))
 
     def contact_distances(self, body: int) -> list[tuple[int, float]]:
         """(other body id, signed contact distance in metres) of every contact point of ``body``."""

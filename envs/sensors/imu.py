@@ -45,6 +45,7 @@ class Imu:
         self._bound = np.array([c.accel_range] * 3 + [c.gyro_range] * 3, dtype=np.float32)
         self.observation_space = spaces.Box(-self._bound, self._bound, dtype=np.float32)
         self._gravity = np.array([0.0, 0.0, -c.gravity])
+        self._rate = 1.0 / c.dt
         self._previous_velocity = np.zeros(3)
 
     def reset(self, state: RobotState) -> None:
@@ -53,11 +54,13 @@ class Imu:
 
     def read(self, sim: Sim, state: RobotState) -> np.ndarray:
         row = state.link(self.config.link)
-        velocity = state.links.linear_velocity[row]
-        accel = (velocity - self._previous_velocity) / self.config.dt
-        self._previous_velocity = velocity.copy()
-        rot = state.links.rotation[row]
-        return np.concatenate([rot.T @ (accel - self._gravity), rot.T @ state.links.angular_velocity[row]])
+        velocity = state.links.linear_velocity[row].copy()
+        world = np.empty((2, 3))
+        np.multiply(velocity - self._previous_velocity, self._rate, out=world[0])
+        world[0] -= self._gravity
+        world[1] = state.links.angular_velocity[row]
+        self._previous_velocity = velocity
+        return (world @ state.links.rotation[row]).ravel()  # rows: R^T (a - g), R^T w
 
     def observe(self, reading: np.ndarray) -> np.ndarray:
-        return np.clip(reading, -self._bound, self._bound).astype(np.float32)
+        return np.minimum(np.maximum(reading, -self._bound), self._bound).astype(np.float32)

@@ -44,7 +44,7 @@ class NavRewardWeights:
                 raise ValueError(f"reward weight {name} must be in [0, 1e4], got {value!r}")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class StepOutcome:
     """Reward, its signed terms, and the episode-ending flags of one step."""
 

@@ -128,36 +128,45 @@ def _sample_obstacles(rng: np.random.Generator, spec: ClutterSpec) -> tuple[Obst
 def clearance_field(obstacles: tuple[Obstacle, ...], spec: ClutterSpec, cap: float) -> np.ndarray:
     """Distance from every cell centre to the nearest obstacle or wall, capped at ``cap`` metres.
 
-    Each obstacle only matters within ``cap`` of its enclosing circle, so all obstacles are evaluated at once on
-    equal-sized windows around them (one numpy expression: the signed distance of a rounded rectangle, which is
-    a box for rounding 0 and a disc for a square of half-side r rounded by r), then merged by minimum.
+    An obstacle only matters within ``cap`` of its enclosing circle, so obstacles are evaluated on windows
+    around them: compact ones and long ones (wall segments) in two groups, each group at once on equal-sized
+    windows with one numpy expression, then merged into the field by minimum.
     """
     field = np.minimum(spec.wall_clearance, cap)
-    if not obstacles:
-        return field
+    compact = tuple(o for o in obstacles if o.radius <= 0.5)
+    long = tuple(o for o in obstacles if o.radius > 0.5)
+    for group in (compact, long):
+        if group:
+            _merge_windows(field, group, spec, cap)
+    return field
+
+
+def _merge_windows(field: np.ndarray, obstacles: tuple[Obstacle, ...], spec: ClutterSpec, cap: float) -> None:
+    """Lower ``field`` to each obstacle's signed distance on a window around it.
+
+    The distance is that of a rounded rectangle: a box for rounding 0, a disc for a square of half-side r
+    rounded by r, so boxes and cylinders share one expression.
+    """
     c = spec.cell_centres
     n, res, half = len(c), spec.arena_size / len(c), 0.5 * spec.arena_size
     centre = np.array([o.position for o in obstacles], dtype=float)
     radius = np.array([o.radius for o in obstacles])
-    cyl = np.array([o.shape == "cylinder" for o in obstacles])
     half_ext = np.array([(0.5 * o.size[0], 0.5 * o.size[1]) for o in obstacles])
-    rounding = np.where(cyl, radius, 0.0)
-    cos_y = np.cos([o.yaw for o in obstacles])[:, None, None]
-    sin_y = np.sin([o.yaw for o in obstacles])[:, None, None]
-    width = int(math.ceil(2 * (radius.max() + cap) / res)) + 2
-    lo = np.clip(np.floor((centre - radius[:, None] - cap + half) / res).astype(int), 0, max(n - width, 0))
-    ix = np.minimum(lo[:, 0, None] + np.arange(width), n - 1)  # (k, w) cell indices of each window
-    iy = np.minimum(lo[:, 1, None] + np.arange(width), n - 1)
-    dx = c[ix][:, :, None] - centre[:, 0, None, None]
-    dy = c[iy][:, None, :] - centre[:, 1, None, None]
+    rounding = np.array([o.radius if o.shape == "cylinder" else 0.0 for o in obstacles])
+    yaw = np.array([o.yaw for o in obstacles])
+    cos_y, sin_y = np.cos(yaw)[:, None, None], np.sin(yaw)[:, None, None]
+    width = min(int(math.ceil(2 * (radius.max() + cap) / res)) + 2, n)
+    lo = np.clip(np.floor((centre - radius[:, None] - cap + half) / res).astype(int), 0, n - width)
+    offsets = np.arange(width)
+    dx = c[lo[:, 0, None] + offsets][:, :, None] - centre[:, 0, None, None]
+    dy = c[lo[:, 1, None] + offsets][:, None, :] - centre[:, 1, None, None]
     qx = np.abs(cos_y * dx + sin_y * dy) - (half_ext[:, 0] - rounding)[:, None, None]
     qy = np.abs(-sin_y * dx + cos_y * dy) - (half_ext[:, 1] - rounding)[:, None, None]
     d = (np.hypot(np.maximum(qx, 0.0), np.maximum(qy, 0.0)) + np.minimum(np.maximum(qx, qy), 0.0)
          - rounding[:, None, None])
     for k in range(len(obstacles)):
         window = field[lo[k, 0]:lo[k, 0] + width, lo[k, 1]:lo[k, 1] + width]
-        np.minimum(window, d[k, : window.shape[0], : window.shape[1]], out=window)
-    return field
+        np.minimum(window, d[k], out=window)
 
 
 def sample_scene(rng: np.random.Generator, spec: ClutterSpec, robot_radius: float) -> Scene:
