@@ -128,24 +128,21 @@ def scenario(name: str, seed: int, rounds: int, steps: int, peer: EnvRunner | No
     twin.reset(seed=seed)
     floor = Floor(twin)
     rng = np.random.default_rng(seed)
-    if name == "navigator":
-        policy = PotentialFieldNavigator.for_env(env)
-        choose = lambda obs, i: policy(obs)  # noqa: E731
-    else:
-        choose = None
+    navigator = PotentialFieldNavigator.for_env(env)
     rows: dict[str, list[float]] = {"env": [], "floor": [], "ratio": [], "peer": []}
     for _ in range(rounds):
-        if name != "navigator":
+        if name == "navigator":
+            seconds, actions, ends = runner.run(lambda obs, i: navigator(obs), steps)
+        else:
             walk = smooth_actions(rng, steps)
-            choose = lambda obs, i, walk=walk: walk[i]  # noqa: E731
-        seconds, actions, ends = runner.run(choose, steps)
+            seconds, actions, ends = runner.run(lambda obs, i, walk=walk: walk[i], steps)
         floor_seconds = floor.run(actions, ends)
         rows["env"].append(steps / seconds)
         rows["floor"].append(steps / floor_seconds)
         rows["ratio"].append(seconds / floor_seconds)
         if peer is not None:
-            peer_actions = rng.uniform(-1, 1, size=(steps, *peer.env.action_space.shape))
-            rows["peer"].append(steps / peer.run(lambda obs, i: peer_actions[i], steps)[0])
+            uniform = rng.uniform(-1, 1, size=(steps, *peer.env.action_space.shape))
+            rows["peer"].append(steps / peer.run(lambda obs, i, uniform=uniform: uniform[i], steps)[0])
     same = np.array_equal(env.unwrapped.robot.state().position, twin.unwrapped.robot.state().position)
     assert same, "the floor did not retrace the env's trajectory: the comparison would be unfair"
     env.close()

@@ -83,7 +83,8 @@ def _print_demo(summary: dict) -> None:
     print(f"  return         {summary['return']:.2f}")
     print(f"  contact steps  {summary['contact_steps']}")
     print(f"  min clearance  {summary['min_clearance_m']:.3f} m")
-    print(f"  env steps/s    {summary['steps_per_s']} (env.step only, rendering excluded)")
+    print(f"  env steps/s    {summary['steps_per_s']} (env.step only, in a short run with rendering in between;"
+          " python3 tasks.py bench measures throughput)")
     print(f"  episode GIF    {summary['gif']}")
 
 

@@ -60,7 +60,7 @@ class ClutterEnv(gym.Env):
         self.sensors = tuple(sensors)
         self.render_mode = render_mode
         self.render_size = render_size
-        self.metadata = {**self.metadata, "render_fps": int(round(control_hz))}
+        self.metadata = {**self.metadata, "render_fps": control_hz}
         self.substeps = int(round(sim.physics_hz / control_hz))  # physics ticks per action
         arena.load(sim)
         robot.load(sim)
@@ -167,7 +167,7 @@ class ClutterEnv(gym.Env):
             self.sim.follow_camera(position, 0.9 * arena, 0.0, -60.0)
             return None
         width, height = self.render_size
-        return self.sim.render(width, height, eye=(0.0, -0.62 * arena, 0.78 * arena), target=(0.0, -0.04 * arena, 0.0))
+        return self.sim.render(width, height, eye=(0.0, -0.62 * arena, 0.78 * arena), target=(0.0, -0.1 * arena, 0.0))
 
     def close(self) -> None:
         self.sim.close()

@@ -59,7 +59,7 @@ def test_demo_cli_writes_a_gif_and_a_clean_summary(tmp_path):
     assert summary["steps"] == 30 and Path(summary["gif"]).stat().st_size > 1000
     assert summary["steps_per_s"] > 0
     assert "b3Warning" not in result.stderr and "pybullet build time" not in result.stderr
-    assert not list(tmp_path.glob("*.tmp*")), "a temporary file was left behind"
+    assert list(tmp_path.iterdir()) == [Path(summary["gif"])], "a temporary file was left behind"
 
 
 def test_demo_cli_rejects_bad_options():

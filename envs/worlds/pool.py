@@ -92,7 +92,7 @@ class ObstaclePool:
             self._sim.sleep(body)
             self._active.append((key, body))
             bodies.append(body)
-        for key, body in released:
+        for _, body in released:
             if body in self._parked:
                 self._sim.move_static(body, PARK_POSITION, (0.0, 0.0, 0.0, 1.0))
                 self._sim.sleep(body)
