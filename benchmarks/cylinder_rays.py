@@ -1,7 +1,7 @@
 """Speed against error of LIDAR rays on cylinder obstacles: Bullet's cylinder primitive vs n-gon trimesh prisms.
 
 Twenty cylinders (r = 0.2 m) ring a 64-beam scan; the error is measured on 400 beams fanned across one cylinder
-against the exact ray-circle intersection. Prisms have the circle's area (see clutter_gym.sim._prism_mesh).
+against the exact ray-circle intersection. Prisms have the circle's area (see clutter_gym.meshes.prism_mesh).
 
     python benchmarks/cylinder_rays.py
 """
@@ -13,7 +13,8 @@ import time
 
 import numpy as np
 
-from clutter_gym.sim import _prism_mesh, pb, quiet_c_output
+from clutter_gym.meshes import prism_mesh
+from clutter_gym.sim import pb, quiet_c_output
 
 R, H = 0.2, 0.5
 
@@ -21,7 +22,7 @@ R, H = 0.2, 0.5
 def collision_shape(cid: int, kind: str, sides: int) -> int:
     if kind == "primitive":
         return pb.createCollisionShape(pb.GEOM_CYLINDER, radius=R, height=H, physicsClientId=cid)
-    vertices, indices = _prism_mesh(R, H, sides)
+    vertices, indices = prism_mesh(R, H, sides)
     return pb.createCollisionShape(pb.GEOM_MESH, vertices=vertices, indices=indices,
                                    flags=pb.GEOM_FORCE_CONCAVE_TRIMESH, physicsClientId=cid)
 
