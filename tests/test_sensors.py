@@ -40,16 +40,13 @@ def test_imu_at_rest_reads_gravity_up_and_no_rotation(make_env):
     np.testing.assert_allclose(obs["imu"], [0, 0, G, 0, 0, 0], atol=1e-6)  # placed exactly level, at rest
     for _ in range(20):
         obs, *_ = env.step(np.zeros(2))
-    # Settled on four contacts the chassis tilts by a fraction of a degree, which moves some of g onto x;
-    # the magnitude of the specific force stays g.
-    assert np.linalg.norm(obs["imu"][:3]) == pytest.approx(G, abs=0.01)
-    assert abs(obs["imu"][0]) < 0.2
-    np.testing.assert_allclose(obs["imu"][3:], 0, atol=5e-3)
+    np.testing.assert_allclose(obs["imu"][:3], [0, 0, G], atol=1e-3)  # settled, still level
+    np.testing.assert_allclose(obs["imu"][3:], 0, atol=1e-3)
 
 
 def test_gyro_matches_the_measured_yaw_rate(make_env):
-    """Time-averaged gyro z equals the yaw change over the same window (contact stick-slip makes single
-    samples jitter by ~0.05 rad/s at any physics rate, so single samples are not compared)."""
+    """Each gyro sample (the rate at the end of a step) is close to the yaw change over that step, and their
+    means agree to 0.1%."""
     env = make_env()
     env.reset(options={"scene": empty_scene()})
     for _ in range(20):  # spin up
@@ -60,9 +57,10 @@ def test_gyro_matches_the_measured_yaw_rate(make_env):
         obs, *_ = env.step(np.array([0.0, 0.5]))
         yaw.append(env.unwrapped.robot.state().yaw)
         gyro.append(obs["imu"][5])
-    rate = (np.unwrap(yaw)[-1] - yaw[0]) / (40 / 20)
-    assert np.mean(gyro) == pytest.approx(rate, rel=0.02)
-    assert rate == pytest.approx(1.0, rel=0.1)  # commanded 0.5 * 2.0 rad/s
+    rate = np.diff(np.unwrap(yaw)) * 20
+    np.testing.assert_allclose(gyro, rate, atol=0.02)
+    assert np.mean(gyro) == pytest.approx(np.mean(rate), rel=1e-3)
+    assert np.mean(rate) == pytest.approx(1.0, rel=0.01)  # commanded 0.5 * 2.0 rad/s
 
 
 def test_accelerometer_integrates_to_the_speed_gained(make_env):
@@ -75,5 +73,5 @@ def test_accelerometer_integrates_to_the_speed_gained(make_env):
         obs, *_ = env.step(np.array([1.0, 0.0]))
         fx.append(obs["imu"][0])
     speed = obs["velocity"][0]
-    assert speed == pytest.approx(0.5, rel=0.05)  # commanded max_linear_speed
-    assert np.sum(fx) * dt == pytest.approx(speed, rel=0.03)
+    assert speed == pytest.approx(0.5, rel=0.01)  # commanded max_linear_speed
+    assert np.sum(fx) * dt == pytest.approx(speed, rel=5e-3)
