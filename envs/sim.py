@@ -160,7 +160,7 @@ class Sim:
         Cylinders stay true cylinders (``URDF_USE_IMPLICIT_CYLINDER``). By default pybullet turns them into
         convex hulls, and for the diffbot that cost: polygonal wheels shook the chassis (vertical acceleration
         std 0.98 m/s^2 at constant speed, gyro jitter 0.05 rad/s), and the hull with its margin made pybullet see
-        contact while FCL measured 1-3 mm of clearance (2.1% of steps disagreed, 0.7% with true cylinders).
+        contact while FCL measured 1-3 mm of clearance (5.0% of steps disagreed, 2.6% with true cylinders).
 
         Raises:
             FileNotFoundError: ``path`` does not exist.
@@ -193,7 +193,9 @@ class Sim:
         area, not Bullet's cylinder primitive: rays against the primitive go through GJK convex casting
         (about 10 us per ray per cylinder, 7x a scan's cost with 20 cylinders) and still miss the exact circle by
         up to 2.8 mm, while the 64-gon prism is hit by BVH ray-triangle tests with at most 0.52 mm error and no
-        mean bias (measured in benchmarks/cylinder_rays.py). The visual shape stays a true cylinder.
+        mean bias (measured in benchmarks/cylinder_rays.py). The visual shape stays a true cylinder. The mesh's
+        collision margin is zero: pybullet's default 1 mm margin made contacts fire 1-2 mm before FCL's exact
+        cylinder touched (contact disagreement 2.6% -> 0.3% of steps, benchmarks/contact_agreement.py).
         """
         vertices, indices = _UNIT_PRISM  # one shared list: pybullet keeps a reference to every list it is given
         col = pb.createCollisionShape(
@@ -207,7 +209,9 @@ class Sim:
         vis = pb.createVisualShape(
             pb.GEOM_CYLINDER, radius=radius, length=height, rgbaColor=rgba, physicsClientId=self._cid
         )
-        return self._static_body(col, vis)
+        body = self._static_body(col, vis)
+        pb.changeDynamics(body, -1, collisionMargin=0.0, physicsClientId=self._cid)
+        return body
 
     def _static_body(self, collision: int, visual: int) -> int:
         """A mass-0 body as a plain rigid body (maximal coordinates), not a Featherstone multibody.
