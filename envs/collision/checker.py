@@ -138,6 +138,7 @@ class CollisionChecker:
         """
         clearance = self.min_clearance(state)
         tol = self.contact_tolerance
-        n_fcl = self._count_contacts() if clearance <= tol else 0
+        # at least one pair when the clearance says contact, even if a pairwise query lands a hair above tol
+        n_fcl = max(1, self._count_contacts()) if clearance <= tol else 0
         n_pb = sum(1 for body, d in pybullet_contacts if d <= tol and body in self._obstacle_bodies)
         return CollisionReport(clearance, n_fcl, n_pb, (n_fcl > 0) != (n_pb > 0))
