@@ -14,7 +14,8 @@ import time
 import numpy as np
 
 from clutter_gym.meshes import prism_mesh
-from clutter_gym.sim import pb, quiet_c_output
+from clutter_gym.quiet import quiet_c_output
+from clutter_gym.sim import pb
 
 R, H = 0.2, 0.5
 
