@@ -73,7 +73,7 @@ class Floor:
         self.wheels, self.links, self.substeps = u.robot.wheel_joints, u.robot.tracked_links, u.substeps
         lidar = next(s for s in u.sensors if s.name == "lidar")
         self.ray_starts, self.ray_ends = lidar.ray_starts, lidar.ray_ends
-        self.lidar_link = u.robot.tracked_links[u.robot.link_names.index(lidar.config.link)]
+        self.lidar_link = u.robot.link_index[lidar.config.link]
         self.torques = [self.config.max_wheel_torque] * 2
 
     def run(self, actions: np.ndarray, ends: list[int]) -> float:

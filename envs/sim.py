@@ -42,14 +42,12 @@ class LinkStates:
 
     Attributes:
         position: (n, 3) link frame origins in metres (the URDF link frame, not the inertial frame).
-        quaternion: (n, 4) link frame orientations, (x, y, z, w).
-        rotation: (n, 3, 3) the same orientations as matrices (columns are the link axes in world coordinates).
+        rotation: (n, 3, 3) link frame orientations (columns are the link axes in world coordinates).
         linear_velocity: (n, 3) velocity of the link's centre of mass in m/s.
         angular_velocity: (n, 3) angular velocity in rad/s.
     """
 
     position: np.ndarray
-    quaternion: np.ndarray
     rotation: np.ndarray
     linear_velocity: np.ndarray
     angular_velocity: np.ndarray
@@ -115,7 +113,7 @@ class Sim:
             visual = pb.createVisualShape(
                 pb.GEOM_PLANE, rgbaColor=(0.85, 0.85, 0.8, 1.0), physicsClientId=self._cid
             )
-            body = pb.createMultiBody(0.0, shape, visual, useMaximalCoordinates=True, physicsClientId=self._cid)
+            body = self._static_body(shape, visual)
         return self._register(name, body)
 
     def load_urdf(self, name: str, path: str | Path, position: Sequence[float] = (0.0, 0.0, 0.0)) -> int:
@@ -178,7 +176,7 @@ class Sim:
         return body
 
     def _static_body(self, collision: int, visual: int) -> int:
-        """A mass-0 body as a plain rigid body (maximal coordinates), not a Featherstone multibody.
+        """A mass-0 body (collision -1: visual only) as a plain rigid body, not a Featherstone multibody.
 
         Every multibody in the world costs each physics tick even when fixed and far away (measured: 0.22 us per
         body per tick); a static rigid body costs a third of that, and a sleeping one less again.
@@ -198,7 +196,7 @@ class Sim:
         vis = pb.createVisualShape(
             pb.GEOM_CYLINDER, radius=radius, length=0.01, rgbaColor=rgba, physicsClientId=self._cid
         )
-        return self._register(name, pb.createMultiBody(0.0, -1, vis, useMaximalCoordinates=True, physicsClientId=self._cid))
+        return self._register(name, self._static_body(-1, vis))
 
     def _register(self, name: str, body: int) -> int:
         if name in self.bodies:
@@ -271,9 +269,6 @@ class Sim:
         """
         return np.asarray(pb.getDynamicsInfo(body, -1, physicsClientId=self._cid)[3], dtype=float)
 
-    def set_friction(self, body: int, link: int, lateral: float) -> None:
-        pb.changeDynamics(body, link, lateralFriction=lateral, physicsClientId=self._cid)
-
     # ---------------------------------------------------------------------------------------- hot path
     def step(self, n: int = 1) -> None:
         """Advance ``n`` physics ticks."""
@@ -293,11 +288,11 @@ class Sim:
             physicsClientId=self._cid,
         )
 
-    def base_state(self, body: int) -> tuple[tuple, tuple, np.ndarray, tuple, tuple]:
-        """(centre-of-mass position, quaternion xyzw, rotation matrix, linear velocity, angular velocity), world."""
+    def base_state(self, body: int) -> tuple[tuple, np.ndarray, tuple, tuple]:
+        """(centre-of-mass position, rotation matrix, linear velocity, angular velocity), world frame."""
         pos, quat = pb.getBasePositionAndOrientation(body, physicsClientId=self._cid)
         lin, ang = pb.getBaseVelocity(body, physicsClientId=self._cid)
-        return pos, quat, np.array(pb.getMatrixFromQuaternion(quat)).reshape(3, 3), lin, ang
+        return pos, np.array(pb.getMatrixFromQuaternion(quat)).reshape(3, 3), lin, ang
 
     def link_states(self, body: int, links: Sequence[int]) -> LinkStates:
         """One batched ``getLinkStates`` call with velocities; see :class:`LinkStates`.
@@ -308,14 +303,13 @@ class Sim:
         rows = pb.getLinkStates(
             body, links, computeLinkVelocity=1, computeForwardKinematics=1, physicsClientId=self._cid
         )
-        flat = np.array([r[4] + r[5] + r[6] + r[7] for r in rows])  # one conversion for all 13 numbers per link
+        flat = np.array([r[4] + r[6] + r[7] for r in rows])  # one conversion: frame origin, lin and ang velocity
         rotation = np.array([pb.getMatrixFromQuaternion(r[5]) for r in rows]).reshape(-1, 3, 3)
         return LinkStates(
             position=flat[:, 0:3],
-            quaternion=flat[:, 3:7],
             rotation=rotation,
-            linear_velocity=flat[:, 7:10],
-            angular_velocity=flat[:, 10:13],
+            linear_velocity=flat[:, 3:6],
+            angular_velocity=flat[:, 6:9],
         )
 
     def ray_hit_fractions(self, starts: list, ends: list, body: int = -1, link: int = -1) -> np.ndarray:

@@ -60,7 +60,7 @@ class CollisionChecker:
 
     Args:
         elements: the robot's collision primitives (see :func:`load_collision_elements`).
-        base_link: name of the URDF base link (its pose is ``RobotState.position``/``quaternion``).
+        base_link: name of the URDF base link (its pose is ``RobotState.position``/``rotation``).
         contact_tolerance: distance at or below which either engine counts a contact, metres.
     """
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 from gymnasium import spaces
@@ -12,8 +13,9 @@ from clutter_gym.robots.state import RobotState
 from clutter_gym.sim import Sim
 from clutter_gym.transforms import quat_to_matrix, yaw_quat
 
-#: Links whose poses are read every step: the sensor mounts and every link with collision geometry.
-TRACKED_LINKS = ("left_wheel", "right_wheel", "front_caster", "rear_caster", "lidar_link", "imu_link")
+#: Links whose states are read every step: the IMU and every link with collision geometry. The LIDAR needs only
+#: its link's index: its rays are cast in the link's frame.
+TRACKED_LINKS = ("left_wheel", "right_wheel", "front_caster", "rear_caster", "imu_link")
 
 
 @dataclass(frozen=True)
@@ -66,7 +68,7 @@ class DiffDriveRobot:
         self._body = -1
 
     @property
-    def urdf_path(self):
+    def urdf_path(self) -> Path:
         return asset_path(self.urdf)
 
     @property
@@ -90,9 +92,9 @@ class DiffDriveRobot:
         sim.hide_from_rays(self._body)
         joints = sim.joint_indices(self._body)
         self._wheels = [joints["left_wheel_joint"], joints["right_wheel_joint"]]
-        links = sim.link_indices(self._body)
+        self.link_index = sim.link_indices(self._body)
         self.link_names = TRACKED_LINKS
-        self._tracked = tuple(links[name] for name in TRACKED_LINKS)
+        self._tracked = tuple(self.link_index[name] for name in TRACKED_LINKS)
         self._com_offset = sim.base_inertial_offset(self._body)
         c = self.config
         self._torques = [c.max_wheel_torque, c.max_wheel_torque]
@@ -119,16 +121,15 @@ class DiffDriveRobot:
 
     def state(self) -> RobotState:
         """Ground-truth state from three batched pybullet reads."""
-        com, quat, rot, lin, ang = self._sim.base_state(self._body)
+        com, rot, lin, ang = self._sim.base_state(self._body)
         return RobotState(
             position=np.asarray(com) - rot @ self._com_offset,
-            quaternion=np.asarray(quat),
             rotation=rot,
             linear_velocity=lin,
             angular_velocity=ang,
             links=self._sim.link_states(self._body, self._tracked),
             link_names=self.link_names,
-            link_ids=self._tracked,
+            link_index=self.link_index,
             body=self._body,
         )
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -16,24 +17,22 @@ class RobotState:
 
     Attributes:
         position: (3,) origin of the URDF base frame, metres.
-        quaternion: (4,) base orientation (x, y, z, w).
-        rotation: (3, 3) base orientation as a matrix (columns are the base axes in world coordinates).
+        rotation: (3, 3) base orientation (columns are the base axes in world coordinates).
         linear_velocity: velocity of the base centre of mass (vx, vy, vz), m/s.
         angular_velocity: base angular velocity (wx, wy, wz), rad/s.
-        links: poses and velocities of the robot's tracked links (sensor mounts, collision links).
+        links: poses and velocities of the links read every step (the IMU and every collision link).
         link_names: names of the rows of ``links``.
-        link_ids: pybullet link indices of the rows of ``links``.
+        link_index: pybullet index of every link of the robot by URDF name (-1 for the base); constant.
         body: pybullet body id of the robot.
     """
 
     position: np.ndarray
-    quaternion: np.ndarray
     rotation: np.ndarray
     linear_velocity: tuple[float, float, float]
     angular_velocity: tuple[float, float, float]
     links: LinkStates
     link_names: tuple[str, ...]
-    link_ids: tuple[int, ...]
+    link_index: Mapping[str, int]
     body: int
 
     @property

@@ -77,7 +77,7 @@ class Lidar:
 
     def read(self, sim: Sim, state: RobotState) -> np.ndarray:
         """Ranges (metres) measured from the mount origin, ``max_range`` where nothing is hit."""
-        link = state.link_ids[state.link(self.config.link)]
+        link = state.link_index[self.config.link]
         fractions = sim.ray_hit_fractions(self.ray_starts, self.ray_ends, body=state.body, link=link)
         return self.config.min_range + fractions * self._span
 
