@@ -1,0 +1,1 @@
+"""Sensor, actuation and dynamics noise: pure functions of (clean value, rng, params), named profiles as data."""
