@@ -1,4 +1,4 @@
-"""`clutter-gym` command line: ``demo`` now; train, eval, sweep and bench arrive with their issues."""
+"""`clutter-gym` command line: ``demo`` and ``profiles`` now; train, eval, sweep and bench arrive with their issues."""
 
 from __future__ import annotations
 
@@ -16,6 +16,7 @@ import numpy as np
 
 import clutter_gym  # noqa: F401  (registers the envs)
 from clutter_gym import ENV_IDS
+from clutter_gym.noise.profiles import PROFILE_NAMES, profile_description, profile_table_markdown, resolve_noise
 from clutter_gym.training.baselines import PotentialFieldNavigator
 
 
@@ -41,7 +42,7 @@ def write_gif_atomically(path: Path, frames: list[np.ndarray], fps: float) -> No
 
 def demo(args: argparse.Namespace) -> dict:
     """Roll out the scripted potential-field policy, write a GIF and return the episode summary."""
-    env = gym.make(args.env, render_mode="rgb_array")
+    env = gym.make(args.env, render_mode="rgb_array", noise=args.noise)
     try:
         obs, info = env.reset(seed=args.seed)
         policy = PotentialFieldNavigator.for_env(env)
@@ -67,6 +68,7 @@ def demo(args: argparse.Namespace) -> dict:
     return {
         "env": args.env,
         "seed": args.seed,
+        "noise": args.noise,
         "steps": steps,
         "return": round(episode_return, 3),
         "success": bool(info["is_success"]),
@@ -78,7 +80,7 @@ def demo(args: argparse.Namespace) -> dict:
 
 
 def _print_demo(summary: dict) -> None:
-    print(f"{summary['env']} seed {summary['seed']}: scripted potential-field policy")
+    print(f"{summary['env']} seed {summary['seed']}, noise {summary['noise']!r}: scripted potential-field policy")
     print(f"  steps          {summary['steps']}  ({'goal reached' if summary['success'] else 'goal not reached'})")
     print(f"  return         {summary['return']:.2f}")
     print(f"  contact steps  {summary['contact_steps']}")
@@ -97,8 +99,21 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--max-steps", type=_positive_int, default=400, help="stop the episode after this many steps")
     p.add_argument("--frame-every", type=_positive_int, default=2, help="keep every k-th frame in the GIF")
     p.add_argument("--out", default="out/demo", help="folder for the GIF")
+    p.add_argument("--noise", choices=PROFILE_NAMES, default="none", help="sensor/actuation noise profile")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
+    p = sub.add_parser("profiles", help="list the noise profiles; print one's parameters; print the README table")
+    p.add_argument("name", nargs="?", choices=PROFILE_NAMES, help="print this profile's resolved parameters as JSON")
     return parser
+
+
+def profiles(name: str | None) -> None:
+    if name is not None:
+        print(json.dumps(resolve_noise(name).to_dict(), indent=2))
+        return
+    for profile in PROFILE_NAMES:
+        print(f"- `{profile}`: {profile_description(profile)}")
+    print()
+    print(profile_table_markdown())
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -109,6 +124,8 @@ def main(argv: list[str] | None = None) -> int:
             print(json.dumps(summary))
         else:
             _print_demo(summary)
+    elif args.command == "profiles":
+        profiles(args.name)
     return 0
 
 

@@ -17,6 +17,10 @@ import numpy as np
 from gymnasium import spaces
 
 from clutter_gym.collision import CollisionChecker
+from clutter_gym.noise.action import ActionChannel
+from clutter_gym.noise.dynamics import sample_dynamics
+from clutter_gym.noise.profiles import NoiseProfile
+from clutter_gym.noise.timing import SampleHoldDelay
 from clutter_gym.robots import DiffDriveRobot, RobotState
 from clutter_gym.sensors import Sensor
 from clutter_gym.sim import Sim
@@ -34,10 +38,11 @@ class ClutterEnv(gym.Env):
         sim: the physics client (owned: closed by :meth:`close`).
         robot: loaded into ``sim`` here.
         arena: loaded into ``sim`` here; chooses and places each episode's scene.
-        sensors: read after every step, in order; their names are observation keys.
+        sensors: read after every step, in order (each fills the observation keys in its ``spaces``).
         checker: FCL model of the robot against the scene.
         task: reward, termination and the goal observation.
         control_hz: actions per simulated second; ``sim.physics_hz`` must be a multiple of it.
+        noise: sensor timing, actuation noise and dynamics randomisation (the sensors carry their own noise).
         render_mode: None, "rgb_array" or "human".
         render_size: (width, height) of rgb_array frames in pixels.
     """
@@ -53,11 +58,16 @@ class ClutterEnv(gym.Env):
         checker: CollisionChecker,
         task: NavigateTask,
         control_hz: float,
+        noise: NoiseProfile,
         render_mode: str | None = None,
         render_size: tuple[int, int] = (320, 240),
     ) -> None:
         self.sim, self.robot, self.arena, self.checker, self.task = sim, robot, arena, checker, task
         self.sensors = tuple(sensors)
+        self.noise = noise
+        self._clocks = tuple(SampleHoldDelay(noise.timing[s.name], 1.0 / control_hz) for s in self.sensors)
+        self._action_channel = ActionChannel(noise.action, robot.action_space.shape[0])
+        self._noise_rng = np.random.default_rng(0)  # replaced at every reset from np_random
         self.render_mode = render_mode
         self.render_size = render_size
         self.metadata = {**self.metadata, "render_fps": control_hz}
@@ -70,7 +80,7 @@ class ClutterEnv(gym.Env):
         self._action_high = self.action_space.high.astype(np.float64)
         self.observation_space = spaces.Dict(
             {
-                **{s.name: s.observation_space for s in self.sensors},
+                **{key: space for s in self.sensors for key, space in s.spaces.items()},
                 task.name: task.observation_space,
                 "velocity": robot.observation_space,
             }
@@ -84,18 +94,27 @@ class ClutterEnv(gym.Env):
         """Start an episode on a new seeded layout, or on ``options["scene"]`` (see README, "Scene format")."""
         super().reset(seed=seed)
         scene = self.arena.choose_scene(self.np_random, options)
+        # Noise draws come from a generator seeded by one draw of np_random, taken whatever the profile: the
+        # layouts of a seed are then the same under every noise profile (paired sim-to-real comparisons).
+        self._noise_rng = rng = np.random.default_rng(int(self.np_random.integers(2**63)))
+        self.robot.apply_dynamics(sample_dynamics(rng, self.noise.dynamics))
         obstacles, bodies = self.arena.place(scene)
         self.checker.set_scene(obstacles, bodies)
         self.robot.reset_pose(*scene.start)
         self.sim.move_static(self._goal_marker, (*scene.goal, 0.005), yaw_quat(0.0))
         self.scene = scene
         state = self.robot.state()
-        for sensor in self.sensors:
-            sensor.reset(state)
+        for sensor, clock in zip(self.sensors, self._clocks):
+            sensor.reset(self.sim, state, rng)
+            clock.reset(rng)
+        self._action_channel.reset()
         self.task.reset(scene.goal, state)
         report = self.checker.check(state, self.sim.contact_distances(self.robot.body))
         obs, info = self._observe(state)
-        info.update(min_clearance=report.min_clearance, n_contacts=report.n_contacts, is_success=False)
+        info.update(
+            min_clearance=report.min_clearance, n_contacts=report.n_contacts, is_success=False,
+            noise_profile=self.noise.name,
+        )
         if self.render_mode == "human":
             self.render()
         return obs, info
@@ -110,7 +129,10 @@ class ClutterEnv(gym.Env):
         if self.scene is None:
             raise RuntimeError("call reset() before step()")
         a = self._checked_action(action)
-        self.robot.apply_action(a)
+        command = self._action_channel.send(a, self._noise_rng)
+        if command is not a:
+            command = np.minimum(np.maximum(command, self._action_low), self._action_high)
+        self.robot.apply_action(command)
         self.sim.step(self.substeps)
         state = self.robot.state()
         report = self.checker.check(state, self.sim.contact_distances(self.robot.body))
@@ -143,11 +165,15 @@ class ClutterEnv(gym.Env):
     def _observe(self, state: RobotState) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
         obs: dict[str, np.ndarray] = {}
         info: dict[str, Any] = {}
-        for sensor in self.sensors:
-            reading = sensor.read(self.sim, state)
-            obs[sensor.name] = sensor.observe(reading)
-            if sensor.info_key is not None:
-                info[sensor.info_key] = reading
+        for sensor, clock in zip(self.sensors, self._clocks):
+            due = clock.due()
+            reading = sensor.read(self.sim, state, self._noise_rng) if due or sensor.read_every_step else None
+            fresh = (sensor.observe(reading), sensor.info(reading)) if due else None
+            delivered = clock.push(fresh)
+            if delivered is not fresh:  # held or delayed: already returned once, so hand out copies
+                delivered = tuple({k: np.copy(v) for k, v in part.items()} for part in delivered)
+            obs.update(delivered[0])
+            info.update(delivered[1])
         obs[self.task.name] = self.task.observe(state)
         obs["velocity"] = self.robot.observe(state)
         if not math.isfinite(sum(float(v.sum()) for v in obs.values())):  # NaN/Inf anywhere poisons the sum

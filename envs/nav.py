@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from typing import Any
 
 from clutter_gym.collision import CollisionChecker, load_collision_elements
 from clutter_gym.core import ClutterEnv, check_render_mode
 from clutter_gym.robots import DiffDriveConfig, DiffDriveRobot
-from clutter_gym.sensors import SENSOR_NAMES, Imu, ImuConfig, Lidar, LidarConfig, Sensor
+from clutter_gym.noise.profiles import NoiseProfile, resolve_noise
+from clutter_gym.sensors import CameraConfig, ImuConfig, LidarConfig, build_sensors
 from clutter_gym.sim import Sim
 from clutter_gym.tasks import NavigateTask, NavRewardWeights
 from clutter_gym.worlds import ClutterArena, ClutterSpec
@@ -35,12 +37,17 @@ class ClutterNavEnv(ClutterEnv):
 
     | key | shape | content | units, frame | bounds |
     |---|---|---|---|---|
-    | ``lidar`` | (n_rays,) | range / lidar_range, beams CCW from the robot's +x | -, lidar link | [0, 1] |
+    | ``lidar`` | (n_rays,) or (lidar_channels, n_rays) | range / lidar_range, beams CCW from the robot's +x, channels bottom up | -, lidar link | [0, 1] |
     | ``imu`` | (6,) | specific force (f_x, f_y, f_z), angular rate (w_x, w_y, w_z) | m/s^2, rad/s; IMU link | +-156.9, +-34.9 |
+    | ``camera_rgb`` | (h, w, 3) uint8 | colour image | -, camera link looking along +x | [0, 255] |
+    | ``camera_depth`` | (h, w) | depth along the optical axis, 0 = no data | m | [0, camera_far] |
+    | ``camera_segmentation`` | (h, w) uint8 | class per pixel: nothing, ground, obstacle, robot, goal | - | [0, 4] |
     | ``goal`` | (3,) | distance, sin(bearing), cos(bearing) | m, -, -; robot frame | [0, arena diagonal], [-1, 1] |
     | ``velocity`` | (2,) | forward speed, yaw rate | m/s, rad/s; base frame | +-2x the commanded maxima |
 
-    ``lidar`` and ``imu`` are present only when listed in ``sensors``. The IMU reads +9.81 m/s^2 on z at rest.
+    Sensor entries are present only when listed in ``sensors`` (camera entries only for its ``camera_modes``;
+    ``(w, h) = camera_size``). The IMU reads +9.81 m/s^2 on z at rest. With a noise profile the entries carry
+    that profile's noise, update rate (held between updates) and latency; a LIDAR beam without a return reads 1.
 
     ## Rewards
 
@@ -66,32 +73,54 @@ class ClutterNavEnv(ClutterEnv):
     ``reward_terms``, ``cost``, ``is_success``, ``min_clearance`` (m, FCL, negative = penetration),
     ``n_contacts`` (FCL link/obstacle pairs within ``contact_tolerance``), ``pybullet_contacts`` (pybullet
     contact points within the same tolerance), ``contact_disagreement`` (exactly one engine sees contact),
-    ``lidar_ranges`` (m).
+    ``lidar_ranges`` (m, as the sensor reports them: noisy, and ``inf`` for no return if the profile says so),
+    ``noise_profile`` (at reset).
+
+    ## Noise
+
+    ``noise`` names a profile (``"none"``, ``"nominal"``, ``"low-cost"``, ``"harsh"``) or overrides one per
+    parameter, e.g. ``{"profile": "nominal", "lidar": {"range_sigma": 0.02}}`` (see :mod:`clutter_gym.noise` and
+    the README). It sets sensor noise, sensor rates and latencies, action latency and noise, and per-episode
+    dynamics randomisation. Noise is drawn from a generator seeded from ``np_random`` at each reset, so a seed
+    gives the same layouts under every profile. Rewards and termination always use ground truth.
 
     ## Arguments
 
-    ``render_mode`` (None, "rgb_array", "human"); ``sensors`` (subset of ("lidar", "imu")); ``arena_size`` m
-    [2, 30]; ``obstacle_density`` floor fraction [0, 0.3]; ``n_rays`` [1, 4096]; ``lidar_fov`` rad (0, 2 pi];
-    ``lidar_range`` m; ``lidar_mount_height`` m above the lidar link; ``physics_hz`` (a multiple of
+    ``render_mode`` (None, "rgb_array", "human"); ``sensors`` (subset of ("lidar", "imu", "camera"));
+    ``noise`` (profile name, override mapping or NoiseProfile); ``arena_size`` m [2, 30]; ``obstacle_density``
+    floor fraction [0, 0.3]; ``n_rays`` [1, 4096]; ``lidar_fov`` rad (0, 2 pi]; ``lidar_range`` m;
+    ``lidar_mount_height`` m above the lidar link; ``lidar_channels`` [1, 128] and ``lidar_vertical_fov`` rad
+    [0, pi/2] (a multi-channel 3D LIDAR); ``camera_size`` (width, height) px; ``camera_modes`` (subset of
+    ("rgb", "depth", "segmentation")); ``camera_fov`` vertical, rad; ``camera_far`` m; ``camera_renderer``
+    ("tiny" or "egl"); ``physics_hz`` (a multiple of
     ``control_hz``); ``control_hz``; ``solver_iterations``; ``max_linear_speed`` m/s; ``max_angular_speed`` rad/s;
     ``success_radius`` m; ``clearance_margin`` m; ``terminate_on_collision``; ``contact_tolerance`` m;
     ``*_weight`` reward weights. Defaults are in the signature.
 
     ## Version history
 
-    * v0: initial release.
+    * v0: initial release; camera sensor, noise profiles, sensor timing, action noise and dynamics randomisation
+      added without changing the clean defaults.
     """
 
     def __init__(
         self,
         render_mode: str | None = None,
         sensors: Sequence[str] = ("lidar", "imu"),
+        noise: str | Mapping[str, Any] | NoiseProfile | None = "none",
         arena_size: float = 6.0,
         obstacle_density: float = 0.12,
         n_rays: int = 64,
         lidar_fov: float = 2 * math.pi,
         lidar_range: float = 3.5,
         lidar_mount_height: float = 0.0,
+        lidar_channels: int = 1,
+        lidar_vertical_fov: float = 0.0,
+        camera_size: tuple[int, int] = (84, 84),
+        camera_modes: Sequence[str] = ("rgb", "depth"),
+        camera_fov: float = math.radians(58.0),
+        camera_far: float = 10.0,
+        camera_renderer: str = "tiny",
         physics_hz: float = 120.0,
         control_hz: float = 20.0,
         solver_iterations: int = 10,
@@ -114,10 +143,11 @@ class ClutterNavEnv(ClutterEnv):
             raise ValueError(f"contact_tolerance must be in [0, 0.05] metres, got {contact_tolerance!r}")
         robot = DiffDriveRobot(DiffDriveConfig(max_linear_speed=max_linear_speed, max_angular_speed=max_angular_speed))
         spec = ClutterSpec(arena_size=arena_size, obstacle_density=obstacle_density)
-        lidar = LidarConfig(n_rays=n_rays, fov=lidar_fov, max_range=lidar_range, mount_height=lidar_mount_height)
-        chosen = _check_sensors(sensors)
-        factories = {"lidar": lambda: Lidar(lidar), "imu": lambda: Imu(ImuConfig(dt=1.0 / control_hz))}
-        sensor_objects: list[Sensor] = [factories[name]() for name in chosen]
+        lidar = LidarConfig(n_rays=n_rays, fov=lidar_fov, max_range=lidar_range, mount_height=lidar_mount_height,
+                            n_channels=lidar_channels, vertical_fov=lidar_vertical_fov)
+        camera = _camera_config(camera_size, camera_modes, camera_fov, camera_far, camera_renderer)
+        profile = resolve_noise(noise)
+        sensor_objects = build_sensors(sensors, profile, lidar, ImuConfig(dt=1.0 / control_hz), camera)
         task = NavigateTask(
             NavRewardWeights(progress_weight, success_weight, contact_weight, clearance_weight, control_weight,
                              time_weight),
@@ -137,6 +167,7 @@ class ClutterNavEnv(ClutterEnv):
             checker=checker,
             task=task,
             control_hz=control_hz,
+            noise=profile,
             render_mode=render_mode,
         )
 
@@ -155,12 +186,9 @@ def _check_rates(physics_hz: float, control_hz: float, solver_iterations: int) -
         raise ValueError(f"solver_iterations must be an integer in [1, 1000], got {solver_iterations!r}")
 
 
-def _check_sensors(sensors: Sequence[str]) -> tuple[str, ...]:
-    if isinstance(sensors, str) or not isinstance(sensors, Sequence):
-        raise ValueError(f"sensors must be a tuple of names from {SENSOR_NAMES}, got {sensors!r}")
-    unknown = [s for s in sensors if s not in SENSOR_NAMES]
-    if unknown:
-        raise ValueError(f"unknown sensors {unknown}; allowed: {SENSOR_NAMES}")
-    if len(set(sensors)) != len(sensors):
-        raise ValueError(f"sensors must not repeat a name, got {tuple(sensors)}")
-    return tuple(sensors)
+def _camera_config(size: Any, modes: Any, fov: float, far: float, renderer: str) -> CameraConfig:
+    if isinstance(size, (str, bytes)) or not isinstance(size, Sequence) or len(size) != 2:
+        raise ValueError(f"camera_size must be (width, height) in pixels, got {size!r}")
+    if isinstance(modes, str) or not isinstance(modes, Sequence):
+        raise ValueError(f"camera_modes must be a tuple of names, got {modes!r}")
+    return CameraConfig(width=size[0], height=size[1], modes=tuple(modes), vertical_fov=fov, far=far, renderer=renderer)

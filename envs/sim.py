@@ -11,6 +11,7 @@ descriptors; :func:`quiet_c_output` silences them around the calls that print, s
 from __future__ import annotations
 
 import contextlib
+import importlib.util
 import operator
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -77,6 +78,7 @@ class Sim:
         self.bodies: dict[str, int] = {}
         self._filters: dict[int, tuple[int, int]] = {}  # body -> (collision group, mask) set by this Sim
         self.physics_hz = float(physics_hz)
+        self._renderer = pb.ER_TINY_RENDERER
         pb.setPhysicsEngineParameter(
             fixedTimeStep=1.0 / self.physics_hz,
             numSolverIterations=int(solver_iterations),
@@ -288,6 +290,28 @@ class Sim:
             physicsClientId=self._cid,
         )
 
+    def inertial_properties(self, body: int, links: Sequence[int]) -> list[tuple[float, float, tuple]]:
+        """(mass kg, lateral friction coefficient, inertia diagonal kg m^2) of each link (-1 = the base)."""
+        return [pb.getDynamicsInfo(body, link, physicsClientId=self._cid)[:3] for link in links]
+
+    def set_dynamics(
+        self, body: int, link: int, mass: float, inertia: Sequence[float], lateral_friction: float, restitution: float
+    ) -> None:
+        """Set a link's mass (kg), inertia diagonal (kg m^2), friction coefficient and restitution.
+
+        The inertia is passed explicitly: given a mass alone, pybullet recomputes the inertia from the collision
+        shape, which is zero for a link without one.
+        """
+        pb.changeDynamics(
+            body,
+            link,
+            mass=mass,
+            localInertiaDiagonal=inertia,
+            lateralFriction=lateral_friction,
+            restitution=restitution,
+            physicsClientId=self._cid,
+        )
+
     def base_state(self, body: int) -> tuple[tuple, np.ndarray, tuple, tuple]:
         """(centre-of-mass position, rotation matrix, linear velocity, angular velocity), world frame."""
         pos, quat = pb.getBasePositionAndOrientation(body, physicsClientId=self._cid)
@@ -356,6 +380,54 @@ class Sim:
             physicsClientId=self._cid,
         )
         return np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)[:, :, :3].copy()
+
+    def camera_image(
+        self, width: int, height: int, view: Sequence[float], projection: Sequence[float], segmentation: bool
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        """One ``getCameraImage``: RGB (height, width, 3) uint8, the raw depth buffer (height, width) in [0, 1],
+        and body ids per pixel (-1 = nothing) when ``segmentation`` is set.
+
+        The renderer is TinyRenderer unless :meth:`use_egl` loaded the EGL plugin.
+        """
+        flags = pb.ER_SEGMENTATION_MASK_OBJECT_AND_LINKINDEX if segmentation else pb.ER_NO_SEGMENTATION_MASK
+        _, _, rgba, depth, seg = pb.getCameraImage(
+            width, height, view, projection, renderer=self._renderer, flags=flags, physicsClientId=self._cid
+        )
+        rgb = np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)[:, :, :3]
+        depth = np.asarray(depth, dtype=np.float64).reshape(height, width)
+        if not segmentation:
+            return rgb, depth, None
+        seg = np.asarray(seg, dtype=np.int64).reshape(height, width)
+        return rgb, depth, np.where(seg >= 0, seg & ((1 << 24) - 1), -1)  # low 24 bits: the body id
+
+    def use_egl(self) -> None:
+        """Render camera images with the EGL (OpenGL, headless) plugin instead of TinyRenderer.
+
+        Raises:
+            RuntimeError: the plugin does not load on this machine (no EGL driver).
+        """
+        egl = importlib.util.find_spec("eglRenderer")
+        plugin = -1
+        if egl is not None and egl.origin:
+            with quiet_c_output():
+                plugin = pb.loadPlugin(egl.origin, "_eglRendererPlugin", physicsClientId=self._cid)
+        if plugin < 0:
+            raise RuntimeError("camera_renderer='egl': the pybullet EGL plugin did not load (no EGL driver?)")
+        self._renderer = pb.ER_BULLET_HARDWARE_OPENGL
+
+    def link_frame(self, body: int, link: int) -> tuple[np.ndarray, np.ndarray]:
+        """(origin (3,), rotation (3, 3)) of a link's URDF frame in world coordinates."""
+        state = pb.getLinkState(body, link, physicsClientId=self._cid)
+        rotation = np.array(pb.getMatrixFromQuaternion(state[5], physicsClientId=self._cid)).reshape(3, 3)
+        return np.array(state[4]), rotation
+
+    def body_ids(self) -> list[int]:
+        """Ids of every body in the world."""
+        return [pb.getBodyUniqueId(i, physicsClientId=self._cid) for i in range(pb.getNumBodies(physicsClientId=self._cid))]
+
+    def body_names(self) -> dict[int, str]:
+        """Body id -> name of every named body (see :meth:`load_urdf`, :meth:`add_ground`, :meth:`add_marker`)."""
+        return {body: name for name, body in self.bodies.items()}
 
     def follow_camera(self, target: Sequence[float], distance: float, yaw_deg: float, pitch_deg: float) -> None:
         """Point the GUI camera (render_mode="human")."""

@@ -53,6 +53,8 @@ def test_new_layouts_move_pooled_bodies_without_reloading(make_env):
     assert unwrapped.robot.body == robot
     pool = unwrapped.arena._pool
     assert pool.size <= len(unwrapped.scene.obstacles) + pool.max_parked  # parked bodies are capped
+    env.reset(seed=0)
+    n_bodies = pb.getNumBodies(physicsClientId=cid)
     for _ in range(30):  # the same layout again: the pool has every shape already
         env.reset(seed=0)
     assert pb.getNumBodies(physicsClientId=cid) == n_bodies

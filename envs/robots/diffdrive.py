@@ -9,6 +9,7 @@ import numpy as np
 from gymnasium import spaces
 
 from clutter_gym.assets import asset_path
+from clutter_gym.noise.dynamics import DynamicsSample
 from clutter_gym.robots.state import RobotState
 from clutter_gym.sim import Sim
 from clutter_gym.transforms import quat_to_matrix, yaw_quat
@@ -98,7 +99,27 @@ class DiffDriveRobot:
         self._com_offset = sim.base_inertial_offset(self._body)
         c = self.config
         self._torques = [c.max_wheel_torque, c.max_wheel_torque]
+        links = [-1, *sorted(self.link_index.values())]
+        self._nominal = dict(zip(links, sim.inertial_properties(self._body, links)))
+        self._dynamics = DynamicsSample()
         return self._body
+
+    def apply_dynamics(self, sample: DynamicsSample) -> None:
+        """Set this episode's masses (inertias scale with them), friction, restitution and motor strength,
+        relative to the URDF's nominal values (a no-op when nothing changed)."""
+        if sample == self._dynamics:
+            return
+        for link, (mass, friction, inertia) in self._nominal.items():
+            self._sim.set_dynamics(
+                self._body,
+                link,
+                mass=mass * sample.mass_scale,
+                inertia=[sample.mass_scale * i for i in inertia],
+                lateral_friction=friction * sample.friction_scale,
+                restitution=sample.restitution,
+            )
+        self._torques = [self.config.max_wheel_torque * sample.motor_scale] * 2
+        self._dynamics = sample
 
     def reset_pose(self, x: float, y: float, yaw: float) -> None:
         """Place the robot at rest on the floor at (x, y) with heading ``yaw`` (rad), wheels stopped."""

@@ -1,8 +1,12 @@
-"""What every sensor provides to the env (a structural protocol; sensors do not inherit from it)."""
+"""What every sensor provides to the env (a structural protocol; sensors do not inherit from it).
+
+A sensor is a clean read of the world, a chain of pure noise functions (``clutter_gym.noise``) and, outside the
+sensor, a sample-and-hold plus delay line (:class:`clutter_gym.noise.timing.SampleHoldDelay`) that the env runs.
+"""
 
 from __future__ import annotations
 
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 from gymnasium import spaces
@@ -12,19 +16,27 @@ from clutter_gym.sim import Sim
 
 
 class Sensor(Protocol):
-    """A clean read of the world in physical units, and its observation form.
+    """A noisy reading in physical units, and its observation form.
 
-    ``read`` never writes to the world. ``observe`` turns the physical reading into the (normalised, clipped)
-    float32 value that lands in the observation dict under ``name``. ``info_key``, if set, names the ``info``
-    entry that carries the physical reading.
+    Attributes:
+        name: the sensor's name in ``sensors=(...)`` and in the noise profile's timing.
+        spaces: observation keys this sensor fills, with their spaces.
+        read_every_step: the sensor must be read every control step even while its output is held (state that
+            integrates over time, like the IMU's finite difference).
     """
 
     name: str
-    info_key: str | None
-    observation_space: spaces.Box
+    spaces: dict[str, spaces.Space]
+    read_every_step: bool
 
-    def reset(self, state: RobotState) -> None: ...
+    def reset(self, sim: Sim, state: RobotState, rng: np.random.Generator) -> None:
+        """Start an episode: draw per-episode errors (biases, gains) from ``rng``."""
 
-    def read(self, sim: Sim, state: RobotState) -> np.ndarray: ...
+    def read(self, sim: Sim, state: RobotState, rng: np.random.Generator) -> Any:
+        """Clean reading plus noise, in physical units. Never writes to the world."""
 
-    def observe(self, reading: np.ndarray) -> np.ndarray: ...
+    def observe(self, reading: Any) -> dict[str, np.ndarray]:
+        """Observation entries (normalised/clipped as documented by the env) from a reading."""
+
+    def info(self, reading: Any) -> dict[str, Any]:
+        """``info`` entries that carry the physical reading (may be empty)."""

@@ -4,15 +4,19 @@ Specific force is what an accelerometer measures: ``f = R^T (a - g)`` with ``g =
 sensor at rest reads ``+9.81`` along its up axis. ``a`` is the finite difference of the link's world velocity
 over one control period, i.e. the mean acceleration over the period, which is what an IMU whose output is
 averaged to the control rate reports. The angular rate is ``R^T w``. Both saturate at the full-scale range.
+Noise (:mod:`clutter_gym.noise.imu`) is generated for that averaged sample: white noise of std ``ND / sqrt(dt)``
+and one bias step of ``dt`` per control step.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from gymnasium import spaces
 
+from clutter_gym.noise.imu import ImuNoise, apply_imu_noise, start_imu_episode
 from clutter_gym.robots.state import RobotState
 from clutter_gym.sim import Sim
 
@@ -35,24 +39,30 @@ class ImuConfig:
 
 
 class Imu:
-    """Observation: (f_x, f_y, f_z) in m/s^2 then (w_x, w_y, w_z) in rad/s, IMU link frame, clipped at full scale."""
+    """Observation ``imu``: (f_x, f_y, f_z) in m/s^2 then (w_x, w_y, w_z) in rad/s, IMU link frame, clipped at
+    full scale."""
 
     name = "imu"
-    info_key = None
+    read_every_step = True  # the finite difference needs every control step, even while the output is held
 
-    def __init__(self, config: ImuConfig) -> None:
+    def __init__(self, config: ImuConfig, noise: ImuNoise | None = None) -> None:
         self.config = c = config
+        self.noise = noise or ImuNoise()
         self._bound = np.array([c.accel_range] * 3 + [c.gyro_range] * 3, dtype=np.float32)
-        self.observation_space = spaces.Box(-self._bound, self._bound, dtype=np.float32)
+        self.spaces = {"imu": spaces.Box(-self._bound, self._bound, dtype=np.float32)}
         self._gravity = np.array([0.0, 0.0, -c.gravity])
         self._rate = 1.0 / c.dt
         self._previous_velocity = np.zeros(3)
+        self._episode = start_imu_episode(np.random.default_rng(0), ImuNoise())
 
-    def reset(self, state: RobotState) -> None:
-        """Start the finite difference from the current velocity (the first sample reads zero acceleration)."""
+    def reset(self, sim: Sim, state: RobotState, rng: np.random.Generator) -> None:
+        """Start the finite difference from the current velocity (the first sample reads zero acceleration) and
+        draw this episode's turn-on bias, scale and misalignment."""
         self._previous_velocity = state.links.linear_velocity[state.link(self.config.link)].copy()
+        self._episode = start_imu_episode(rng, self.noise)
 
-    def read(self, sim: Sim, state: RobotState) -> np.ndarray:
+    def read_clean(self, state: RobotState) -> np.ndarray:
+        """Exact specific force and angular rate (6,), IMU frame, before saturation."""
         row = state.link(self.config.link)
         velocity = state.links.linear_velocity[row].copy()
         world = np.empty((2, 3))
@@ -62,5 +72,14 @@ class Imu:
         self._previous_velocity = velocity
         return (world @ state.links.rotation[row]).ravel()  # rows: R^T (a - g), R^T w
 
-    def observe(self, reading: np.ndarray) -> np.ndarray:
-        return np.minimum(np.maximum(reading, -self._bound), self._bound).astype(np.float32)
+    def read(self, sim: Sim, state: RobotState, rng: np.random.Generator) -> np.ndarray:
+        clean = self.read_clean(state)
+        if self.noise.is_clean:
+            return clean
+        return apply_imu_noise(clean, rng, self.noise, self._episode, self.config.dt)
+
+    def observe(self, reading: np.ndarray) -> dict[str, np.ndarray]:
+        return {"imu": np.minimum(np.maximum(reading, -self._bound), self._bound).astype(np.float32)}
+
+    def info(self, reading: np.ndarray) -> dict[str, Any]:
+        return {}

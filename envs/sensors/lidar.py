@@ -1,28 +1,33 @@
-"""2D scanning LIDAR: one ``rayTestBatch`` per scan in the mount link's xy plane."""
+"""2D or multi-channel scanning LIDAR: one ``rayTestBatch`` per scan, cast in the mount link's frame."""
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from gymnasium import spaces
 
+from clutter_gym.noise.lidar import LidarEpisode, LidarNoise, apply_lidar_noise, jitter_angles, start_lidar_episode
 from clutter_gym.robots.state import RobotState
 from clutter_gym.sim import Sim
 
 
 @dataclass(frozen=True)
 class LidarConfig:
-    """Scan geometry. Range defaults are the TurtleBot3 LDS-01's (0.12-3.5 m; shared/sensor-noise-reference.md L8).
+    """Scan geometry. Range defaults are the TurtleBot3 LDS-01's (0.12-3.5 m; docs/sensor-noise-reference.md L8).
 
     Attributes:
-        n_rays: beams per scan, in [1, 4096].
-        fov: field of view in radians, in (0, 2 pi]; beams are spread evenly, centred on the mount's +x axis
-            (a full circle does not repeat its first beam).
+        n_rays: beams per channel, in [1, 4096].
+        fov: horizontal field of view in radians, in (0, 2 pi]; beams are spread evenly, centred on the mount's +x
+            axis (a full circle does not repeat its first beam).
         max_range: metres, in (min_range, 100]; a beam with no return reads ``max_range``.
         min_range: metres, in [0, 1); beams start this far from the mount so they never hit the robot itself.
-        mount_height: offset of the scan plane above the mount link origin along its z axis, metres, [-0.5, 2].
+        mount_height: offset of the scan origin above the mount link origin along its z axis, metres, [-0.5, 2].
+        n_channels: vertical channels (1 = a 2D scanner), in [1, 128]; n_rays * n_channels <= 16384.
+        vertical_fov: spread of the channels' elevation angles in radians, [0, pi/2]; channels are evenly spaced
+            and centred on the horizontal plane (a VLP-16 is 16 channels over 30 degrees).
         link: URDF link the LIDAR is mounted on.
     """
 
@@ -31,13 +36,20 @@ class LidarConfig:
     max_range: float = 3.5
     min_range: float = 0.12
     mount_height: float = 0.0
+    n_channels: int = 1
+    vertical_fov: float = 0.0
     link: str = "lidar_link"
 
     def __post_init__(self) -> None:
-        if isinstance(self.n_rays, bool) or not isinstance(self.n_rays, (int, np.integer)) or not 1 <= self.n_rays <= 4096:
-            raise ValueError(f"n_rays must be an integer in [1, 4096], got {self.n_rays!r}")
+        for name, value, hi in (("n_rays", self.n_rays, 4096), ("lidar_channels", self.n_channels, 128)):
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 1 <= value <= hi:
+                raise ValueError(f"{name} must be an integer in [1, {hi}], got {value!r}")
+        if self.n_rays * self.n_channels > 16384:
+            raise ValueError(f"n_rays * lidar_channels must be <= 16384, got {self.n_rays * self.n_channels}")
         if not (math.isfinite(self.fov) and 0 < self.fov <= 2 * math.pi + 1e-9):
             raise ValueError(f"lidar_fov must be in (0, 2*pi] radians, got {self.fov!r}")
+        if not (math.isfinite(self.vertical_fov) and 0 <= self.vertical_fov <= math.pi / 2):
+            raise ValueError(f"lidar_vertical_fov must be in [0, pi/2] radians, got {self.vertical_fov!r}")
         if not (math.isfinite(self.min_range) and 0.0 <= self.min_range < 1.0):
             raise ValueError(f"lidar_min_range must be in [0, 1) metres, got {self.min_range!r}")
         if not (math.isfinite(self.max_range) and self.min_range < self.max_range <= 100.0):
@@ -47,39 +59,72 @@ class LidarConfig:
 
     @property
     def angles(self) -> np.ndarray:
-        """Beam angles in the mount frame, radians, counter-clockwise from +x."""
+        """Beam azimuths in the mount frame, radians, counter-clockwise from +x."""
         if self.fov >= 2 * math.pi - 1e-9:  # full circle: the last beam must not repeat the first
             return -math.pi + 2 * math.pi * np.arange(self.n_rays) / self.n_rays
         if self.n_rays == 1:
             return np.zeros(1)
         return np.linspace(-self.fov / 2, self.fov / 2, self.n_rays)
 
+    @property
+    def elevations(self) -> np.ndarray:
+        """Channel elevation angles, radians, bottom channel first."""
+        if self.n_channels == 1:
+            return np.zeros(1)
+        return np.linspace(-self.vertical_fov / 2, self.vertical_fov / 2, self.n_channels)
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        """(n_rays,) for a 2D scanner, (n_channels, n_rays) otherwise."""
+        return (self.n_rays,) if self.n_channels == 1 else (self.n_channels, self.n_rays)
+
 
 class Lidar:
-    """Ranges in metres (``info["lidar_ranges"]``); observation = ranges / max_range in [0, 1]."""
+    """Ranges in metres (``info["lidar_ranges"]``); observation ``lidar`` = ranges / max_range in [0, 1].
+
+    Noise (:mod:`clutter_gym.noise.lidar`) is applied to the physical ranges; a no-return reads ``max_range`` in
+    the observation whichever convention ``info`` uses.
+    """
 
     name = "lidar"
-    info_key = "lidar_ranges"
+    read_every_step = False
 
-    def __init__(self, config: LidarConfig | None = None) -> None:
+    def __init__(self, config: LidarConfig | None = None, noise: LidarNoise | None = None) -> None:
         self.config = c = config or LidarConfig()
-        self.observation_space = spaces.Box(0.0, 1.0, shape=(c.n_rays,), dtype=np.float32)
-        a = c.angles
-        dirs = np.stack([np.cos(a), np.sin(a), np.zeros_like(a)], axis=1)
-        centre = np.array([0.0, 0.0, c.mount_height])
-        # beams in the mount link's frame: constant, pybullet moves them with the link
-        self.ray_starts = (centre + c.min_range * dirs).tolist()
-        self.ray_ends = (centre + c.max_range * dirs).tolist()
+        self.noise = noise or LidarNoise()
+        self.spaces = {"lidar": spaces.Box(0.0, 1.0, shape=c.shape, dtype=np.float32)}
+        self._centre = np.array([0.0, 0.0, c.mount_height])
+        self.ray_starts, self.ray_ends = self._rays(c.angles)
         self._span = c.max_range - c.min_range
+        self._episode = LidarEpisode()
 
-    def reset(self, state: RobotState) -> None:
-        """A LIDAR keeps no state between scans."""
+    def _rays(self, azimuths: np.ndarray) -> tuple[list, list]:
+        """Ray starts and ends in the mount link's frame (pybullet moves them with the link)."""
+        c = self.config
+        az = np.broadcast_to(azimuths, c.shape).reshape(-1)
+        el = np.repeat(c.elevations, c.n_rays)
+        dirs = np.stack([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)], axis=1)
+        return (self._centre + c.min_range * dirs).tolist(), (self._centre + c.max_range * dirs).tolist()
 
-    def read(self, sim: Sim, state: RobotState) -> np.ndarray:
-        """Ranges (metres) measured from the mount origin, ``max_range`` where nothing is hit."""
+    def reset(self, sim: Sim, state: RobotState, rng: np.random.Generator) -> None:
+        self._episode = start_lidar_episode(rng, self.noise)
+
+    def read_clean(self, sim: Sim, state: RobotState, starts: list | None = None, ends: list | None = None):
+        """Exact ranges (metres) from the mount origin, ``max_range`` where nothing is hit."""
         link = state.link_index[self.config.link]
-        fractions = sim.ray_hit_fractions(self.ray_starts, self.ray_ends, body=state.body, link=link)
-        return self.config.min_range + fractions * self._span
+        fractions = sim.ray_hit_fractions(
+            starts or self.ray_starts, ends or self.ray_ends, body=state.body, link=link
+        )
+        return (self.config.min_range + fractions * self._span).reshape(self.config.shape)
 
-    def observe(self, reading: np.ndarray) -> np.ndarray:
-        return (reading / self.config.max_range).astype(np.float32)
+    def read(self, sim: Sim, state: RobotState, rng: np.random.Generator) -> np.ndarray:
+        c = self.config
+        jittered = jitter_angles(np.broadcast_to(c.angles, c.shape), rng, self.noise)
+        clean = self.read_clean(sim, state) if jittered is None else self.read_clean(sim, state, *self._rays(jittered))
+        return apply_lidar_noise(clean, rng, self.noise, self._episode, c.min_range, c.max_range)
+
+    def observe(self, reading: np.ndarray) -> dict[str, np.ndarray]:
+        return {"lidar": (np.minimum(reading, self.config.max_range) / self.config.max_range).astype(np.float32)}
+
+    def info(self, reading: np.ndarray) -> dict[str, Any]:
+        return {"lidar_ranges": reading}

@@ -1,0 +1,186 @@
+"""Camera on a robot link: RGB, depth and segmentation from one ``getCameraImage`` per frame.
+
+The image is rendered only when the sensor is due (its rate, see the noise profile's ``camera.rate_hz``) and only
+with the modes asked for. TinyRenderer's cost grows with the triangles of every visual shape in the world and
+with the pixels, so the robots and clutter keep their visual meshes lean.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+
+from clutter_gym.noise.camera import (
+    DepthEpisode,
+    DepthNoise,
+    RgbEpisode,
+    RgbNoise,
+    apply_depth_noise,
+    apply_rgb_noise,
+    start_depth_episode,
+    start_rgb_episode,
+)
+from clutter_gym.noise.distortion import Intrinsics
+from clutter_gym.robots.state import RobotState
+from clutter_gym.sim import Sim
+
+CAMERA_MODES = ("rgb", "depth", "segmentation")
+RENDERERS = ("tiny", "egl")
+#: Segmentation classes, by value: what each pixel shows.
+SEGMENTATION_CLASSES = ("nothing", "ground", "obstacle", "robot", "goal")
+
+
+@dataclass(frozen=True)
+class CameraConfig:
+    """Attributes:
+    width, height: image size in pixels, each in [8, 1024].
+    modes: a non-empty subset of ("rgb", "depth", "segmentation").
+    vertical_fov: radians, (0, pi); 58 degrees is the RealSense D435's depth field of view.
+    near, far: clipping planes in metres; nothing closer than ``near`` or beyond ``far`` is seen, and depth
+        pixels there read 0 (no data).
+    renderer: "tiny" (TinyRenderer, CPU, always available) or "egl" (OpenGL through the EGL plugin).
+    link: URDF link the camera is mounted on; it looks along the link's +x axis with +z up.
+    """
+
+    width: int = 84
+    height: int = 84
+    modes: tuple[str, ...] = ("rgb", "depth")
+    vertical_fov: float = math.radians(58.0)
+    near: float = 0.05
+    far: float = 10.0
+    renderer: str = "tiny"
+    link: str = "camera_link"
+
+    def __post_init__(self) -> None:
+        for name, value in (("camera_size[0] (width)", self.width), ("camera_size[1] (height)", self.height)):
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 8 <= value <= 1024:
+                raise ValueError(f"{name} must be an integer in [8, 1024] pixels, got {value!r}")
+        if isinstance(self.modes, str) or not self.modes or any(m not in CAMERA_MODES for m in self.modes):
+            raise ValueError(f"camera_modes must be a non-empty tuple of names from {CAMERA_MODES}, got {self.modes!r}")
+        if len(set(self.modes)) != len(self.modes):
+            raise ValueError(f"camera_modes must not repeat a name, got {self.modes!r}")
+        if not (math.isfinite(self.vertical_fov) and 0.0 < self.vertical_fov < math.pi):
+            raise ValueError(f"camera_fov must be in (0, pi) radians, got {self.vertical_fov!r}")
+        if not (math.isfinite(self.near) and math.isfinite(self.far) and 0.001 <= self.near < self.far <= 1000.0):
+            raise ValueError(f"camera near/far must satisfy 0.001 <= near < far <= 1000 m, got {self.near}, {self.far}")
+        if self.renderer not in RENDERERS:
+            raise ValueError(f"camera_renderer must be one of {RENDERERS}, got {self.renderer!r}")
+
+    @property
+    def intrinsics(self) -> Intrinsics:
+        """Pinhole intrinsics of the rendered image (pixel indices, row 0 at the top).
+
+        TinyRenderer samples each pixel at its corner, not its centre: measured against analytic floor depths
+        and box edges (tests/test_camera.py), its principal point is ``(width / 2, height / 2 - 1)``, half a
+        pixel off the ``((width - 1) / 2, (height - 1) / 2)`` of a centre-sampling renderer, which EGL's OpenGL
+        rasteriser is assumed to be.
+        """
+        ideal = Intrinsics.from_fov(self.width, self.height, self.vertical_fov)
+        if self.renderer == "egl":
+            return ideal
+        return Intrinsics(self.width, self.height, ideal.fx, ideal.fy, self.width / 2, self.height / 2 - 1)
+
+
+class Camera:
+    """Observation entries, one per mode:
+
+    * ``camera_rgb``: (height, width, 3) uint8;
+    * ``camera_depth``: (height, width) float32, metres along the optical axis, 0 = no data;
+    * ``camera_segmentation``: (height, width) uint8, index into :data:`SEGMENTATION_CLASSES`.
+    """
+
+    name = "camera"
+    read_every_step = False
+
+    def __init__(self, config: CameraConfig | None = None, rgb_noise: RgbNoise | None = None,
+                 depth_noise: DepthNoise | None = None) -> None:
+        self.config = c = config or CameraConfig()
+        self.rgb_noise = rgb_noise or RgbNoise()
+        self.depth_noise = depth_noise or DepthNoise()
+        shape = (c.height, c.width)
+        all_spaces = {
+            "rgb": spaces.Box(0, 255, (*shape, 3), dtype=np.uint8),
+            "depth": spaces.Box(0.0, c.far, shape, dtype=np.float32),
+            "segmentation": spaces.Box(0, len(SEGMENTATION_CLASSES) - 1, shape, dtype=np.uint8),
+        }
+        self.spaces = {f"camera_{mode}": all_spaces[mode] for mode in c.modes}
+        self.intrinsics = c.intrinsics
+        f = 1.0 / math.tan(c.vertical_fov / 2)
+        aspect = c.width / c.height
+        # OpenGL perspective projection, column-major (what pybullet's computeProjectionMatrixFOV returns)
+        self.projection = [f / aspect, 0, 0, 0, 0, f, 0, 0, 0, 0, (c.far + c.near) / (c.near - c.far), -1,
+                           0, 0, 2 * c.far * c.near / (c.near - c.far), 0]
+        self._rgb_episode, self._depth_episode = RgbEpisode(), DepthEpisode()
+        self._classes = np.zeros(1, dtype=np.uint8)
+
+    def reset(self, sim: Sim, state: RobotState, rng: np.random.Generator) -> None:
+        if self.config.renderer == "egl" and not getattr(self, "_egl", False):
+            sim.use_egl()
+            self._egl = True
+        self._rgb_episode = start_rgb_episode(rng, self.rgb_noise)
+        self._depth_episode = start_depth_episode(rng, self.depth_noise)
+        if "segmentation" in self.config.modes:
+            self._classes = _class_table(sim)
+
+    def render(self, sim: Sim, state: RobotState) -> dict[str, np.ndarray]:
+        """The clean images of the requested modes (depth in metres, 0 where nothing is within [near, far])."""
+        c = self.config
+        eye, rotation = sim.link_frame(state.body, state.link_index[c.link])
+        view = _view_matrix(eye, rotation)
+        rgb, buffer, ids = sim.camera_image(c.width, c.height, view, self.projection, "segmentation" in c.modes)
+        images: dict[str, np.ndarray] = {}
+        if "rgb" in c.modes:
+            images["rgb"] = rgb
+        if "depth" in c.modes:
+            # the depth buffer is non-linear in z: invert the projection. TinyRenderer leaves the background a
+            # hair short of the far plane (z = 0.99999 far), so the last millimetre counts as nothing seen.
+            z = c.far * c.near / (c.far - (c.far - c.near) * buffer)
+            images["depth"] = np.where(z < c.far - 1e-3, z, 0.0)
+        if ids is not None:
+            images["segmentation"] = self._classes[np.clip(ids + 1, 0, len(self._classes) - 1)]
+        return images
+
+    def read(self, sim: Sim, state: RobotState, rng: np.random.Generator) -> dict[str, np.ndarray]:
+        images = self.render(sim, state)
+        if "rgb" in images:
+            images["rgb"] = apply_rgb_noise(images["rgb"], rng, self.rgb_noise, self._rgb_episode, self.intrinsics)
+        if "depth" in images:
+            images["depth"] = apply_depth_noise(
+                images["depth"], rng, self.depth_noise, self._depth_episode, self.intrinsics
+            )
+        return images
+
+    def observe(self, reading: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+        out = {f"camera_{mode}": image for mode, image in reading.items()}
+        if "camera_depth" in out:
+            out["camera_depth"] = np.minimum(out["camera_depth"], self.config.far).astype(np.float32)
+        return out
+
+    def info(self, reading: Any) -> dict[str, Any]:
+        return {}
+
+
+def _view_matrix(eye: np.ndarray, rotation: np.ndarray) -> list[float]:
+    """OpenGL view matrix (column-major) of a camera at ``eye`` looking along the rotation's x axis, z up."""
+    forward, up = rotation[:, 0], rotation[:, 2]
+    side = np.cross(forward, up)  # camera right = forward x up
+    m = np.eye(4)
+    m[0, :3], m[1, :3], m[2, :3] = side, up, -forward
+    m[:3, 3] = -m[:3, :3] @ eye
+    return m.T.reshape(-1).tolist()
+
+
+def _class_table(sim: Sim) -> np.ndarray:
+    """Lookup from body id + 1 to segmentation class (index 0 = no body); unnamed bodies are obstacles."""
+    names = sim.body_names()
+    size = max([*names, *sim.body_ids()], default=0) + 2
+    table = np.full(size, SEGMENTATION_CLASSES.index("obstacle"), dtype=np.uint8)
+    table[0] = SEGMENTATION_CLASSES.index("nothing")
+    classes = {"ground": "ground", "robot": "robot", "goal": "goal"}
+    for body, name in names.items():
+        table[body + 1] = SEGMENTATION_CLASSES.index(classes.get(name, "obstacle"))
+    return table
