@@ -176,7 +176,8 @@ class ClutterEnv(gym.Env):
             info.update(delivered[1])
         obs[self.task.name] = self.task.observe(state)
         obs["velocity"] = self.robot.observe(state)
-        if not math.isfinite(sum(float(v.sum()) for v in obs.values())):  # NaN/Inf anywhere poisons the sum
+        floats = [v for v in obs.values() if v.dtype.kind == "f"]  # integer images cannot hold NaN/Inf
+        if not math.isfinite(sum(float(v.sum()) for v in floats)):  # NaN/Inf anywhere poisons the sum
             bad = [key for key, value in obs.items() if not np.all(np.isfinite(value))]
             raise FloatingPointError(f"non-finite observation {bad}: {[obs[k] for k in bad]}")
         return obs, info

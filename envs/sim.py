@@ -79,6 +79,7 @@ class Sim:
         self._filters: dict[int, tuple[int, int]] = {}  # body -> (collision group, mask) set by this Sim
         self.physics_hz = float(physics_hz)
         self._renderer = pb.ER_TINY_RENDERER
+        self._visuals: dict[int, list[tuple[int, tuple]]] = {}
         pb.setPhysicsEngineParameter(
             fixedTimeStep=1.0 / self.physics_hz,
             numSolverIterations=int(solver_iterations),
@@ -107,16 +108,19 @@ class Sim:
             self._cid = -1
 
     # ------------------------------------------------------------------------------------------- bodies
-    def add_ground(self, name: str = "ground") -> int:
-        """An infinite static plane at z = 0 (one collision primitive, no mesh)."""
-        # pybullet warns from C that a plane has no default visual (at createMultiBody), then draws one anyway
-        with quiet_c_output():
-            shape = pb.createCollisionShape(pb.GEOM_PLANE, physicsClientId=self._cid)
-            visual = pb.createVisualShape(
-                pb.GEOM_PLANE, rgbaColor=(0.85, 0.85, 0.8, 1.0), physicsClientId=self._cid
-            )
-            body = self._static_body(shape, visual)
-        return self._register(name, body)
+    def add_ground(self, visual_size: float, name: str = "ground") -> int:
+        """An infinite static collision plane at z = 0, drawn as a ``visual_size`` square (metres).
+
+        The drawn square is a flat box, not pybullet's plane visual: TinyRenderer pays per shaded pixel, and the
+        plane visual cost 35% more than an untextured box for the floor half of every camera image.
+        """
+        half = 0.5 * visual_size
+        shape = pb.createCollisionShape(pb.GEOM_PLANE, physicsClientId=self._cid)
+        visual = pb.createVisualShape(
+            pb.GEOM_BOX, halfExtents=(half, half, 0.0005), visualFramePosition=(0.0, 0.0, -0.0005),
+            rgbaColor=(0.85, 0.85, 0.8, 1.0), physicsClientId=self._cid,
+        )
+        return self._register(name, self._static_body(shape, visual))
 
     def load_urdf(self, name: str, path: str | Path, position: Sequence[float] = (0.0, 0.0, 0.0)) -> int:
         """Load a URDF once and address it by ``name``.
@@ -188,6 +192,12 @@ class Sim:
     def remove_body(self, body: int) -> None:
         """Delete a body from the world (its collision and visual shapes stay cached for reuse)."""
         pb.removeBody(body, physicsClientId=self._cid)
+
+    def set_visible(self, body: int, visible: bool, rgba: Sequence[float]) -> None:
+        """Show a single-shape body in colour ``rgba``, or hide it from every renderer (fully transparent shapes are
+        skipped by TinyRenderer: a parked obstacle then costs a camera frame nothing)."""
+        colour = (*rgba[:3], rgba[3] if visible else 0.0)
+        pb.changeVisualShape(body, -1, rgbaColor=colour, physicsClientId=self._cid)
 
     def sleep(self, body: int) -> None:
         """Deactivate a static body so the physics tick skips it (teleporting it wakes it again)."""
@@ -336,11 +346,14 @@ class Sim:
             angular_velocity=flat[:, 6:9],
         )
 
-    def ray_hit_fractions(self, starts: list, ends: list, body: int = -1, link: int = -1) -> np.ndarray:
+    def ray_hit_fractions(
+        self, starts: list | np.ndarray, ends: list | np.ndarray, body: int = -1, link: int = -1
+    ) -> np.ndarray:
         """Cast a batch of rays in one ``rayTestBatch``; returns the hit fraction per ray (1.0 = no hit).
 
         Args:
-            starts, ends: (n, 3) nested lists, metres (pybullet converts a list twice as fast as an ndarray).
+            starts, ends: (n, 3) metres. pybullet converts a ready nested list twice as fast as an ndarray, but an
+                ndarray made this step is faster to pass as it is than through ``tolist()``.
             body, link: when ``body`` >= 0 the rays are given in that link's frame and pybullet moves them with it,
                 so a sensor can keep constant ray lists.
 
@@ -382,23 +395,55 @@ class Sim:
         return np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)[:, :, :3].copy()
 
     def camera_image(
-        self, width: int, height: int, view: Sequence[float], projection: Sequence[float], segmentation: bool
+        self,
+        width: int,
+        height: int,
+        view: Sequence[float],
+        projection: Sequence[float],
+        segmentation: bool,
+        behind: int = -1,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         """One ``getCameraImage``: RGB (height, width, 3) uint8, the raw depth buffer (height, width) in [0, 1],
         and body ids per pixel (-1 = nothing) when ``segmentation`` is set.
 
-        The renderer is TinyRenderer unless :meth:`use_egl` loaded the EGL plugin.
+        The renderer is TinyRenderer unless :meth:`use_egl` loaded the EGL plugin. ``behind`` names a body that
+        lies wholly behind the camera (the robot carrying it) and is hidden for the frame: TinyRenderer does not
+        cull triangles behind the eye but rasterises their projection over the whole viewport, so the diffbot's
+        own visuals cost 0.9 ms of a 2.2 ms 84x84 frame while contributing no pixel. Hiding and showing them
+        costs 17 us.
         """
         flags = pb.ER_SEGMENTATION_MASK_OBJECT_AND_LINKINDEX if segmentation else pb.ER_NO_SEGMENTATION_MASK
-        _, _, rgba, depth, seg = pb.getCameraImage(
-            width, height, view, projection, renderer=self._renderer, flags=flags, physicsClientId=self._cid
-        )
+        colours = self._visual_colours(behind) if behind >= 0 else []
+        for link, _ in colours:
+            pb.changeVisualShape(behind, link, rgbaColor=(0.0, 0.0, 0.0, 0.0), physicsClientId=self._cid)
+        try:
+            _, _, rgba, depth, seg = pb.getCameraImage(
+                width, height, view, projection, renderer=self._renderer, flags=flags, physicsClientId=self._cid
+            )
+        finally:
+            for link, colour in colours:
+                pb.changeVisualShape(behind, link, rgbaColor=colour, physicsClientId=self._cid)
         rgb = np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)[:, :, :3]
         depth = np.asarray(depth, dtype=np.float64).reshape(height, width)
         if not segmentation:
             return rgb, depth, None
         seg = np.asarray(seg, dtype=np.int64).reshape(height, width)
         return rgb, depth, np.where(seg >= 0, seg & ((1 << 24) - 1), -1)  # low 24 bits: the body id
+
+    def _visual_colours(self, body: int) -> list[tuple[int, tuple]]:
+        """(link, rgba) of each link of ``body`` with a visual shape (read once, cached).
+
+        Raises:
+            ValueError: a link has several visual shapes: pybullet's ``changeVisualShape`` ignores its shape index,
+                so they could not get their colours back.
+        """
+        if body not in self._visuals:
+            links = [data[1] for data in pb.getVisualShapeData(body, physicsClientId=self._cid)]
+            if len(set(links)) != len(links):
+                raise ValueError(f"body {body} has a link with several visual shapes; give each its own link")
+            colours = [data[7] for data in pb.getVisualShapeData(body, physicsClientId=self._cid)]
+            self._visuals[body] = list(zip(links, colours))
+        return self._visuals[body]
 
     def use_egl(self) -> None:
         """Render camera images with the EGL (OpenGL, headless) plugin instead of TinyRenderer.

@@ -84,3 +84,24 @@ def test_depth_noise_on_a_wall_matches_the_harsh_profile(make_env):
     assert abs(error.std() / expected - 1.0) < 0.05
     # one per-episode bias, within +-(0.011 + 0.001 z); the mean of ~6,000 pixels is good to 1 mm
     assert abs(error.mean()) < 0.011 + 0.001 * z + 5 * expected / np.sqrt(error.size)
+
+
+def test_the_render_leaves_every_colour_as_it_was(make_env):
+    """The robot is hidden during its own camera's frame (TinyRenderer pays for geometry behind the eye) and
+    parked obstacles are invisible; after a frame the robot's colours are back, and active obstacles are shown."""
+    import pybullet as pb
+
+    env = make_env(sensors=("camera",), render_mode="rgb_array")
+    env.reset(seed=0)
+    u = env.unwrapped
+    cid = u.sim.client_id
+    before = [d[7] for d in pb.getVisualShapeData(u.robot.body, physicsClientId=cid)]
+    for _ in range(3):
+        env.step(np.zeros(2, dtype=np.float32))
+    assert [d[7] for d in pb.getVisualShapeData(u.robot.body, physicsClientId=cid)] == before
+    for _ in range(5):
+        env.reset()
+    pool = u.arena._pool
+    alpha = {b: pb.getVisualShapeData(b, physicsClientId=cid)[0][7][3] for b in pool._parked}
+    assert alpha and all(a == 0.0 for a in alpha.values())
+    assert all(pb.getVisualShapeData(b, physicsClientId=cid)[0][7][3] == 1.0 for _, b in pool._active)

@@ -11,7 +11,7 @@ from clutter_gym.noise.lidar import (
     LidarEpisode,
     LidarNoise,
     apply_lidar_noise,
-    jitter_angles,
+    angle_offsets,
     start_lidar_episode,
 )
 
@@ -96,10 +96,9 @@ def test_no_return_stays_a_no_return_whatever_the_noise():
 
 
 def test_angular_jitter_std():
-    angles = np.zeros(N)
-    jittered = jitter_angles(angles, np.random.default_rng(4), LidarNoise(angular_jitter=0.0087))
-    assert abs(jittered.std() / 0.0087 - 1.0) < 0.05
-    assert jitter_angles(angles, np.random.default_rng(4), LidarNoise()) is None
+    offsets = angle_offsets((N,), np.random.default_rng(4), LidarNoise(angular_jitter=0.0087))
+    assert abs(offsets.std() / 0.0087 - 1.0) < 0.05
+    assert angle_offsets((N,), np.random.default_rng(4), LidarNoise()) is None
 
 
 def test_clean_params_return_the_reading_and_draw_nothing():

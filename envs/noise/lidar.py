@@ -13,7 +13,7 @@ Model, applied to every beam that returned (clean range below the maximum), in t
 
 A no-return reads ``max_range`` (``no_return="max"``, the clean sensor's convention and the observation's) or
 ``inf`` (``no_return="inf"``, the ROS ``LaserScan`` convention). Angular jitter moves the beams themselves, so it is
-applied by the sensor before the rays are cast (:func:`jitter_angles`).
+applied by the sensor before the rays are cast (:func:`angle_offsets`).
 """
 
 from __future__ import annotations
@@ -58,11 +58,11 @@ def start_lidar_episode(rng: np.random.Generator, params: LidarNoise) -> LidarEp
     return LidarEpisode(bias_u=float(rng.uniform(-1.0, 1.0)))
 
 
-def jitter_angles(angles: np.ndarray, rng: np.random.Generator, params: LidarNoise) -> np.ndarray | None:
-    """Beam angles with Gaussian jitter (radians), or None when there is no jitter (cast the fixed beams)."""
+def angle_offsets(shape: tuple[int, ...], rng: np.random.Generator, params: LidarNoise) -> np.ndarray | None:
+    """Gaussian errors of the beams' azimuths (radians), or None when there is no jitter (cast the fixed beams)."""
     if params.angular_jitter == 0.0:
         return None
-    return angles + rng.normal(0.0, params.angular_jitter, angles.shape)
+    return rng.normal(0.0, params.angular_jitter, shape)
 
 
 def apply_lidar_noise(
@@ -92,12 +92,19 @@ def apply_lidar_noise(
         r += episode.bias_u * np.maximum(params.bias_m, params.bias_frac * r)
     if params.range_sigma > 0.0 or params.range_sigma_frac > 0.0:
         r += np.maximum(params.range_sigma, params.range_sigma_frac * r) * rng.standard_normal(r.shape)
-    if params.spurious_prob > 0.0:
-        spurious = rng.random(r.shape) < params.spurious_prob
-        r = np.where(spurious, lo + rng.random(r.shape) * np.maximum(r - lo, 0.0), r)
-    if params.dropout_prob > 0.0:
-        hit &= rng.random(r.shape) >= params.dropout_prob
+    if params.spurious_prob > 0.0 or params.dropout_prob > 0.0:
+        u = rng.random((2, *r.shape))  # one draw for both: row 0 spurious, row 1 dropout
+        spurious = u[0] < params.spurious_prob
+        if spurious.any():
+            # given u < p, u / p is uniform on [0, 1): it places the spurious return, no second draw needed
+            r[spurious] = lo + u[0][spurious] / params.spurious_prob * np.maximum(r[spurious] - lo, 0.0)
+        if params.dropout_prob > 0.0:
+            hit &= u[1] >= params.dropout_prob
     if params.quantization > 0.0:
-        r = np.round(r / params.quantization) * params.quantization
-    hit &= (r >= lo) & (r <= hi)
-    return np.where(hit, r, math.inf if params.no_return == "inf" else max_range)
+        r /= params.quantization
+        np.rint(r, out=r)
+        r *= params.quantization
+    hit &= r >= lo
+    hit &= r <= hi
+    r[~hit] = math.inf if params.no_return == "inf" else max_range
+    return r

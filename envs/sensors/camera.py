@@ -131,7 +131,9 @@ class Camera:
         c = self.config
         eye, rotation = sim.link_frame(state.body, state.link_index[c.link])
         view = _view_matrix(eye, rotation)
-        rgb, buffer, ids = sim.camera_image(c.width, c.height, view, self.projection, "segmentation" in c.modes)
+        rgb, buffer, ids = sim.camera_image(
+            c.width, c.height, view, self.projection, "segmentation" in c.modes, behind=state.body
+        )
         images: dict[str, np.ndarray] = {}
         if "rgb" in c.modes:
             images["rgb"] = rgb
@@ -167,7 +169,7 @@ class Camera:
 def _view_matrix(eye: np.ndarray, rotation: np.ndarray) -> list[float]:
     """OpenGL view matrix (column-major) of a camera at ``eye`` looking along the rotation's x axis, z up."""
     forward, up = rotation[:, 0], rotation[:, 2]
-    side = np.cross(forward, up)  # camera right = forward x up
+    side = -rotation[:, 1]  # camera right = forward x up = x_link x z_link = -y_link
     m = np.eye(4)
     m[0, :3], m[1, :3], m[2, :3] = side, up, -forward
     m[:3, 3] = -m[:3, :3] @ eye

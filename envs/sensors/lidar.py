@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 from gymnasium import spaces
 
-from clutter_gym.noise.lidar import LidarEpisode, LidarNoise, apply_lidar_noise, jitter_angles, start_lidar_episode
+from clutter_gym.noise.lidar import LidarEpisode, LidarNoise, angle_offsets, apply_lidar_noise, start_lidar_episode
 from clutter_gym.robots.state import RobotState
 from clutter_gym.sim import Sim
 
@@ -93,34 +93,38 @@ class Lidar:
         self.config = c = config or LidarConfig()
         self.noise = noise or LidarNoise()
         self.spaces = {"lidar": spaces.Box(0.0, 1.0, shape=c.shape, dtype=np.float32)}
+        az = np.broadcast_to(c.angles, c.shape).reshape(-1)
+        el = np.repeat(c.elevations, c.n_rays)
+        self._dirs = np.stack([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)], axis=1)
+        self._d_dirs = np.stack([-np.cos(el) * np.sin(az), np.cos(el) * np.cos(az), 0 * el], axis=1)  # d/d azimuth
         self._centre = np.array([0.0, 0.0, c.mount_height])
-        self.ray_starts, self.ray_ends = self._rays(c.angles)
+        self.ray_starts = (self._centre + c.min_range * self._dirs).tolist()  # constant: pybullet moves them
+        self.ray_ends = (self._centre + c.max_range * self._dirs).tolist()  # with the mount link
         self._span = c.max_range - c.min_range
         self._episode = LidarEpisode()
-
-    def _rays(self, azimuths: np.ndarray) -> tuple[list, list]:
-        """Ray starts and ends in the mount link's frame (pybullet moves them with the link)."""
-        c = self.config
-        az = np.broadcast_to(azimuths, c.shape).reshape(-1)
-        el = np.repeat(c.elevations, c.n_rays)
-        dirs = np.stack([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)], axis=1)
-        return (self._centre + c.min_range * dirs).tolist(), (self._centre + c.max_range * dirs).tolist()
 
     def reset(self, sim: Sim, state: RobotState, rng: np.random.Generator) -> None:
         self._episode = start_lidar_episode(rng, self.noise)
 
-    def read_clean(self, sim: Sim, state: RobotState, starts: list | None = None, ends: list | None = None):
-        """Exact ranges (metres) from the mount origin, ``max_range`` where nothing is hit."""
+    def read_clean(self, sim: Sim, state: RobotState, starts: np.ndarray | None = None, ends: np.ndarray | None = None):
+        """Exact ranges (metres) from the mount origin, ``max_range`` where nothing is hit; the beams given by
+        ``starts`` and ``ends`` (mount frame) or the scan's own."""
         link = state.link_index[self.config.link]
-        fractions = sim.ray_hit_fractions(
-            starts or self.ray_starts, ends or self.ray_ends, body=state.body, link=link
-        )
+        if starts is None or ends is None:
+            starts, ends = self.ray_starts, self.ray_ends
+        fractions = sim.ray_hit_fractions(starts, ends, body=state.body, link=link)
         return (self.config.min_range + fractions * self._span).reshape(self.config.shape)
 
     def read(self, sim: Sim, state: RobotState, rng: np.random.Generator) -> np.ndarray:
         c = self.config
-        jittered = jitter_angles(np.broadcast_to(c.angles, c.shape), rng, self.noise)
-        clean = self.read_clean(sim, state) if jittered is None else self.read_clean(sim, state, *self._rays(jittered))
+        offsets = angle_offsets((len(self._dirs), 1), rng, self.noise)
+        if offsets is None:
+            clean = self.read_clean(sim, state)
+        else:
+            # first order in the azimuth error d, half the cost of recomputing cos/sin: ranges come out short by
+            # a factor 1 / sqrt(1 + d^2), 4e-5 for a 1-sigma error of 0.0087 rad (harsh; 0.13 mm at 3.5 m)
+            dirs = self._dirs + offsets * self._d_dirs
+            clean = self.read_clean(sim, state, self._centre + c.min_range * dirs, self._centre + c.max_range * dirs)
         return apply_lidar_noise(clean, rng, self.noise, self._episode, c.min_range, c.max_range)
 
     def observe(self, reading: np.ndarray) -> dict[str, np.ndarray]:

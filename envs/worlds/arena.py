@@ -30,7 +30,7 @@ class ClutterArena:
 
     def load(self, sim: Sim) -> None:
         """Create the ground and walls (once per env)."""
-        sim.add_ground()
+        sim.add_ground(visual_size=self.spec.arena_size + 2.0)
         self._pool = ObstaclePool(sim, self.spec.arena_size, self.spec.obstacle_height, self.spec.wall_thickness)
 
     @property

@@ -1,7 +1,8 @@
 """Put scenes into a Sim by moving pooled static bodies: no URDF reload, no resetSimulation on reset.
 
 Bodies are pooled by exact shape (shape and size). A scene takes what the pool has and creates only the
-shapes it lacks; bodies it does not need are parked under the floor, asleep. Parked bodies are not free: Bullet
+shapes it lacks; bodies it does not need are parked under the floor, asleep and invisible (a camera frame
+would otherwise pay for their triangles). Parked bodies are not free: Bullet
 visits every body each physics tick (measured: 245 parked bodies took a tick from 29 to 77 us), so the pool
 keeps at most ``max_parked`` of them and deletes the least recently used beyond that. Generated layouts draw
 their sizes from a few levels per range (``ClutterSpec.size_levels``), so a small pool covers every layout and
@@ -74,6 +75,7 @@ class ObstaclePool:
         if self._free[key]:
             body = self._free[key].pop()
             del self._parked[body]
+            self._sim.set_visible(body, True, _COLOURS[key[0]])
             return body
         return self._create(o)
 
@@ -96,6 +98,7 @@ class ObstaclePool:
             if body in self._parked:
                 self._sim.move_static(body, PARK_POSITION, (0.0, 0.0, 0.0, 1.0))
                 self._sim.sleep(body)
+                self._sim.set_visible(body, False, _COLOURS[self._parked[body][0]])
         while len(self._parked) > self.max_parked:
             body, key = self._parked.popitem(last=False)
             self._free[key].remove(body)
