@@ -46,17 +46,18 @@ def test_wheel_carries_the_assets(tmp_path):
     assert "clutter_gym/assets/robots/diffbot.urdf" in names
     assert "clutter_gym/training/baselines.py" in names
     assert "clutter_gym/collision/checker.py" in names
+    assert "clutter_gym/noise/profiles.yaml" in names
 
 
 def test_demo_cli_writes_a_gif_and_a_clean_summary(tmp_path):
     exe = shutil.which("clutter-gym", path=str(Path(sys.executable).parent))
     assert exe, "the clutter-gym console script is not installed"
     result = subprocess.run(
-        [exe, "demo", "--max-steps", "30", "--out", str(tmp_path), "--json"],
+        [exe, "demo", "--max-steps", "30", "--out", str(tmp_path), "--json", "--noise", "harsh"],
         capture_output=True, text=True, check=True,
     )
     summary = json.loads(result.stdout)  # nothing else on stdout: pybullet's C output is silenced
-    assert summary["steps"] == 30 and Path(summary["gif"]).stat().st_size > 1000
+    assert summary["steps"] == 30 and summary["noise"] == "harsh" and Path(summary["gif"]).stat().st_size > 1000
     assert summary["steps_per_s"] > 0
     assert "b3Warning" not in result.stderr and "pybullet build time" not in result.stderr
     assert list(tmp_path.iterdir()) == [Path(summary["gif"])], "a temporary file was left behind"
@@ -67,3 +68,11 @@ def test_demo_cli_rejects_bad_options():
         [sys.executable, "-m", "clutter_gym.cli", "demo", "--max-steps", "0"], capture_output=True, text=True
     )
     assert result.returncode == 2 and "must be a positive integer" in result.stderr
+
+
+def test_profiles_cli_prints_the_table_and_a_profile():
+    exe = shutil.which("clutter-gym", path=str(Path(sys.executable).parent))
+    table = subprocess.run([exe, "profiles"], capture_output=True, text=True, check=True).stdout
+    assert "| `lidar.range_sigma` |" in table and "- `harsh`:" in table
+    harsh = json.loads(subprocess.run([exe, "profiles", "harsh"], capture_output=True, text=True, check=True).stdout)
+    assert harsh["profile"] == "harsh" and harsh["lidar"]["range_sigma"] == 0.02 and harsh["lidar"]["rate_hz"] == 5.0

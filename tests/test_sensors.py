@@ -75,3 +75,14 @@ def test_accelerometer_integrates_to_the_speed_gained(make_env):
     speed = obs["velocity"][0]
     assert speed == pytest.approx(0.5, rel=0.01)  # commanded max_linear_speed
     assert np.sum(fx) * dt == pytest.approx(speed, rel=5e-3)
+
+
+def test_multichannel_lidar_middle_channel_is_the_2d_scan(make_env):
+    flat, multi = make_env(lidar_range=5.0), make_env(lidar_range=5.0, lidar_channels=3, lidar_vertical_fov=0.3)
+    scene = {"scene": empty_scene()}
+    obs_flat, _ = flat.reset(options=scene)
+    obs_multi, info = multi.reset(options=scene)
+    assert obs_multi["lidar"].shape == (3, 64) and multi.observation_space["lidar"].shape == (3, 64)
+    np.testing.assert_allclose(obs_multi["lidar"][1], obs_flat["lidar"], atol=1e-6)
+    # the lowest channel looks 0.15 rad down from 0.21 m: its beams meet the floor 0.21 / sin(0.15) = 1.405 m away
+    np.testing.assert_allclose(info["lidar_ranges"][0], 0.21 / math.sin(0.15), rtol=1e-4)
