@@ -30,17 +30,9 @@ difference is far below one 8-bit step."""
 
 
 @dataclasses.dataclass(frozen=True)
-class RgbNoise(NoiseParams):
-    """Colour camera noise. Defaults are a clean camera. Values are 1-sigma unless stated."""
+class LensNoise(NoiseParams):
+    """Brown-Conrady lens distortion coefficients, shared by the colour and depth images (0 = a pinhole)."""
 
-    section = "camera_rgb"
-
-    read_sigma: float = param(0.0, 0.0, 50.0, "DN", "Gaussian read noise in 8-bit digital numbers")
-    shot_electrons: float = param(
-        0.0, 0.0, 1e6, "e-", "electrons collected at full scale (255 DN): s in [0, 1] -> Poisson(s N) / N; 0 = none"
-    )
-    gain_sigma: float = param(0.0, 0.0, 0.5, "", "per-episode global gain error, fraction (gain = 1 + sigma n)")
-    color_sigma: float = param(0.0, 0.0, 0.5, "", "per-episode per-channel gain error, fraction")
     k1: float = param(0.0, -1.0, 1.0, "", "radial distortion r^2 coefficient (< 0 barrel)")
     k2: float = param(0.0, -1.0, 1.0, "", "radial distortion r^4 coefficient")
     k3: float = param(0.0, -1.0, 1.0, "", "radial distortion r^6 coefficient")
@@ -53,7 +45,21 @@ class RgbNoise(NoiseParams):
 
 
 @dataclasses.dataclass(frozen=True)
-class DepthNoise(NoiseParams):
+class RgbNoise(LensNoise):
+    """Colour camera noise. Defaults are a clean camera. Values are 1-sigma unless stated."""
+
+    section = "camera_rgb"
+
+    read_sigma: float = param(0.0, 0.0, 50.0, "DN", "Gaussian read noise in 8-bit digital numbers")
+    shot_electrons: float = param(
+        0.0, 0.0, 1e6, "e-", "electrons collected at full scale (255 DN): s in [0, 1] -> Poisson(s N) / N; 0 = none"
+    )
+    gain_sigma: float = param(0.0, 0.0, 0.5, "", "per-episode global gain error, fraction (gain = 1 + sigma n)")
+    color_sigma: float = param(0.0, 0.0, 0.5, "", "per-episode per-channel gain error, fraction")
+
+
+@dataclasses.dataclass(frozen=True)
+class DepthNoise(LensNoise):
     """Depth camera noise, sigma_z = sigma_c0 + sigma_c2 (z - sigma_z0)^2. Defaults are a clean camera."""
 
     section = "camera_depth"
@@ -73,11 +79,6 @@ class DepthNoise(NoiseParams):
     edge_threshold_m: float = param(0.05, 0.001, 10.0, "m", "|dz| to a 4-neighbour that makes a discontinuity")
     min_depth: float = param(0.0, 0.0, 10.0, "m", "readings nearer than this read no data")
     max_depth: float = param(1000.0, 0.1, 1000.0, "m", "readings farther than this read no data")
-    k1: float = param(0.0, -1.0, 1.0, "", "radial distortion r^2 coefficient (< 0 barrel)")
-    k2: float = param(0.0, -1.0, 1.0, "", "radial distortion r^4 coefficient")
-    k3: float = param(0.0, -1.0, 1.0, "", "radial distortion r^6 coefficient")
-    p1: float = param(0.0, -1.0, 1.0, "", "tangential distortion coefficient p1")
-    p2: float = param(0.0, -1.0, 1.0, "", "tangential distortion coefficient p2")
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -85,10 +86,6 @@ class DepthNoise(NoiseParams):
             raise ValueError(
                 f"{self.section}.min_depth ({self.min_depth} m) must be below max_depth ({self.max_depth} m)"
             )
-
-    @property
-    def distortion(self) -> Distortion:
-        return Distortion(self.k1, self.k2, self.p1, self.p2, self.k3)
 
 
 @dataclasses.dataclass(frozen=True)
