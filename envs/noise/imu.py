@@ -93,26 +93,6 @@ class ImuEpisode:
     bias: np.ndarray = field(default_factory=lambda: np.zeros(6))
     matrix: np.ndarray = field(default_factory=lambda: np.eye(6))
 
-    @property
-    def accel_matrix(self) -> np.ndarray:
-        """(3, 3) accelerometer scale/misalignment matrix (a view into ``matrix``)."""
-        return self.matrix[:3, :3]
-
-    @property
-    def gyro_matrix(self) -> np.ndarray:
-        """(3, 3) gyro scale/misalignment matrix (a view into ``matrix``)."""
-        return self.matrix[3:, 3:]
-
-    @property
-    def accel_bias(self) -> np.ndarray:
-        """(3,) current total accelerometer bias (turn-on + drift), m/s^2."""
-        return self.turn_on_bias[:3] + self.bias[:3]
-
-    @property
-    def gyro_bias(self) -> np.ndarray:
-        """(3,) current total gyro bias (turn-on + drift), rad/s."""
-        return self.turn_on_bias[3:] + self.bias[3:]
-
 
 def white_sigma(density: float, dt: float) -> float:
     """Per-sample std of white noise averaged over one sample period: ``density / sqrt(dt)``.

@@ -116,11 +116,12 @@ class Camera:
                            0, 0, 2 * c.far * c.near / (c.near - c.far), 0]
         self._rgb_episode, self._depth_episode = RgbEpisode(), DepthEpisode()
         self._classes = np.zeros(1, dtype=np.uint8)
+        self._egl_loaded = False
 
     def reset(self, sim: Sim, state: RobotState, rng: np.random.Generator) -> None:
-        if self.config.renderer == "egl" and not getattr(self, "_egl", False):
+        if self.config.renderer == "egl" and not self._egl_loaded:
             sim.use_egl()
-            self._egl = True
+            self._egl_loaded = True
         self._rgb_episode = start_rgb_episode(rng, self.rgb_noise)
         self._depth_episode = start_depth_episode(rng, self.depth_noise)
         if "segmentation" in self.config.modes:

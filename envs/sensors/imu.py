@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 from gymnasium import spaces
 
-from clutter_gym.noise.imu import ImuNoise, apply_imu_noise, start_imu_episode
+from clutter_gym.noise.imu import ImuEpisode, ImuNoise, apply_imu_noise, start_imu_episode
 from clutter_gym.robots.state import RobotState
 from clutter_gym.sim import Sim
 
@@ -53,7 +53,7 @@ class Imu:
         self._gravity = np.array([0.0, 0.0, -c.gravity])
         self._rate = 1.0 / c.dt
         self._previous_velocity = np.zeros(3)
-        self._episode = start_imu_episode(np.random.default_rng(0), ImuNoise())
+        self._episode = ImuEpisode()
 
     def reset(self, sim: Sim, state: RobotState, rng: np.random.Generator) -> None:
         """Start the finite difference from the current velocity (the first sample reads zero acceleration) and
