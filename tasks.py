@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
-"""Project commands that need nothing but Python 3.10+ and pip: ``python3 tasks.py demo|test|bench``.
+"""Project commands that need nothing but Python 3.10+ and pip: ``python3 tasks.py main|demo|test|bench``.
 
-Each command first makes ``.venv`` (once) and installs clutter-gym into it with its test and training extras,
+Each command first makes ``.venv`` (once) and installs clutter-gym into it with its test, training, benchmark and Ray extras,
 with torch pinned through ``constraints.txt`` (an unpinned torch pulls several GB of CUDA wheels). The package
 itself is reinstalled (not in editable mode) whenever its sources change, so tests always import what a user's
 ``pip install .`` would give them.
@@ -47,7 +47,7 @@ def ensure_installed() -> None:
     deps = _digest(("pyproject.toml", "constraints.txt"))
     if not deps_stamp.exists() or deps_stamp.read_text() != deps:
         print("installing dependencies into .venv (first run: a few minutes) ...", flush=True)
-        _pip(f"{ROOT}[test,train,bench]")
+        _pip(f"{ROOT}[test,train,bench,ray]")
         deps_stamp.write_text(deps)
     pkg = _digest(SOURCES)
     if not pkg_stamp.exists() or pkg_stamp.read_text() != pkg:
@@ -57,6 +57,7 @@ def ensure_installed() -> None:
 
 def main(argv: list[str]) -> int:
     commands = {
+        "main": [str(BIN / "clutter-gym"), "report"],
         "demo": [str(BIN / "clutter-gym"), "demo"],
         "test": [str(PY), "-m", "pytest"],
         "bench": [str(PY), str(ROOT / "benchmarks" / "throughput.py")],

@@ -1,43 +1,22 @@
-"""`clutter-gym` command line: ``demo`` and ``profiles`` now; train, eval, sweep and bench arrive with their issues."""
+"""`clutter-gym` command line: ``demo``, ``profiles``, and the training commands ``train``, ``eval``, ``sweep``, ``report``."""
 
 from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
-import tempfile
 import time
 from pathlib import Path
 
 import gymnasium as gym
-import imageio.v2 as imageio
 import numpy as np
 
 import clutter_gym  # noqa: F401  (registers the envs)
 from clutter_gym import ENV_IDS
 from clutter_gym.noise.profiles import PROFILE_NAMES, profile_description, profile_table_markdown, resolve_noise
+from clutter_gym.training import commands as training_commands
 from clutter_gym.training.baselines import PotentialFieldNavigator
-
-
-def _positive_int(text: str) -> int:
-    value = int(text)
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be a positive integer, got {text}")
-    return value
-
-
-def write_gif_atomically(path: Path, frames: list[np.ndarray], fps: float) -> None:
-    """Write ``frames`` as a looping GIF; the file appears complete or not at all (temp file + rename)."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(suffix=".gif", dir=path.parent)
-    os.close(fd)
-    try:
-        imageio.mimsave(tmp, frames, format="GIF", duration=1000.0 / fps, loop=0)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+from clutter_gym.video import write_video
 
 
 def demo(args: argparse.Namespace) -> dict:
@@ -62,7 +41,7 @@ def demo(args: argparse.Namespace) -> dict:
                 frames.append(env.render())
         frames.append(env.render())
         gif = Path(args.out) / f"{args.env}-seed{args.seed}.gif"
-        write_gif_atomically(gif, frames, fps=env.metadata["render_fps"] / args.frame_every)
+        write_video(gif, frames, fps=env.metadata["render_fps"] / args.frame_every)
     finally:
         env.close()
     return {
@@ -96,13 +75,14 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("demo", help="roll out a scripted policy, write an episode GIF and print a summary")
     p.add_argument("--env", choices=ENV_IDS, default="ClutterNav-v0")
     p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--max-steps", type=_positive_int, default=400, help="stop the episode after this many steps")
-    p.add_argument("--frame-every", type=_positive_int, default=2, help="keep every k-th frame in the GIF")
+    p.add_argument("--max-steps", type=training_commands.positive_int, default=400, help="stop the episode after this many steps")
+    p.add_argument("--frame-every", type=training_commands.positive_int, default=2, help="keep every k-th frame in the GIF")
     p.add_argument("--out", default="out/demo", help="folder for the GIF")
     p.add_argument("--noise", choices=PROFILE_NAMES, default="none", help="sensor/actuation noise profile")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
     p = sub.add_parser("profiles", help="list the noise profiles; print one's parameters; print the README table")
     p.add_argument("name", nargs="?", choices=PROFILE_NAMES, help="print this profile's resolved parameters as JSON")
+    training_commands.add_parsers(sub)
     return parser
 
 
@@ -126,6 +106,8 @@ def main(argv: list[str] | None = None) -> int:
             _print_demo(summary)
     elif args.command == "profiles":
         profiles(args.name)
+    else:
+        return args.handler(args)
     return 0
 
 

@@ -108,7 +108,7 @@ class ClutterEnv(gym.Env):
             sensor.reset(self.sim, state, rng)
             clock.reset(rng)
         self._action_channel.reset()
-        self.task.reset(scene.goal, state)
+        self.task.reset(scene, state)
         report = self.checker.check(state, self.sim.contact_distances(self.robot.body))
         obs, info = self._observe(state)
         info.update(

@@ -155,6 +155,8 @@ class ClutterNavEnv(ClutterEnv):
             clearance_margin=clearance_margin,
             terminate_on_collision=terminate_on_collision,
             max_goal_distance=math.sqrt(2.0) * arena_size,
+            spec=spec,
+            robot_radius=robot.config.footprint_radius,
         )
         checker = CollisionChecker(
             load_collision_elements(robot.urdf_path), base_link="base_link", contact_tolerance=contact_tolerance

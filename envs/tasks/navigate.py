@@ -14,6 +14,9 @@ from gymnasium import spaces
 
 from clutter_gym.collision import CollisionReport
 from clutter_gym.robots.state import RobotState
+from clutter_gym.worlds.clutter import ClutterSpec
+from clutter_gym.worlds.path_distance import PathDistance
+from clutter_gym.worlds.scene import Scene
 
 MAX_TILT_COS = 0.5  # the base z axis more than 60 degrees from vertical counts as flipped
 
@@ -23,7 +26,8 @@ class NavRewardWeights:
     """Weights of the reward terms (all >= 0; the sign of each term is fixed by its meaning).
 
     Attributes:
-        progress: per metre the goal distance shrinks in a step (negative when it grows).
+        progress: per metre the path distance to the goal (around the clutter, ``worlds/path_distance.py``)
+            shrinks in a step (negative when it grows).
         success: once, on reaching the goal.
         contact: per step with any robot/obstacle contact.
         clearance: per step, scaled by ``(margin - clearance) / margin`` when clearance < margin.
@@ -58,12 +62,18 @@ class StepOutcome:
 class NavigateTask:
     """Drive the base frame origin to within ``success_radius`` of the goal.
 
+    Progress is measured along the shortest path around the clutter, not the straight line, so that the reward
+    has no local minima behind obstacles; the goal observation is the straight-line vector, as a real robot
+    with a goal in odometry coordinates would have it.
+
     Args:
         weights: reward term weights.
         success_radius: metres, in (0, 2].
         clearance_margin: clearance below which the clearance term applies, metres, in [0, 1].
         terminate_on_collision: end the episode (terminated) on the first contact.
         max_goal_distance: upper bound of the distance observation (the arena diagonal), metres.
+        spec: the arena's layout parameters (size and grid of the path-distance field).
+        robot_radius: footprint radius for the path-distance field, metres.
     """
 
     name = "goal"
@@ -75,6 +85,8 @@ class NavigateTask:
         clearance_margin: float,
         terminate_on_collision: bool,
         max_goal_distance: float,
+        spec: ClutterSpec,
+        robot_radius: float,
     ) -> None:
         if not (math.isfinite(success_radius) and 0.0 < success_radius <= 2.0):
             raise ValueError(f"success_radius must be in (0, 2] metres, got {success_radius!r}")
@@ -88,12 +100,19 @@ class NavigateTask:
         high = np.array([max_goal_distance, 1.0, 1.0], dtype=np.float32)
         self.observation_space = spaces.Box(low, high, dtype=np.float32)
         self._max_goal_distance = float(high[0])
-        self._goal = np.zeros(2)
-        self._previous_distance = 0.0
+        self._spec, self._robot_radius = spec, robot_radius
+        self._goal = (0.0, 0.0)
+        self._path_distance: PathDistance | None = None
+        self._previous_path = 0.0
 
-    def reset(self, goal: tuple[float, float], state: RobotState) -> None:
-        self._goal = (float(goal[0]), float(goal[1]))
-        self._previous_distance = self._distance(state)
+    def reset(self, scene: Scene, state: RobotState) -> None:
+        self._goal = (float(scene.goal[0]), float(scene.goal[1]))
+        self._path_distance = PathDistance(scene, self._spec, self._robot_radius)
+        self._previous_path = self.path_distance(state)
+
+    def path_distance(self, state: RobotState) -> float:
+        """Metres to the goal along the shortest path the footprint fits through."""
+        return self._path_distance(float(state.position[0]), float(state.position[1]))
 
     def _distance(self, state: RobotState) -> float:
         return float(math.hypot(self._goal[0] - state.position[0], self._goal[1] - state.position[1]))
@@ -109,17 +128,18 @@ class NavigateTask:
         """Reward terms and termination after a step, from ground truth only."""
         w = self.weights
         distance = self._distance(state)
+        path = self.path_distance(state)
         success = distance <= self.success_radius
         shortfall = max(0.0, self.clearance_margin - report.min_clearance)
         terms = {
-            "progress": w.progress * (self._previous_distance - distance),
+            "progress": w.progress * (self._previous_path - path),
             "success": w.success if success else 0.0,
             "contact": -w.contact if report.in_contact else 0.0,
             "clearance": -w.clearance * min(1.0, shortfall / self.clearance_margin) if self.clearance_margin else 0.0,
             "control": -w.control * float(action @ action),
             "time": -w.time,
         }
-        self._previous_distance = distance
+        self._previous_path = path
         flipped = state.rotation[2, 2] < MAX_TILT_COS
         terminated = success or flipped or (self.terminate_on_collision and report.in_contact)
         return StepOutcome(sum(terms.values()), terms, terminated, success, 1.0 if report.in_contact else 0.0)

@@ -1,0 +1,96 @@
+"""The training loop's side work: episode log, TensorBoard scalars, checkpoints and the progress bar."""
+
+from __future__ import annotations
+
+import csv
+import time
+from collections import deque
+
+import numpy as np
+from stable_baselines3.common.callbacks import BaseCallback
+from tqdm import tqdm
+
+from clutter_gym.training.config import TrainConfig
+from clutter_gym.training.run_dir import RunDir
+
+WINDOW = 100  # episodes in the running success / collision rates
+
+
+class RunMonitor(BaseCallback):
+    """Writes every finished episode to ``episodes.csv``, logs running means, checkpoints on schedule.
+
+    Scalars under ``clutter/`` (TensorBoard): ``success_rate``, ``collision_rate``, ``cost``, ``min_clearance``,
+    ``return`` and ``term_<name>`` for each reward term, means over the last 100 episodes.
+    """
+
+    def __init__(self, run: RunDir, config: TrainConfig, progress: bool) -> None:
+        super().__init__()
+        self.run, self.config, self.progress = run, config, progress
+        self.recent: deque[dict[str, float]] = deque(maxlen=WINDOW)
+        self._bar: tqdm | None = None
+        self._file = None
+        self._writer: csv.DictWriter | None = None
+
+    def _on_training_start(self) -> None:
+        every = self.config.checkpoint_every
+        self._next_checkpoint = (self.num_timesteps // every + 1) * every
+        self._start_steps, self._start_time = self.num_timesteps, time.perf_counter()
+        self.recent.extend(self.run.read_episodes()[-WINDOW:])
+        if self.progress:
+            self._bar = tqdm(total=self.config.timesteps, initial=self.num_timesteps, unit="step", dynamic_ncols=True,
+                             desc=f"{self.config.env_id} seed {self.config.seed}")
+
+    def _append(self, row: dict[str, float]) -> None:
+        if self._writer is None:
+            exists = self.run.episodes_file.is_file() and self.run.episodes_file.stat().st_size > 0
+            if exists:
+                with self.run.episodes_file.open(newline="") as f:
+                    fieldnames = next(csv.reader(f))
+            else:
+                fieldnames = list(row)
+            self._file = self.run.episodes_file.open("a", newline="")
+            self._writer = csv.DictWriter(self._file, fieldnames=fieldnames, extrasaction="ignore")
+            if not exists:
+                self._writer.writeheader()
+        self._writer.writerow(row)
+        self._file.flush()
+
+    def _on_step(self) -> bool:
+        for info in self.locals["infos"]:
+            stats = info.get("episode_stats")
+            if stats is not None:
+                row = {"timestep": float(self.num_timesteps), **stats}
+                self._append(row)
+                self.recent.append(row)
+        if self.num_timesteps >= self._next_checkpoint:
+            self.run.save_checkpoint(self.model, self.model.get_vec_normalize_env(), self.num_timesteps,
+                                     self.config.keep_checkpoints)
+            self._next_checkpoint += self.config.checkpoint_every
+        if self._bar is not None:
+            self._bar.update(self.num_timesteps - self._bar.n)
+            if self.n_calls % 50 == 0:
+                self._bar.set_postfix(self._postfix(), refresh=False)
+        return True
+
+    def _postfix(self) -> dict[str, str]:
+        elapsed = time.perf_counter() - self._start_time
+        postfix = {"steps/s": f"{(self.num_timesteps - self._start_steps) / max(elapsed, 1e-9):.0f}"}
+        if self.recent:
+            postfix["success"] = f"{np.mean([r['success'] for r in self.recent]):.0%}"
+            postfix["collision"] = f"{np.mean([r['collision'] for r in self.recent]):.0%}"
+        return postfix
+
+    def _on_rollout_end(self) -> None:
+        if not self.recent:
+            return
+        for key in self.recent[-1]:
+            if key != "timestep":
+                name = {"success": "success_rate", "collision": "collision_rate"}.get(key, key)
+                self.logger.record(f"clutter/{name}", float(np.mean([r.get(key, np.nan) for r in self.recent])))
+
+    def _on_training_end(self) -> None:
+        if self._file is not None:
+            self._file.close()
+        if self._bar is not None:
+            self._bar.set_postfix(self._postfix())
+            self._bar.close()

@@ -1,0 +1,203 @@
+"""The sim-to-real sweep: train under each noise profile (several seeds), evaluate every run under every profile.
+
+A *cell* is one (train profile, seed): it trains a run (resuming it if a killed sweep left it half done) and
+evaluates it under each evaluation profile, one JSON per profile. Finished trainings and evaluations are found
+on disk and never recomputed, so a restarted sweep only does what is missing. Cells run on a local process pool
+or as Ray tasks on a cluster; either way they write into the same folder layout:
+
+```
+OUT/
+  sweep.yaml                          the sweep's spec (a restart with another spec is refused)
+  cells/<train>-seed<k>/run/          the training run folder
+  cells/<train>-seed<k>/eval-<p>.json evaluation under profile p
+  sweep.csv                           one row per (train profile, seed, eval profile)
+  heatmap.png                         success and collision rate, train profile x eval profile, mean over seeds
+```
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from clutter_gym.atomic import atomic_path, write_text_atomically
+from clutter_gym.training.config import config_for
+
+EVAL_SEED = 1_000_000
+CSV_METRICS = ("success_rate", "collision_rate", "mean_cost", "mean_return", "mean_length", "mean_min_clearance")
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    """What a sweep trains and evaluates.
+
+    Attributes:
+        env_id: env to train on.
+        train_noise: profiles to train under.
+        eval_noise: profiles to evaluate every run under.
+        seeds: training seeds 0..seeds-1 per train profile.
+        timesteps: env steps per training run (None: the env's ppo.yml value).
+        episodes: evaluation episodes per (run, eval profile); episode i uses seed 1,000,000 + i.
+        n_envs: envs per training run.
+    """
+
+    env_id: str
+    train_noise: tuple[str, ...]
+    eval_noise: tuple[str, ...]
+    seeds: int
+    timesteps: int | None
+    episodes: int
+    n_envs: int = 1
+
+    def cells(self) -> list[tuple[str, int]]:
+        return [(noise, seed) for noise in self.train_noise for seed in range(self.seeds)]
+
+    def to_dict(self) -> dict[str, Any]:
+        data = asdict(self)
+        data["train_noise"], data["eval_noise"] = list(self.train_noise), list(self.eval_noise)
+        return data
+
+
+def cell_dir(out: Path, train_noise: str, seed: int) -> Path:
+    return out / "cells" / f"{train_noise}-seed{seed}"
+
+
+def cell_done(spec: SweepSpec, out: Path, train_noise: str, seed: int) -> bool:
+    folder = cell_dir(out, train_noise, seed)
+    return all((folder / f"eval-{p}.json").is_file() for p in spec.eval_noise)
+
+
+def run_cell(spec_data: dict[str, Any], out: str, train_noise: str, seed: int) -> str:
+    """Train (or resume, or skip if finished) one cell's run, then each missing evaluation. Returns the cell name."""
+    from clutter_gym.training.evaluate import evaluate
+    from clutter_gym.training.run_dir import RunDir
+    from clutter_gym.training.train import start, train
+
+    spec = SweepSpec(**{**spec_data, "train_noise": tuple(spec_data["train_noise"]),
+                        "eval_noise": tuple(spec_data["eval_noise"])})
+    folder = cell_dir(Path(out), train_noise, seed)
+    run = RunDir(folder / "run")
+    if not run.config_file.is_file():
+        overrides = {"seed": seed, "noise": train_noise, "n_envs": spec.n_envs, "final_eval_episodes": 0}
+        if spec.timesteps is not None:
+            overrides["timesteps"] = spec.timesteps
+        start(config_for(spec.env_id, overrides), run.root)
+    if not run.is_finished():
+        train(run, progress=False)
+    for profile in spec.eval_noise:
+        target = folder / f"eval-{profile}.json"
+        if not target.is_file():
+            summary = evaluate(run.root, noise=profile, episodes=spec.episodes, seed=EVAL_SEED)
+            summary.pop("per_episode")
+            write_text_atomically(target, json.dumps(summary, indent=2))
+    return folder.name
+
+
+def run_sweep(spec: SweepSpec, out: Path, workers: int | None = None, ray_address: str | None = None) -> dict[str, Any]:
+    """Run every unfinished cell (process pool, or Ray tasks when ``ray_address`` is given), then write CSV and plot.
+
+    ``ray_address`` is passed to ``ray.init``: ``"auto"`` or ``"ray://head:10001"`` for a running cluster, or
+    ``"local"`` to start a throwaway local Ray instance (how the tests exercise this path).
+    """
+    out.mkdir(parents=True, exist_ok=True)
+    spec_file = out / "sweep.yaml"
+    if spec_file.is_file():
+        saved = yaml.safe_load(spec_file.read_text())
+        if saved != spec.to_dict():
+            raise ValueError(f"{out} holds a sweep with another spec ({saved}); use a new --out")
+    else:
+        write_text_atomically(spec_file, yaml.safe_dump(spec.to_dict(), sort_keys=False))
+    todo = [cell for cell in spec.cells() if not cell_done(spec, out, *cell)]
+    if todo:
+        runner = _run_on_ray if ray_address is not None else _run_on_pool
+        runner(spec, out, todo, workers if ray_address is None else ray_address)
+    rows = collect_rows(spec, out)
+    csv_path = write_csv(rows, out / "sweep.csv")
+    heatmap = write_heatmap(rows, spec, out / "heatmap.png")
+    return {"cells_run": len(todo), "cells_skipped": len(spec.cells()) - len(todo), "csv": str(csv_path),
+            "heatmap": str(heatmap), "rows": rows}
+
+
+def _run_on_pool(spec: SweepSpec, out: Path, todo: list[tuple[str, int]], workers: int | None) -> None:
+    workers = min(workers or os.cpu_count() or 1, len(todo))
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        futures = [pool.submit(run_cell, spec.to_dict(), str(out), noise, seed) for noise, seed in todo]
+        for future in as_completed(futures):
+            print(f"  cell {future.result()} done", flush=True)
+
+
+def _run_on_ray(spec: SweepSpec, out: Path, todo: list[tuple[str, int]], address: str) -> None:
+    try:
+        import ray
+    except ImportError as exc:
+        raise RuntimeError("--ray-address needs Ray: pip install 'clutter-gym[ray]'") from exc
+    started_here = not ray.is_initialized()
+    if started_here:
+        ray.init(address=None if address == "local" else address, include_dashboard=False, log_to_driver=False)
+    try:
+        task = ray.remote(num_cpus=spec.n_envs)(run_cell)
+        pending = [task.remote(spec.to_dict(), str(out.resolve()), noise, seed) for noise, seed in todo]
+        while pending:
+            finished, pending = ray.wait(pending)
+            print(f"  cell {ray.get(finished[0])} done (ray)", flush=True)
+    finally:
+        if started_here:
+            ray.shutdown()
+
+
+def collect_rows(spec: SweepSpec, out: Path) -> list[dict[str, Any]]:
+    rows = []
+    for train_noise, seed in spec.cells():
+        for profile in spec.eval_noise:
+            summary = json.loads((cell_dir(out, train_noise, seed) / f"eval-{profile}.json").read_text())
+            row: dict[str, Any] = {"train_noise": train_noise, "seed": seed, "eval_noise": profile,
+                                   "episodes": summary["episodes"]}
+            for name in CSV_METRICS:
+                metric = summary["metrics"][name]
+                row[name] = metric["value"]
+                row[f"{name}_ci_low"], row[f"{name}_ci_high"] = metric["ci95"]
+            rows.append(row)
+    return rows
+
+
+def write_csv(rows: list[dict[str, Any]], path: Path) -> Path:
+    with atomic_path(path) as tmp, tmp.open("w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    return path
+
+
+def write_heatmap(rows: list[dict[str, Any]], spec: SweepSpec, path: Path) -> Path:
+    """Two panels (success rate, collision rate): rows = train profile, columns = eval profile, mean over seeds."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    fig, axes = plt.subplots(1, 2, figsize=(4 + 1.6 * len(spec.eval_noise), 1.5 + 0.8 * len(spec.train_noise)))
+    for ax, metric, cmap in zip(axes, ("success_rate", "collision_rate"), ("viridis", "magma_r")):
+        grid = np.array([[np.mean([r[metric] for r in rows if r["train_noise"] == t and r["eval_noise"] == e])
+                          for e in spec.eval_noise] for t in spec.train_noise])
+        ax.imshow(grid, vmin=0.0, vmax=1.0, cmap=cmap)
+        for (i, j), value in np.ndenumerate(grid):
+            ax.text(j, i, f"{value:.0%}", ha="center", va="center", bbox={"facecolor": "white", "alpha": 0.7, "lw": 0})
+        ax.set_xticks(range(len(spec.eval_noise)), spec.eval_noise)
+        ax.set_yticks(range(len(spec.train_noise)), spec.train_noise)
+        ax.set_xlabel("evaluated under")
+        ax.set_ylabel("trained under")
+        ax.set_title(metric.replace("_", " "))
+    fig.suptitle(f"{spec.env_id}: {spec.seeds} seed(s), {spec.episodes} episodes per cell")
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=110)
+    plt.close(fig)
+    return path

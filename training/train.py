@@ -1,0 +1,77 @@
+"""Train PPO on a clutter-gym env into a run folder; resume a killed run from its newest checkpoint."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import torch
+from stable_baselines3 import PPO
+from stable_baselines3.common.logger import configure
+from stable_baselines3.common.vec_env import VecNormalize
+
+from clutter_gym.atomic import write_text_atomically
+from clutter_gym.training.callbacks import RunMonitor
+from clutter_gym.training.config import TrainConfig
+from clutter_gym.training.evaluate import evaluate
+from clutter_gym.training.run_dir import NORMALIZER_FILE, RunDir
+from clutter_gym.training.vec_env import build_vec_env, normalize, policy_name
+
+FINAL_EVAL_SEED_OFFSET = 1_000_000  # evaluation episodes use seeds training never drew
+
+
+def start(config: TrainConfig, out: str | Path) -> RunDir:
+    """A new run folder for ``config``; refuses a folder that already holds a run (resume that instead)."""
+    run = RunDir(out)
+    if run.config_file.exists():
+        raise FileExistsError(f"{run.root} already holds a run; pass --resume {run.root} to continue it, "
+                              "or choose another --out")
+    run.root.mkdir(parents=True, exist_ok=True)
+    run.write_config(config)
+    return run
+
+
+def train(run: RunDir, progress: bool = True, timesteps: int | None = None) -> dict[str, Any] | None:
+    """Train (or continue) the run in ``run`` up to its configured timesteps, then save and evaluate.
+
+    A run with checkpoints continues from the newest one, with the config saved in the folder: the steps after
+    that checkpoint are redone (and their episode rows dropped), so a killed run loses at most one checkpoint
+    interval. ``timesteps`` raises the run's total (to extend a finished run). The continued run draws new env
+    seeds, so it is not bit-identical to an uninterrupted one.
+
+    Returns:
+        The final evaluation summary (also written to ``eval.json``), or None if ``final_eval_episodes`` is 0.
+    """
+    config = run.read_config()
+    if timesteps is not None and timesteps != config.timesteps:
+        config = TrainConfig.from_dict({**config.to_dict(), "timesteps": timesteps})
+        run.write_config(config)
+    torch.set_num_threads(1)  # small MLPs: threads only fight the env workers for the cores
+    latest = run.latest_checkpoint()
+    done = latest[0] if latest else 0
+    venv = normalize(build_vec_env(config, seed=config.seed + done), config)
+    try:
+        if latest is None:
+            model = PPO(policy_name(venv.observation_space), venv, seed=config.seed, device="cpu", verbose=0,
+                        **config.ppo.sb3_kwargs())
+        else:
+            step, folder = latest
+            if isinstance(venv, VecNormalize):
+                venv = VecNormalize.load(str(folder / NORMALIZER_FILE), venv.venv)
+            model = PPO.load(folder / "model.zip", env=venv, device="cpu")
+            model.set_random_seed(config.seed + step)
+            run.truncate_episodes(step)
+        model.set_logger(configure(str(run.tb_dir), ["tensorboard"]))
+        remaining = config.timesteps - model.num_timesteps
+        if remaining > 0:
+            model.learn(remaining, callback=RunMonitor(run, config, progress), reset_num_timesteps=latest is None)
+        run.save_model(model, model.get_vec_normalize_env(), run.model_dir)
+    finally:
+        venv.close()
+    if config.final_eval_episodes == 0:
+        return None
+    summary = evaluate(run.root, noise=config.noise, episodes=config.final_eval_episodes,
+                       seed=config.seed + FINAL_EVAL_SEED_OFFSET)
+    write_text_atomically(run.eval_file, json.dumps(summary, indent=2))
+    return summary
