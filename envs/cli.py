@@ -9,7 +9,6 @@ import time
 from pathlib import Path
 
 import gymnasium as gym
-import numpy as np
 
 import clutter_gym  # noqa: F401  (registers the envs)
 from clutter_gym import ENV_IDS

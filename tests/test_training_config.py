@@ -1,0 +1,105 @@
+"""Hyperparameter YAML, config validation, typed CLI options, and the confidence intervals of evaluations."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from clutter_gym.cli import build_parser, main
+from clutter_gym.training.commands import train_overrides
+from clutter_gym.training.config import PPOHyperparams, TrainConfig, config_for, hyperparams_table
+from clutter_gym.training.stats import mean_interval, wilson_interval
+
+
+def test_shipped_yaml_has_a_default_block_and_valid_blocks_for_every_env():
+    from clutter_gym import ENV_IDS
+
+    table = hyperparams_table()
+    assert "default" in table
+    for env_id in ENV_IDS:
+        config = config_for(env_id)
+        assert config.env_id == env_id and config.timesteps > 0
+
+
+def test_env_block_and_overrides_merge_key_by_key():
+    config = config_for("ClutterNav-v0", {"timesteps": 1234, "ppo": {"learning_rate": 1e-3}})
+    assert config.timesteps == 1234
+    assert config.ppo.learning_rate == 1e-3
+    table = hyperparams_table()
+    assert config.ppo.n_steps == table["ClutterNav-v0"]["ppo"]["n_steps"]  # env block kept
+    assert config.ppo.gamma == table["default"]["ppo"]["gamma"]  # default block kept
+    assert config.env_kwargs == table["ClutterNav-v0"]["env_kwargs"]
+
+
+@pytest.mark.parametrize(
+    ("override", "field"),
+    [
+        ({"ppo": {"learning_rate": -1.0}}, "ppo.learning_rate"),
+        ({"ppo": {"gamma": 1.5}}, "ppo.gamma"),
+        ({"ppo": {"net_arch": [0]}}, "ppo.net_arch"),
+        ({"ppo": {"n_epochs": 2.5}}, "ppo.n_epochs"),
+        ({"n_envs": 0}, "n_envs"),
+        ({"timesteps": float("nan")}, "timesteps"),
+        ({"noise": "loud"}, "noise"),
+        ({"ppo": {"batch_size": 10**6}}, "ppo.batch_size"),
+        ({"ppo": {"learning_rte": 1e-3}}, "learning_rte"),
+        ({"n_env": 2}, "n_env"),
+        ({"env_kwargs": {"noise": "harsh"}}, "env_kwargs"),
+    ],
+)
+def test_bad_config_values_name_the_field(override, field):
+    with pytest.raises(ValueError, match=field.replace(".", r"\.")):
+        config_for("ClutterNav-v0", override)
+
+
+def test_config_round_trips_through_a_plain_dict():
+    config = config_for("ClutterNav-v0", {"seed": 7, "ppo": {"net_arch": [32, 16]}})
+    again = TrainConfig.from_dict(config.to_dict())
+    assert again == config and again.ppo.net_arch == (32, 16)
+
+
+def test_sb3_kwargs_carry_net_arch_as_policy_kwargs():
+    kwargs = PPOHyperparams(net_arch=(8, 8)).sb3_kwargs()
+    assert kwargs["policy_kwargs"] == {"net_arch": [8, 8]}
+    assert "normalize_obs" not in kwargs and "net_arch" not in kwargs
+
+
+def test_typed_cli_options_become_overrides():
+    args = build_parser().parse_args(
+        ["train", "--timesteps", "500", "--learning-rate", "0.001", "--net-arch", "32,32", "--no-normalize-obs"]
+    )
+    overrides = train_overrides(args)
+    assert overrides["timesteps"] == 500
+    assert overrides["ppo"] == {"learning_rate": 0.001, "net_arch": (32, 32), "normalize_obs": False}
+
+
+@pytest.mark.parametrize("argv", [["train", "--net-arch", "64,x"], ["train", "--n-envs", "0"],
+                                  ["sweep", "--train-noise", "none,loud"], ["eval", "run", "--episodes", "0"]])
+def test_cli_rejects_malformed_options(argv, capsys):
+    with pytest.raises(SystemExit):
+        build_parser().parse_args(argv)
+    assert "error" in capsys.readouterr().err
+
+
+def test_resume_refuses_options_that_would_change_the_config(tmp_path):
+    with pytest.raises(SystemExit, match="seed"):
+        main(["train", "--resume", str(tmp_path), "--seed", "3"])
+
+
+def test_wilson_interval_matches_published_values():
+    # Newcombe (1998), table I: 0/10 -> (0, 0.2775); 1/10 -> (0.0179, 0.4042); 10/10 -> (0.7225, 1).
+    assert wilson_interval(0, 10) == pytest.approx((0.0, 0.2775), abs=1e-4)
+    assert wilson_interval(1, 10) == pytest.approx((0.0179, 0.4042), abs=1e-4)
+    assert wilson_interval(10, 10) == pytest.approx((0.7225, 1.0), abs=1e-4)
+
+
+def test_mean_interval_covers_the_true_mean_about_95_percent_of_the_time():
+    rng = np.random.default_rng(0)
+    trials = 4000
+    covered = sum(lo <= 2.0 <= hi for lo, hi in (mean_interval(rng.normal(2.0, 3.0, size=10)) for _ in range(trials)))
+    # Binomial(4000, 0.95) has sd 0.0034: 4 sd either side.
+    assert abs(covered / trials - 0.95) < 0.014
+    assert mean_interval(np.array([3.0])) == (3.0, 3.0)
+    assert all(math.isfinite(v) for v in mean_interval(np.array([1.0, 1.0, 1.0])))

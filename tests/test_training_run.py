@@ -1,0 +1,152 @@
+"""Tiny training runs: the run folder, resume, crash-safe checkpoints, evaluation schema and episode statistics."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+from clutter_gym.cli import main
+from clutter_gym.training.config import config_for
+from clutter_gym.training.episode_stats import EPISODE_KEYS, EpisodeStats
+from clutter_gym.training.evaluate import METRICS, TrainedPolicy, evaluate
+from clutter_gym.training.run_dir import MODEL_FILE, NORMALIZER_FILE, RunDir
+from clutter_gym.training.train import start, train
+
+# Small enough to run in seconds; short episodes so that some finish inside the budget.
+TINY = {"timesteps": 256, "n_envs": 1, "checkpoint_every": 128, "final_eval_episodes": 2,
+        "env_kwargs": {"obstacle_density": 0.05}, "ppo": {"n_steps": 64, "batch_size": 32, "n_epochs": 2}}
+
+
+def tiny_run(tmp_path, **overrides):
+    config = config_for("ClutterNav-v0", {**TINY, **overrides})
+    return start(config, tmp_path / "run")
+
+
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory):
+    run = tiny_run(tmp_path_factory.mktemp("trained"))
+    summary = train(run, progress=False)
+    return run, summary
+
+
+def test_a_tiny_run_leaves_a_complete_loadable_run_folder(trained):
+    run, summary = trained
+    assert run.read_config().timesteps == 256
+    assert (run.model_dir / MODEL_FILE).is_file() and (run.model_dir / NORMALIZER_FILE).is_file()
+    assert [step for step, _ in run.checkpoints()] == [128, 256]  # every checkpoint_every steps
+    assert any(run.tb_dir.glob("events.out.tfevents.*"))
+    assert json.loads(run.eval_file.read_text())["metrics"].keys() == set(METRICS)
+    policy = TrainedPolicy(run.model_dir)
+    env = gym.make("ClutterNav-v0")
+    obs, _ = env.reset(seed=0)
+    action = policy(obs)
+    env.close()
+    assert action.shape == (2,) and np.all(np.isfinite(action))
+    assert policy.model.num_timesteps == 256
+    assert summary["model_step"] == 256
+
+
+def test_resume_continues_the_step_count_from_the_newest_checkpoint(tmp_path):
+    run = tiny_run(tmp_path, final_eval_episodes=0)
+    train(run, progress=False)
+    # Pretend the run was killed after its second checkpoint: drop the final model and the last checkpoint.
+    import shutil
+
+    shutil.rmtree(run.model_dir)
+    shutil.rmtree(run.latest_checkpoint()[1])
+    assert run.latest_checkpoint()[0] == 128
+    train(run, progress=False, timesteps=384)
+    policy = TrainedPolicy(run.policy_folder())
+    assert policy.model.num_timesteps == 384
+    assert run.read_config().timesteps == 384
+    steps = [row["timestep"] for row in run.read_episodes()]
+    assert steps == sorted(steps)
+
+
+def test_an_interrupted_checkpoint_write_leaves_the_previous_checkpoint_intact(trained, tmp_path):
+    run, _ = trained
+    before = run.latest_checkpoint()
+
+    class DiesMidWrite:
+        def save(self, path):
+            with open(path, "wb") as f:
+                f.write(b"PK\x03\x04 half a zip")
+            raise KeyboardInterrupt("killed while writing")
+
+    with pytest.raises(KeyboardInterrupt):
+        run.save_checkpoint(DiesMidWrite(), None, step=10_000, keep=3)
+    assert run.latest_checkpoint() == before
+    assert not list(run.checkpoints_dir.glob(".step_*")), "the temporary folder must be removed"
+    TrainedPolicy(before[1])  # still loads
+
+
+def test_a_new_run_refuses_a_folder_that_already_holds_one(trained):
+    run, _ = trained
+    with pytest.raises(FileExistsError, match="--resume"):
+        start(run.read_config(), run.root)
+
+
+def test_eval_json_schema_and_intervals(trained, tmp_path, capsys):
+    run, _ = trained
+    video = tmp_path / "episode.gif"
+    assert main(["eval", str(run.root), "--noise", "nominal", "--episodes", "3", "--seed", "5", "--json",
+                 "--video", str(video)]) == 0
+    summary = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert {"run", "env_id", "train_noise", "eval_noise", "seed", "episodes", "model_step", "metrics", "video",
+            "per_episode"} <= summary.keys()
+    assert summary["eval_noise"] == "nominal" and summary["episodes"] == 3 and len(summary["per_episode"]) == 3
+    for name in METRICS:
+        value, (low, high) = summary["metrics"][name]["value"], summary["metrics"][name]["ci95"]
+        assert low <= value <= high
+    assert 0.0 <= summary["metrics"]["success_rate"]["ci95"][0] <= summary["metrics"]["success_rate"]["ci95"][1] <= 1.0
+    assert video.stat().st_size > 1000
+
+
+def test_evaluation_is_reproducible_and_pairs_layouts_across_profiles(trained):
+    run, _ = trained
+    a = evaluate(run.root, noise="none", episodes=2, seed=11)
+    b = evaluate(run.root, noise="none", episodes=2, seed=11)
+    assert a["per_episode"] == b["per_episode"]
+
+
+def test_evaluate_rejects_bad_arguments(trained):
+    run, _ = trained
+    with pytest.raises(ValueError, match="noise"):
+        evaluate(run.root, noise="loud", episodes=2, seed=0)
+    with pytest.raises(ValueError, match="episodes"):
+        evaluate(run.root, noise="none", episodes=0, seed=0)
+    with pytest.raises(FileNotFoundError, match="config.yaml"):
+        evaluate(run.root / "nothing", noise="none", episodes=1, seed=0)
+
+
+def test_episode_stats_sum_the_step_infos():
+    env = EpisodeStats(gym.make("ClutterNav-v0", max_episode_steps=30))
+    obs, info = env.reset(seed=3)
+    total, costs, clearances, terms = 0.0, 0.0, [info["min_clearance"]], {}
+    while True:
+        obs, reward, terminated, truncated, info = env.step(np.array([1.0, 0.3], dtype=np.float32))
+        total += reward
+        costs += info["cost"]
+        clearances.append(info["min_clearance"])
+        for k, v in info["reward_terms"].items():
+            terms[k] = terms.get(k, 0.0) + v
+        if terminated or truncated:
+            break
+    env.close()
+    stats = info["episode_stats"]
+    assert set(EPISODE_KEYS) <= stats.keys()
+    assert stats["return"] == pytest.approx(total) and stats["cost"] == pytest.approx(costs)
+    assert stats["collision"] == float(costs > 0) and stats["min_clearance"] == pytest.approx(min(clearances))
+    assert stats["length"] == 30.0
+    assert all(stats[f"term_{k}"] == pytest.approx(v) for k, v in terms.items())
+    assert math.isclose(sum(stats[f"term_{k}"] for k in terms), total, rel_tol=1e-9, abs_tol=1e-9)
+
+
+def test_subprocess_vector_env_trains_with_two_workers(tmp_path):
+    run = tiny_run(tmp_path, n_envs=2, timesteps=128, final_eval_episodes=0)
+    train(run, progress=False)
+    assert RunDir(run.root).is_finished()
