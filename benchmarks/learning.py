@@ -11,6 +11,7 @@ training episodes at each quarter of the budget; writes ``OUT/learning.md`` and 
 from __future__ import annotations
 
 import argparse
+import json
 import time
 from pathlib import Path
 
@@ -21,12 +22,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from clutter_gym.atomic import atomic_path, write_text_atomically  # noqa: E402
-from clutter_gym.training.report import WINDOW, main_job  # noqa: E402
+from clutter_gym.training.report import WINDOW, main_job, rolling_rate  # noqa: E402
 from clutter_gym.training.run_dir import RunDir  # noqa: E402
-
-
-def rolling(values: np.ndarray) -> np.ndarray:
-    return np.convolve(values, np.ones(WINDOW), "full")[: len(values)] / np.minimum(np.arange(1, len(values) + 1), WINDOW)
 
 
 def main() -> None:
@@ -49,13 +46,11 @@ def main() -> None:
         run = RunDir(out / f"seed{seed}" / "run")
         rows = run.read_episodes()
         steps = np.array([r["timestep"] for r in rows])
-        success, collision = rolling(np.array([r["success"] for r in rows])), rolling(np.array([r["collision"] for r in rows]))
+        success, collision = rolling_rate([r["success"] for r in rows]), rolling_rate([r["collision"] for r in rows])
         axes[0].plot(steps, success, label=f"seed {seed}")
         axes[1].plot(steps, collision, label=f"seed {seed}")
         quarters = [int(np.searchsorted(steps, q * steps[-1])) for q in (0.25, 0.5, 0.75)] + [len(steps) - 1]
         at = " / ".join(f"{success[min(i, len(steps) - 1)]:.0%}, {collision[min(i, len(steps) - 1)]:.0%}" for i in quarters)
-        import json
-
         ev = {p: json.loads((out / f"seed{seed}" / f"eval-{p}.json").read_text())["metrics"] for p in ("none", "nominal")}
         lines.append(f"| {seed} | {wall / 60:.1f} (incl. eval) | {int(steps[-1]):,} | {at} | "
                      f"{ev['none']['success_rate']['value']:.0%} | {ev['none']['collision_rate']['value']:.0%} | "

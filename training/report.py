@@ -50,6 +50,12 @@ def main_job(env_id: str, out: Path, timesteps: int | None, seed: int, episodes:
     return report
 
 
+def rolling_rate(values: np.ndarray, window: int = WINDOW) -> np.ndarray:
+    """Mean of each entry and the up to ``window - 1`` before it (the rate over the latest episodes)."""
+    values = np.asarray(values, dtype=float)
+    return np.convolve(values, np.ones(window), "full")[: len(values)] / np.minimum(np.arange(1, len(values) + 1), window)
+
+
 def plot_learning_curve(run: RunDir, path: Path) -> Path | None:
     """Success and collision rate over the last 100 training episodes, against env steps."""
     rows = run.read_episodes()
@@ -63,9 +69,7 @@ def plot_learning_curve(run: RunDir, path: Path) -> Path | None:
     steps = np.array([r["timestep"] for r in rows])
     fig, ax = plt.subplots(figsize=(6.4, 3.6))
     for key, label in (("success", "success rate"), ("collision", "collision rate")):
-        values = np.array([r[key] for r in rows])
-        rolling = np.convolve(values, np.ones(WINDOW), "full")[: len(values)] / np.minimum(np.arange(1, len(values) + 1), WINDOW)
-        ax.plot(steps, rolling, label=label)
+        ax.plot(steps, rolling_rate(np.array([r[key] for r in rows])), label=label)
     ax.set_xlabel("env steps")
     ax.set_ylabel(f"rate over the last {WINDOW} episodes")
     ax.set_ylim(0, 1)
@@ -85,9 +89,9 @@ def render_report(run: RunDir, summaries: dict, curve: Path | None, train_s: flo
     lines = [
         f"# PPO on {config.env_id}",
         "",
-        f"Trained {config.timesteps:,} env steps with {config.n_envs} envs, seed {config.seed}, noise profile "
-        f"{config.noise!r}, in {train_s / 60:.1f} min this time (0 if the run was already finished); evaluation "
-        f"took {eval_s / 60:.1f} min. Hyperparameters: `{run.config_file}`.",
+        f"PPO, {config.timesteps:,} env steps with {config.n_envs} envs, seed {config.seed}, training noise profile "
+        f"{config.noise!r}; this invocation spent {train_s / 60:.1f} min training (0 when it reused a finished run) "
+        f"and {eval_s / 60:.1f} min evaluating. Config: `{run.config_file}`.",
         "",
         "| metric | " + " | ".join(f"eval `{p}`" for p in summaries) + " |",
         "|---|" + "---|" * len(summaries),
