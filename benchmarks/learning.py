@@ -15,15 +15,12 @@ import json
 import time
 from pathlib import Path
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from clutter_gym.atomic import atomic_path, write_text_atomically  # noqa: E402
-from clutter_gym.training.report import WINDOW, main_job, rolling_rate  # noqa: E402
-from clutter_gym.training.run_dir import RunDir  # noqa: E402
+from clutter_gym.atomic import write_text_atomically
+from clutter_gym.training.figures import plt, save_figure
+from clutter_gym.training.report import WINDOW, main_job, rolling_rate
+from clutter_gym.training.run_dir import RunDir
 
 
 def main() -> None:
@@ -62,9 +59,7 @@ def main() -> None:
         ax.set_ylim(0, 1)
         ax.grid(alpha=0.3)
         ax.legend()
-    fig.tight_layout()
-    with atomic_path(out / "learning.png") as tmp:
-        fig.savefig(tmp, dpi=110)
+    save_figure(fig, out / "learning.png")
     write_text_atomically(out / "learning.md", "\n".join(lines) + "\n")
     print("\n".join(lines))
 

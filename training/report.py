@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from clutter_gym.atomic import atomic_path, write_text_atomically
+from clutter_gym.atomic import write_text_atomically
 from clutter_gym.training.config import config_for
 from clutter_gym.training.evaluate import evaluate
 from clutter_gym.training.run_dir import RunDir
@@ -61,10 +61,7 @@ def plot_learning_curve(run: RunDir, path: Path) -> Path | None:
     rows = run.read_episodes()
     if not rows:
         return None
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from clutter_gym.training.figures import plt, save_figure
 
     steps = np.array([r["timestep"] for r in rows])
     fig, ax = plt.subplots(figsize=(6.4, 3.6))
@@ -77,11 +74,7 @@ def plot_learning_curve(run: RunDir, path: Path) -> Path | None:
     ax.legend()
     config = run.read_config()
     ax.set_title(f"PPO on {config.env_id} (seed {config.seed}, training noise {config.noise!r})")
-    fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=110)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)
 
 
 def render_report(run: RunDir, summaries: dict, curve: Path | None, train_s: float, eval_s: float) -> str:

@@ -177,10 +177,7 @@ def write_csv(rows: list[dict[str, Any]], path: Path) -> Path:
 
 def write_heatmap(rows: list[dict[str, Any]], spec: SweepSpec, path: Path) -> Path:
     """Two panels (success rate, collision rate): rows = train profile, columns = eval profile, mean over seeds."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from clutter_gym.training.figures import plt, save_figure
     import numpy as np
 
     fig, axes = plt.subplots(1, 2, figsize=(4 + 1.6 * len(spec.eval_noise), 1.5 + 0.8 * len(spec.train_noise)))
@@ -196,8 +193,4 @@ def write_heatmap(rows: list[dict[str, Any]], spec: SweepSpec, path: Path) -> Pa
         ax.set_ylabel("trained under")
         ax.set_title(metric.replace("_", " "))
     fig.suptitle(f"{spec.env_id}: {spec.seeds} seed(s), {spec.episodes} episodes per cell")
-    fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=110)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)
