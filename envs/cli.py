@@ -14,6 +14,7 @@ import clutter_gym  # noqa: F401  (registers the envs)
 from clutter_gym import ENV_IDS
 from clutter_gym.noise.profiles import PROFILE_NAMES, profile_description, profile_table_markdown, resolve_noise
 from clutter_gym.training import commands as training_commands
+from clutter_gym.training.commands import positive_int
 from clutter_gym.training.baselines import PotentialFieldNavigator
 from clutter_gym.video import write_video
 
@@ -74,8 +75,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("demo", help="roll out a scripted policy, write an episode GIF and print a summary")
     p.add_argument("--env", choices=ENV_IDS, default="ClutterNav-v0")
     p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--max-steps", type=training_commands.positive_int, default=400, help="stop the episode after this many steps")
-    p.add_argument("--frame-every", type=training_commands.positive_int, default=2, help="keep every k-th frame in the GIF")
+    p.add_argument("--max-steps", type=positive_int, default=400, help="stop the episode after this many steps")
+    p.add_argument("--frame-every", type=positive_int, default=2, help="keep every k-th frame in the GIF")
     p.add_argument("--out", default="out/demo", help="folder for the GIF")
     p.add_argument("--noise", choices=PROFILE_NAMES, default="none", help="sensor/actuation noise profile")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")

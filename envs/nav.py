@@ -52,8 +52,8 @@ class ClutterNavEnv(ClutterEnv):
     ## Rewards
 
     Sum of signed terms, each in ``info["reward_terms"]``; weights are constructor arguments:
-    ``progress`` (+progress_weight per metre closer to the goal), ``success`` (+success_weight once),
-    ``contact`` (-contact_weight per step in contact), ``clearance`` (-clearance_weight * (margin - clearance) /
+    ``progress`` (+progress_weight per metre the shortest path to the goal around the clutter shrinks),
+    ``success`` (+success_weight once), ``contact`` (-contact_weight per step in contact), ``clearance`` (-clearance_weight * (margin - clearance) /
     margin per step when clearance < clearance_margin), ``control`` (-control_weight * |a|^2),
     ``time`` (-time_weight per step). ``info["cost"]`` is 1.0 in a step with contact, else 0.0.
 
@@ -100,7 +100,8 @@ class ClutterNavEnv(ClutterEnv):
     ## Version history
 
     * v0: initial release; camera sensor, noise profiles, sensor timing, action noise and dynamics randomisation
-      added without changing the clean defaults.
+      added without changing the clean defaults. The progress term follows the path distance around the
+      clutter instead of the straight-line distance (PPO stalled behind obstacles with the latter).
     """
 
     def __init__(

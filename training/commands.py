@@ -15,10 +15,7 @@ from typing import Any
 
 from clutter_gym import ENV_IDS
 from clutter_gym.noise.profiles import PROFILE_NAMES
-from clutter_gym.training.config import PPOHyperparams
-
-EVAL_SEED = 1_000_000  # default first evaluation seed, away from the seeds training starts its envs with
-
+from clutter_gym.training.config import EVAL_SEED, PPOHyperparams
 
 def positive_int(text: str) -> int:
     value = int(text)

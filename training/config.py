@@ -15,6 +15,8 @@ from typing import Any
 import yaml
 
 HYPERPARAMS_FILE = "ppo.yml"
+#: First evaluation seed by default: far from the seeds training starts its envs with (seed, seed + 1, ...).
+EVAL_SEED = 1_000_000
 
 
 @dataclass(frozen=True)

@@ -14,10 +14,9 @@ from pathlib import Path
 import numpy as np
 
 from clutter_gym.atomic import write_text_atomically
-from clutter_gym.training.config import config_for
+from clutter_gym.training.config import EVAL_SEED, config_for
 from clutter_gym.training.evaluate import evaluate
 from clutter_gym.training.run_dir import RunDir
-from clutter_gym.training.sweep import EVAL_SEED
 from clutter_gym.training.train import start, train
 
 PROFILES = ("none", "nominal")

@@ -19,7 +19,6 @@ from __future__ import annotations
 import csv
 import re
 import shutil
-from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
@@ -110,10 +109,6 @@ class RunDir:
     def truncate_episodes(self, last_step: int) -> None:
         """Drop episode rows logged after ``last_step`` (the steps a resumed run will redo)."""
         rows = [row for row in self.read_episodes() if row["timestep"] <= last_step]
-        self._write_episode_rows(rows)
-
-    def _write_episode_rows(self, rows: Iterable[dict[str, float]]) -> None:
-        rows = list(rows)
         with atomic_path(self.episodes_file) as tmp, tmp.open("w", newline="") as f:
             if rows:
                 writer = csv.DictWriter(f, fieldnames=list(rows[0]))

@@ -28,9 +28,8 @@ from typing import Any
 import yaml
 
 from clutter_gym.atomic import atomic_path, write_text_atomically
-from clutter_gym.training.config import config_for
+from clutter_gym.training.config import EVAL_SEED, config_for
 
-EVAL_SEED = 1_000_000
 CSV_METRICS = ("success_rate", "collision_rate", "mean_cost", "mean_return", "mean_length", "mean_min_clearance")
 
 

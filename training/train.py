@@ -13,12 +13,10 @@ from stable_baselines3.common.vec_env import VecNormalize
 
 from clutter_gym.atomic import write_text_atomically
 from clutter_gym.training.callbacks import RunMonitor
-from clutter_gym.training.config import TrainConfig
+from clutter_gym.training.config import EVAL_SEED, TrainConfig
 from clutter_gym.training.evaluate import evaluate
 from clutter_gym.training.run_dir import NORMALIZER_FILE, RunDir
 from clutter_gym.training.vec_env import build_vec_env, normalize, policy_name
-
-FINAL_EVAL_SEED_OFFSET = 1_000_000  # evaluation episodes use seeds training never drew
 
 
 def start(config: TrainConfig, out: str | Path) -> RunDir:
@@ -72,6 +70,6 @@ def train(run: RunDir, progress: bool = True, timesteps: int | None = None) -> d
     if config.final_eval_episodes == 0:
         return None
     summary = evaluate(run.root, noise=config.noise, episodes=config.final_eval_episodes,
-                       seed=config.seed + FINAL_EVAL_SEED_OFFSET)
+                       seed=config.seed + EVAL_SEED)
     write_text_atomically(run.eval_file, json.dumps(summary, indent=2))
     return summary

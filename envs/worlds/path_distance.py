@@ -42,6 +42,7 @@ class PathDistance:
     def __init__(self, scene: Scene, spec: ClutterSpec, robot_radius: float) -> None:
         self._centres = spec.cell_centres
         self._res = float(self._centres[1] - self._centres[0])
+        self._origin, self._top = float(self._centres[0]), float(len(self._centres) - 1)  # first centre, last index
         clearance = clearance_field(scene.obstacles, spec, cap=robot_radius + self._res)
         free = clearance > robot_radius
         goal_cell = self._nearest_cell(scene.goal)
@@ -54,10 +55,10 @@ class PathDistance:
         return tuple(int(np.clip(round((p - self._centres[0]) / self._res), 0, n - 1)) for p in point)
 
     def __call__(self, x: float, y: float) -> float:
-        n = len(self._centres)
-        fx = float(np.clip((x - self._centres[0]) / self._res, 0.0, n - 1.0))
-        fy = float(np.clip((y - self._centres[0]) / self._res, 0.0, n - 1.0))
-        i, j = min(int(fx), n - 2), min(int(fy), n - 2)
+        top = self._top
+        fx = min(max((x - self._origin) / self._res, 0.0), top)
+        fy = min(max((y - self._origin) / self._res, 0.0), top)
+        i, j = min(int(fx), int(top) - 1), min(int(fy), int(top) - 1)
         tx, ty = fx - i, fy - j
         v = self.values
         grid = ((1 - tx) * (1 - ty) * v[i, j] + tx * (1 - ty) * v[i + 1, j]
