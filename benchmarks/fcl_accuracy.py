@@ -14,7 +14,7 @@ import time
 import fcl
 import numpy as np
 
-from clutter_gym.collision import obstacle_geometry
+from clutter_gym.collision import obstacle_object
 from clutter_gym.worlds.scene import Obstacle
 
 CHASSIS_RADIUS = 0.17
@@ -31,7 +31,7 @@ def main(samples: int = 5000) -> None:
     points = rng.uniform(-2.7, 2.7, size=(samples, 2))
     exact = np.array([[float(o.distance(np.array(x), np.array(y))) - CHASSIS_RADIUS for o in OBSTACLES]
                       for x, y in points])
-    objects = [obstacle_geometry(o) for o in OBSTACLES]
+    objects = [obstacle_object(o) for o in OBSTACLES]
     chassis = fcl.Cylinder(CHASSIS_RADIUS, 0.12)
     print(f"{samples} random chassis positions x {len(OBSTACLES)} obstacles; error = |FCL - closed form|\n")
     header = " | ".join(f"max error, d in [{lo}, {hi}) m" for lo, hi in BINS)

@@ -6,9 +6,10 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from clutter_gym.collision import CollisionChecker, load_collision_elements
+from clutter_gym.collision import CollisionChecker, RobotCollisionModel, check_fidelity
 from clutter_gym.core import ClutterEnv, check_render_mode
 from clutter_gym.robots import DiffDriveConfig, DiffDriveRobot
+from clutter_gym.robots.diffdrive import TRACKED_LINKS
 from clutter_gym.noise.profiles import NoiseProfile, resolve_noise
 from clutter_gym.sensors import CameraConfig, ImuConfig, LidarConfig, build_sensors
 from clutter_gym.sim import Sim
@@ -131,6 +132,8 @@ class ClutterNavEnv(ClutterEnv):
         clearance_margin: float = 0.1,
         terminate_on_collision: bool = False,
         contact_tolerance: float = 1e-3,
+        collision_fidelity: str = "primitive",
+        collision_padding: float = 0.0,
         progress_weight: float = 10.0,
         success_weight: float = 10.0,
         contact_weight: float = 1.0,
@@ -159,8 +162,12 @@ class ClutterNavEnv(ClutterEnv):
             spec=spec,
             robot_radius=robot.config.footprint_radius,
         )
+        model = RobotCollisionModel.from_urdf(
+            robot.urdf_path, check_fidelity(collision_fidelity), ("base_link", *TRACKED_LINKS), collision_padding
+        )
         checker = CollisionChecker(
-            load_collision_elements(robot.urdf_path), base_link="base_link", contact_tolerance=contact_tolerance
+            model, base_link="base_link", contact_tolerance=contact_tolerance,
+            clearance_range=math.sqrt(2.0) * arena_size, dt=1.0 / control_hz,
         )
         super().__init__(
             sim=Sim(physics_hz=physics_hz, solver_iterations=solver_iterations, gui=render_mode == "human"),

@@ -1,6 +1,32 @@
-"""The FCL side (DESIGN.md rule 5: python-fcl is imported only in this package)."""
+"""The FCL side (DESIGN.md rule 5: python-fcl is imported only in this package).
 
-from clutter_gym.collision.checker import CollisionChecker, CollisionReport, obstacle_geometry
+URDF collision elements (:mod:`.urdf_geometry`) become FCL shapes at a fidelity level (:mod:`.fidelity`), placed
+at link poses by a :class:`RobotCollisionModel` that also answers self-collision queries for the pairs an
+allowed-collision matrix enables (:mod:`.acm`); a :class:`CollisionChecker` measures the robot against a scene.
+"""
+
+from clutter_gym.collision.acm import AllowedCollisionMatrix, generate_acm, load_acm
+from clutter_gym.collision.checker import CollisionChecker, CollisionReport, Contact, obstacle_object
+from clutter_gym.collision.fidelity import FIDELITY_LEVELS, LinkShape, build_link_shapes, check_fidelity
+from clutter_gym.collision.kinematics import UrdfKinematics
+from clutter_gym.collision.robot_model import RobotCollisionModel, SelfClearance
 from clutter_gym.collision.urdf_geometry import CollisionElement, load_collision_elements
 
-__all__ = ["CollisionChecker", "CollisionElement", "CollisionReport", "load_collision_elements", "obstacle_geometry"]
+__all__ = [
+    "FIDELITY_LEVELS",
+    "AllowedCollisionMatrix",
+    "CollisionChecker",
+    "CollisionElement",
+    "CollisionReport",
+    "Contact",
+    "LinkShape",
+    "RobotCollisionModel",
+    "SelfClearance",
+    "UrdfKinematics",
+    "build_link_shapes",
+    "check_fidelity",
+    "generate_acm",
+    "load_acm",
+    "load_collision_elements",
+    "obstacle_object",
+]

@@ -1,8 +1,17 @@
-"""Robot-vs-scene clearance and contacts with FCL, cross-checked against pybullet's own contact points.
+"""Robot-vs-scene clearance, contacts, self-collision and swept checks with FCL, cross-checked against pybullet.
 
-The obstacle broad phase (a dynamic AABB tree) is rebuilt on reset only; each step moves the robot's link
-objects (one transform per collision element, from the batched link states the robot already read) and runs one
-manager-vs-manager distance query. The contact enumeration runs only when the clearance says there is contact.
+The obstacle broad phase (a dynamic AABB tree) is rebuilt on reset only. Each step moves the robot's FCL
+objects to the link poses the robot read in one batched call, then:
+
+1. one robot-tree-vs-obstacle-tree distance traversal gives every link's clearance (capped at
+   ``clearance_range``), its witness points and the closest obstacle;
+2. pairs within ``contact_tolerance`` are enumerated as contacts with their penetration depth;
+3. enabled self pairs (the ACM) are tested, after a bounding-ball filter;
+4. shapes that moved faster than ``swept_speed`` are swept from their previous pose (``fcl.continuousCollide``,
+   translation motion, conservative advancement) against the obstacles near their path: a hit the end-of-step
+   check does not see is *tunneling*. The translation motion holds the start rotation (measured: it ignores
+   rotation), so a step's rotation is covered only at its two ends; mesh shapes sweep their convex hull
+   (conservative advancement never detects a moving BVH).
 """
 
 from __future__ import annotations
@@ -13,9 +22,8 @@ from dataclasses import dataclass
 import fcl
 import numpy as np
 
-from clutter_gym.collision.urdf_geometry import CollisionElement
+from clutter_gym.collision.robot_model import RobotCollisionModel
 from clutter_gym.robots.state import RobotState
-from clutter_gym.transforms import quat_to_matrix
 from clutter_gym.worlds.scene import Obstacle
 
 #: Clearance reported when there is nothing to measure against (an empty scene without walls), metres.
@@ -23,122 +31,298 @@ NO_OBSTACLE_CLEARANCE = 1e3
 
 
 @dataclass(frozen=True, slots=True)
-class CollisionReport:
-    """What the two engines say about the robot and the scene after a step.
+class Contact:
+    """A robot link touching or penetrating an obstacle (FCL).
 
     Attributes:
-        min_clearance: signed FCL distance from the robot to the nearest obstacle or wall, metres; negative is
-            penetration depth.
-        n_contacts: FCL robot-link/obstacle pairs closer than the contact tolerance.
+        link: URDF link name.
+        obstacle: index of the obstacle in the scene's obstacle list.
+        depth: penetration depth in metres (0 when touching within the tolerance without overlap).
+        position: (3,) a contact point in the world frame.
+    """
+
+    link: str
+    obstacle: int
+    depth: float
+    position: np.ndarray
+
+
+@dataclass(frozen=True, slots=True)
+class CollisionReport:
+    """What FCL (and pybullet, as a cross-check) say about the robot after a step.
+
+    Attributes:
+        min_clearance: signed distance from the robot to the nearest obstacle, metres; negative = penetration.
+        link_clearance: (L,) signed distance per link with geometry (``CollisionChecker.links``), capped at the
+            clearance range.
+        directions: (L, 3) unit vectors from each link's witness point to its obstacle's, world frame (zero
+            where the link is out of range or penetrating).
+        closest: (link, obstacle index) of the nearest pair, or None beyond the range.
+        witness: (2, 3) witness points (on the link, on the obstacle) of that pair, world frame, or None.
+        contacts: robot-link/obstacle pairs within the contact tolerance.
+        self_collision: an enabled link pair in self-collision, or None.
+        tunneling: shape/obstacle pairs the swept check hit that the end-of-step check found clear.
         pybullet_contacts: pybullet contact points between the robot and obstacles within the tolerance.
-        disagreement: exactly one of the two engines reports contact.
+        disagreement: exactly one of the two engines reports environment contact.
     """
 
     min_clearance: float
-    n_contacts: int
-    pybullet_contacts: int
-    disagreement: bool
+    link_clearance: np.ndarray
+    directions: np.ndarray
+    closest: tuple[str, int] | None
+    witness: np.ndarray | None
+    contacts: tuple[Contact, ...]
+    self_collision: tuple[str, str] | None = None
+    tunneling: int = 0
+    pybullet_contacts: int = 0
+    disagreement: bool = False
+
+    @property
+    def n_contacts(self) -> int:
+        return len(self.contacts)
 
     @property
     def in_contact(self) -> bool:
-        return self.n_contacts > 0
+        return bool(self.contacts)
 
 
-def obstacle_geometry(o: Obstacle) -> fcl.CollisionObject:
-    """FCL object for an obstacle standing on the floor."""
-    if o.shape == "cylinder":
-        geom = fcl.Cylinder(o.radius, o.size[2])
-    else:
-        geom = fcl.Box(*o.size)
+def obstacle_shape(o: Obstacle) -> fcl.CollisionGeometry:
+    """FCL shape of an obstacle in its own frame (centred, cylinder along z)."""
+    return fcl.Cylinder(o.radius, o.size[2]) if o.shape == "cylinder" else fcl.Box(*o.size)
+
+
+def obstacle_object(o: Obstacle, shape: fcl.CollisionGeometry | None = None) -> fcl.CollisionObject:
+    """FCL object for an obstacle (its bottom face at height ``o.z``), optionally with a given shape."""
     half = 0.5 * o.yaw
     q_wxyz = np.array([np.cos(half), 0.0, 0.0, np.sin(half)])
-    return fcl.CollisionObject(geom, fcl.Transform(q_wxyz, [o.position[0], o.position[1], 0.5 * o.size[2]]))
+    return fcl.CollisionObject(shape or obstacle_shape(o), fcl.Transform(q_wxyz, list(o.centre)))
 
 
 class CollisionChecker:
     """FCL model of one robot and the current scene.
 
     Args:
-        elements: the robot's collision primitives (see :func:`load_collision_elements`).
+        model: the robot's FCL objects (fidelity, padding and ACM chosen there).
         base_link: name of the URDF base link (its pose is ``RobotState.position``/``rotation``).
         contact_tolerance: distance at or below which either engine counts a contact, metres.
+        clearance_range: distances are resolved up to this range (metres); farther links report it.
+        swept_speed: shapes faster than this (m/s, from their displacement over ``dt``) get a swept check;
+            ``inf`` turns swept checks off.
+        dt: time between two checks (the control period), seconds.
     """
 
-    def __init__(self, elements: Sequence[CollisionElement], base_link: str, contact_tolerance: float = 1e-3) -> None:
-        self._elements = list(elements)
+    def __init__(
+        self,
+        model: RobotCollisionModel,
+        base_link: str,
+        contact_tolerance: float = 1e-3,
+        clearance_range: float = 0.5,
+        swept_speed: float = 0.2,
+        dt: float = 0.05,
+    ) -> None:
+        self.model = model
+        self.links = model.links
         self._base_link = base_link
         self.contact_tolerance = contact_tolerance
-        self._robot_objects = [fcl.CollisionObject(e.geometry, fcl.Transform()) for e in self._elements]
+        self.clearance_range = clearance_range
+        self.swept_speed = swept_speed
+        self.dt = dt
         self._robot_manager = fcl.DynamicAABBTreeCollisionManager()
-        self._robot_manager.registerObjects(self._robot_objects)
+        self._robot_manager.registerObjects(model.objects)
         self._robot_manager.setup()
-        self._local_pos = np.array([e.position for e in self._elements])
-        self._local_rot = quat_to_matrix(np.array([e.quaternion for e in self._elements]))
-        self._obstacle_manager: fcl.DynamicAABBTreeCollisionManager | None = None
-        self._obstacle_objects: list[fcl.CollisionObject] = []
+        self._sweepers = [fcl.CollisionObject(s.hull or s.geometry, fcl.Transform()) for s in model.shapes]
+        self._obstacles: list[fcl.CollisionObject] = []
+        self._obstacle_index: dict[int, int] = {}
+        self._obstacle_centres = np.zeros((0, 3))
+        self._obstacle_radii = np.zeros(0)
         self._obstacle_bodies: frozenset[int] = frozenset()
-        # GJK's error against the closed form is <= 2e-5 m within 0.5 m and <= 4e-5 m within 1 m, but reaches
-        # 7 mm for obstacles over a metre away, with either of FCL's solvers (benchmarks/fcl_accuracy.py). Contact
-        # and the clearance penalty only look below 0.1 m.
-        self._request = fcl.DistanceRequest(enable_signed_distance=True)
+        self._manager: fcl.DynamicAABBTreeCollisionManager | None = None
+        # GJK's error against the closed form is <= 2e-5 m within 0.5 m (benchmarks/fcl_accuracy.py).
+        self._request = fcl.DistanceRequest(enable_nearest_points=True, enable_signed_distance=True)
+        self._contact_request = fcl.CollisionRequest(num_max_contacts=4, enable_contact=True)
+        self._ccd_request = fcl.ContinuousCollisionRequest()
         self._rows: np.ndarray | None = None
+        self._previous: tuple[np.ndarray, np.ndarray] | None = None
 
+    # ------------------------------------------------------------------------------------------- scene
     def set_scene(self, obstacles: Sequence[Obstacle], bodies: Sequence[int]) -> None:
         """Rebuild the obstacle broad phase (call on reset). ``bodies`` are the matching pybullet body ids."""
-        self._obstacle_objects = [obstacle_geometry(o) for o in obstacles]
+        geometries = [obstacle_shape(o) for o in obstacles]
+        self._obstacles = [obstacle_object(o, g) for o, g in zip(obstacles, geometries)]
+        self._obstacle_index = {id(g): i for i, g in enumerate(geometries)}
+        self._obstacle_centres = np.array([o.centre for o in obstacles]).reshape(-1, 3)
+        self._obstacle_radii = np.array([0.5 * float(np.linalg.norm(o.size)) for o in obstacles])
         self._obstacle_bodies = frozenset(bodies)
         manager = fcl.DynamicAABBTreeCollisionManager()
-        if self._obstacle_objects:
-            manager.registerObjects(self._obstacle_objects)
+        if self._obstacles:
+            manager.registerObjects(self._obstacles)
         manager.setup()
-        self._obstacle_manager = manager
+        self._manager = manager
+        self._previous = None  # a reset teleports the robot: nothing to sweep from
 
-    def _sync(self, state: RobotState) -> None:
-        """Move every robot collision object to its link's pose in ``state``."""
-        if self._rows is None:  # element -> row of [base, *state.links]; fixed for a robot
+    # ------------------------------------------------------------------------------------------- queries
+    def sync(self, state: RobotState) -> None:
+        """Move the robot's FCL objects to the link poses in ``state``."""
+        if self._rows is None:  # model row -> row of [base, *state.links]; fixed for a robot
             names = (self._base_link, *state.link_names)
-            self._rows = np.array([names.index(e.link) for e in self._elements])
+            self._rows = np.array([names.index(n) for n in self.model.link_names])
         rot = np.concatenate((state.rotation[None], state.links.rotation))[self._rows]
         pos = np.concatenate((state.position[None], state.links.position))[self._rows]
-        world_rot = rot @ self._local_rot
-        world_pos = pos + (rot @ self._local_pos[:, :, None])[:, :, 0]
-        for obj, r, t in zip(self._robot_objects, world_rot, world_pos):
-            obj.setRotation(r)
-            obj.setTranslation(t)
+        self.model.sync(pos, rot)
         self._robot_manager.update()
 
-    def min_clearance(self, state: RobotState) -> float:
-        """Signed distance from the robot to the nearest obstacle, metres (FCL)."""
-        self._sync(state)
-        if not self._obstacle_objects:
-            return NO_OBSTACLE_CLEARANCE
-        data = fcl.DistanceData(request=self._request)
-        self._robot_manager.distance(self._obstacle_manager, data, fcl.defaultDistanceCallback)
-        return float(data.result.min_distance)
+    def clearance(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Per shape: signed distance (capped at the range), obstacle index (-1 beyond it) and witness points.
 
-    def _count_contacts(self) -> int:
-        """Robot-link/obstacle pairs within the contact tolerance (robot objects already synced)."""
-        tol, request, hits = self.contact_tolerance, self._request, []
+        Robot objects must be synced. One tree-vs-tree traversal; the running bound handed back to FCL is the
+        largest per-shape best so far (capped at the range), so no pair that could improve a shape is pruned.
+        """
+        n = len(self.model.objects)
+        best = np.full(n, self.clearance_range)
+        other = np.full(n, -1)
+        points = np.zeros((n, 2, 3))
+        if not self._obstacles:
+            return np.full(n, NO_OBSTACLE_CLEARANCE), other, points
+        # The callback gets fresh wrappers of the C++ objects; the geometry a DistanceResult hands back is the
+        # very Python object each shape was built with, so it identifies the pair.
+        shape_of, obstacle_of, pad = self.model.geometry_index, self._obstacle_index, self.model.padding
+        request, bound, unset = self._request, [self.clearance_range], [n]
 
-        def within(o1: fcl.CollisionObject, o2: fcl.CollisionObject, _data: object) -> tuple[bool, float]:
-            # Returning ``tol`` as the running bound makes the tree visit every pair closer than ``tol``.
-            if fcl.distance(o1, o2, request, fcl.DistanceResult()) <= tol:
-                hits.append(1)
-            return False, tol
+        solid = self.model.solid_objects
 
-        self._robot_manager.distance(self._obstacle_manager, None, within)
-        return len(hits)
+        def visit(o1: fcl.CollisionObject, o2: fcl.CollisionObject, _data: object) -> tuple[bool, float]:
+            # o1 comes from the robot's tree; as the first argument a BVH reports world-frame points in order
+            result = fcl.DistanceResult()
+            d = fcl.distance(o1, o2, request, result)
+            i, j, p = shape_of[id(result.o1)], obstacle_of[id(result.o2)], result.nearest_points
+            if d <= 0.0 and solid[i] is not self.model.objects[i]:  # a BVH in overlap: depth from its hull
+                result = fcl.DistanceResult()
+                d = fcl.distance(solid[i], o2, request, result)
+                p = result.nearest_points
+            d -= pad[i]
+            if d < best[i]:
+                if other[i] < 0:
+                    unset[0] -= 1
+                best[i], other[i] = d, j
+                points[i] = p
+                if unset[0] == 0:
+                    bound[0] = float(best.max())
+            return False, bound[0]
 
-    def check(self, state: RobotState, pybullet_contacts: Sequence[tuple[int, float]]) -> CollisionReport:
-        """Clearance and contacts of the robot in ``state``.
+        self._robot_manager.distance(self._manager, None, visit)
+        return best, other, points
+
+    def check(self, state: RobotState, pybullet_contacts: Sequence[tuple[int, float]] = ()) -> CollisionReport:
+        """Clearance, contacts, self-collision and tunneling of the robot in ``state``.
 
         Args:
             state: the robot state after the step.
             pybullet_contacts: (other body id, contact distance) of the robot's pybullet contact points.
         """
-        clearance = self.min_clearance(state)
+        self.sync(state)
+        distance, other, points = self.clearance()
+        model = self.model
+        n_links = len(self.links)
+        link_clearance = np.full(n_links, min(self.clearance_range, NO_OBSTACLE_CLEARANCE))
+        np.minimum.at(link_clearance, model.shape_link, distance)
+        directions = np.zeros((n_links, 3))
+        gap = points[:, 1] - points[:, 0]
+        norms = np.linalg.norm(gap, axis=1)
+        closest_shape = np.full(n_links, -1)
+        for i in np.argsort(-distance):  # nearest last, so each link keeps its nearest shape
+            closest_shape[model.shape_link[i]] = i
+        for link, i in enumerate(closest_shape):
+            if other[i] >= 0 and distance[i] > 0.0 and norms[i] > 0.0:
+                directions[link] = gap[i] / norms[i]
+        k = int(np.argmin(distance))
+        found = other[k] >= 0
+        contacts = self._contacts(distance, other, points)
+        tunneling = self._swept(distance)
         tol = self.contact_tolerance
-        # at least one pair when the clearance says contact, even if a pairwise query lands a hair above tol
-        n_fcl = max(1, self._count_contacts()) if clearance <= tol else 0
         n_pb = sum(1 for body, d in pybullet_contacts if d <= tol and body in self._obstacle_bodies)
-        return CollisionReport(clearance, n_fcl, n_pb, (n_fcl > 0) != (n_pb > 0))
+        return CollisionReport(
+            min_clearance=float(distance[k]) if self._obstacles else NO_OBSTACLE_CLEARANCE,
+            link_clearance=link_clearance,
+            directions=directions,
+            closest=(model.shapes[k].link, int(other[k])) if found else None,
+            witness=points[k].copy() if found else None,
+            contacts=contacts,
+            self_collision=model.self_collision(),
+            tunneling=tunneling,
+            pybullet_contacts=n_pb,
+            disagreement=bool(contacts) != (n_pb > 0),
+        )
+
+    def min_clearance(self, state: RobotState) -> float:
+        """Signed distance from the robot to the nearest obstacle, metres (capped at the clearance range)."""
+        self.sync(state)
+        return float(self.clearance()[0].min())
+
+    def _contacts(self, distance: np.ndarray, other: np.ndarray, points: np.ndarray) -> tuple[Contact, ...]:
+        """Contacts of the shapes whose nearest obstacle is within the tolerance.
+
+        A shape can touch several obstacles at once: every obstacle within the tolerance of a touching shape is
+        enumerated (a second, bounded traversal), with the penetration depth from ``fcl.collide``.
+        """
+        touching = np.flatnonzero(distance <= self.contact_tolerance)
+        if touching.size == 0:
+            return ()
+        model, out = self.model, []
+        for i in touching:
+            obj = model.solid_objects[i]  # a BVH's contact depths are not meaningful; its hull's are
+            for j in self._obstacles_near(i, self.contact_tolerance + model.padding[i]):
+                d = fcl.distance(obj, self._obstacles[j], self._request, fcl.DistanceResult()) - model.padding[i]
+                if d > self.contact_tolerance:
+                    continue
+                result = fcl.CollisionResult()
+                depth, where = max(0.0, -d), points[i].mean(axis=0)
+                if fcl.collide(obj, self._obstacles[j], self._contact_request, result):
+                    deepest = max(result.contacts, key=lambda c: c.penetration_depth)
+                    depth = max(depth, float(deepest.penetration_depth))
+                    where = np.asarray(deepest.pos, dtype=float)
+                out.append(Contact(model.shapes[i].link, int(j), depth + model.padding[i], where))
+        return tuple(out)
+
+    def _obstacles_near(self, shape: int, margin: float) -> np.ndarray:
+        """Obstacles whose bounding ball comes within ``margin`` of the shape's bounding ball."""
+        gap = np.linalg.norm(self._obstacle_centres - self.model.position[shape], axis=1)
+        return np.flatnonzero(gap - self._obstacle_radii - self.model.shapes[shape].radius <= margin)
+
+    def _swept(self, distance: np.ndarray) -> int:
+        """Count swept hits, for shapes faster than ``swept_speed``, that end the step clear of the obstacle."""
+        model = self.model
+        now = (model.position.copy(), model.rotation.copy())
+        previous, self._previous = self._previous, now
+        if previous is None or not self._obstacles or not np.isfinite(self.swept_speed):
+            return 0
+        radius = np.array([s.radius for s in model.shapes])
+        travel = np.linalg.norm(now[0] - previous[0], axis=1)
+        # rotation adds at most angle * radius to the travel of any point of the shape
+        cos_angle = np.clip((np.einsum("nij,nij->n", now[1], previous[1]) - 1.0) / 2.0, -1.0, 1.0)
+        travel = travel + np.arccos(cos_angle) * radius
+        hits = 0
+        for i in np.flatnonzero(travel > self.swept_speed * self.dt):
+            start, end = previous[0][i], now[0][i]
+            centres = self._obstacle_centres
+            axis = end - start
+            t = np.clip((centres - start) @ axis / max(float(axis @ axis), 1e-300), 0.0, 1.0)
+            gap = np.linalg.norm(centres - (start + t[:, None] * axis), axis=1)
+            near = np.flatnonzero(gap <= self._obstacle_radii + radius[i] + model.padding[i])
+            if near.size == 0:
+                continue
+            sweeper = self._sweepers[i]
+            sweeper.setRotation(previous[1][i])
+            sweeper.setTranslation(start)
+            goal = fcl.Transform(now[1][i], end)
+            for j in near:
+                obstacle = self._obstacles[j]
+                result = fcl.ContinuousCollisionResult()
+                fcl.continuousCollide(sweeper, goal, obstacle, obstacle.getTransform(), self._ccd_request, result)
+                if result.is_collide and self._clear_at_end(i, j):
+                    hits += 1
+        return hits
+
+    def _clear_at_end(self, shape: int, obstacle: int) -> bool:
+        obj = self.model.solid_objects[shape]
+        d = fcl.distance(obj, self._obstacles[obstacle], self._request, fcl.DistanceResult())
+        return d - self.model.padding[shape] > self.contact_tolerance

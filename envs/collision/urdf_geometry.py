@@ -1,88 +1,173 @@
-"""Collision geometry of a URDF's links as FCL shapes (primitives: box, cylinder, sphere).
+"""Collision elements of a URDF's links as plain data: primitives by their sizes, meshes loaded with trimesh.
 
 Each ``<collision>`` element becomes one :class:`CollisionElement` carrying its link name and its origin in the
-link frame. Mesh elements and fidelity levels come with the collision-layer work (issue 3); a URDF that needs
-them is rejected here with a clear error rather than approximated silently.
+link frame. Supported geometry: ``box``, ``cylinder``, ``sphere``, ``capsule`` (pybullet's extension: a cylinder
+of ``length`` between two hemispheres) and ``mesh`` (any format trimesh reads: OBJ, STL, DAE, ...; ``scale``
+honoured). Which FCL shape an element becomes is the fidelity level's choice (:mod:`.fidelity`).
+
+Mesh file names resolve as pybullet resolves them: ``package://a/b.obj`` and relative names against the URDF's
+folder (and its parents, for ``package://<pkg>/...`` layouts), ``file://`` and absolute paths as they are.
 """
 
 from __future__ import annotations
 
+import hashlib
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 
-import fcl
 import numpy as np
+import trimesh
 
 from clutter_gym.transforms import rpy_quat
 
+KINDS = ("box", "cylinder", "sphere", "capsule", "mesh")
 
-@dataclass(frozen=True)
+
+@dataclass(frozen=True, eq=False)
 class CollisionElement:
-    """One collision primitive of a link.
+    """One collision element of a link.
 
     Attributes:
         link: URDF link name.
-        geometry: the FCL shape in its own frame (cylinders along z, centred).
+        kind: one of :data:`KINDS`.
+        size: box (sx, sy, sz) full extents; cylinder and capsule (radius, length), length along the element's
+            z axis (a capsule's length excludes its caps); sphere (radius,); mesh: the scaled mesh's bounding-box
+            extents. Metres.
         position: (3,) element origin in the link frame, metres.
         quaternion: (4,) element orientation in the link frame, (x, y, z, w).
+        mesh: the scaled triangle mesh in the element frame (meshes only).
+        source: the resolved mesh file (meshes only).
     """
 
     link: str
-    geometry: fcl.CollisionGeometry
+    kind: str
+    size: tuple[float, ...]
     position: np.ndarray
     quaternion: np.ndarray
+    mesh: trimesh.Trimesh | None = None
+    source: Path | None = None
 
 
-def _floats(text: str | None, n: int, default: float) -> np.ndarray:
+def parse_floats(text: str | None, n: int, default: float, where: str) -> np.ndarray:
     if text is None:
         return np.full(n, default)
-    values = np.array([float(v) for v in text.split()])
-    if values.shape != (n,):
-        raise ValueError(f"expected {n} numbers, got {text!r}")
+    try:
+        values = np.array([float(v) for v in text.split()])
+    except ValueError:
+        raise ValueError(f"{where}: expected {n} numbers, got {text!r}") from None
+    if values.shape != (n,) or not np.all(np.isfinite(values)):
+        raise ValueError(f"{where}: expected {n} finite numbers, got {text!r}")
     return values
 
 
-def _shape(geometry: ET.Element, where: str) -> fcl.CollisionGeometry:
-    child = next(iter(geometry), None)
+def _positive(attrib: dict[str, str], key: str, where: str) -> float:
+    if key not in attrib:
+        raise ValueError(f"{where}: missing attribute {key!r}")
+    value = parse_floats(attrib[key], 1, 0.0, f"{where} {key}")[0]
+    if value <= 0.0:
+        raise ValueError(f"{where}: {key} must be > 0 metres, got {value}")
+    return float(value)
+
+
+def resolve_mesh(filename: str, urdf: Path) -> Path:
+    """The file a URDF mesh ``filename`` refers to.
+
+    Raises:
+        ValueError: no such file (the message lists where it looked).
+    """
+    if filename.startswith("file://"):
+        candidates = [Path(filename[len("file://"):])]
+    elif filename.startswith("package://"):
+        rest = Path(filename[len("package://"):])
+        candidates = [urdf.parent / rest] + [p / rest.relative_to(rest.parts[0]) for p in urdf.parents if rest.parts]
+        candidates += [p / rest for p in urdf.parents]
+    else:
+        candidates = [Path(filename) if Path(filename).is_absolute() else urdf.parent / filename]
+    for path in candidates:
+        if path.is_file():
+            return path.resolve()
+    raise ValueError(f"mesh {filename!r} not found (looked at {[str(p) for p in candidates[:4]]})")
+
+
+@lru_cache(maxsize=64)
+def _load_mesh(path: Path) -> trimesh.Trimesh:
+    """One triangle mesh from ``path`` (scenes are merged); cached per process, never mutated."""
+    loaded = trimesh.load(path, force="mesh", process=True)
+    if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
+        raise ValueError(f"mesh {path} holds no triangles")
+    return loaded
+
+
+def _element(col: ET.Element, link: str, urdf: Path, where: str) -> CollisionElement:
+    origin = col.find("origin")
+    attrs = origin.attrib if origin is not None else {}
+    position = parse_floats(attrs.get("xyz"), 3, 0.0, f"{where} origin xyz")
+    quaternion = rpy_quat(*parse_floats(attrs.get("rpy"), 3, 0.0, f"{where} origin rpy"))
+    geometry = col.find("geometry")
+    child = next(iter(geometry), None) if geometry is not None else None
     if child is None:
-        raise ValueError(f"{where}: <geometry> is empty")
+        raise ValueError(f"{where}: missing or empty <geometry>")
     tag, a = child.tag, child.attrib
     if tag == "box":
-        return fcl.Box(*_floats(a.get("size"), 3, 0.0))
-    if tag == "cylinder":
-        return fcl.Cylinder(float(a["radius"]), float(a["length"]))
+        size = parse_floats(a.get("size"), 3, 0.0, f"{where} box size")
+        if np.any(size <= 0):
+            raise ValueError(f"{where}: box size must be > 0 metres on every axis, got {a.get('size')!r}")
+        return CollisionElement(link, "box", tuple(size.tolist()), position, quaternion)
+    if tag in ("cylinder", "capsule"):
+        size = (_positive(a, "radius", where), _positive(a, "length", where))
+        return CollisionElement(link, tag, size, position, quaternion)
     if tag == "sphere":
-        return fcl.Sphere(float(a["radius"]))
-    raise ValueError(f"{where}: <{tag}> collision geometry is not supported yet (box, cylinder, sphere are)")
+        return CollisionElement(link, "sphere", (_positive(a, "radius", where),), position, quaternion)
+    if tag == "mesh":
+        if "filename" not in a:
+            raise ValueError(f"{where}: <mesh> has no filename")
+        source = resolve_mesh(a["filename"], urdf)
+        scale = parse_floats(a.get("scale"), 3, 1.0, f"{where} mesh scale")
+        if np.any(scale == 0):
+            raise ValueError(f"{where}: mesh scale must be non-zero, got {a.get('scale')!r}")
+        try:
+            mesh = _load_mesh(source).copy()
+        except ValueError:
+            raise
+        except Exception as exc:  # trimesh raises many types for unreadable files
+            raise ValueError(f"{where}: cannot read mesh {source}: {exc}") from exc
+        mesh.apply_scale(scale)
+        return CollisionElement(link, "mesh", tuple(mesh.extents.tolist()), position, quaternion, mesh, source)
+    raise ValueError(f"{where}: <{tag}> collision geometry is not supported ({', '.join(KINDS)} are)")
 
 
 def load_collision_elements(urdf: str | Path) -> list[CollisionElement]:
     """Every collision element of every link of ``urdf``, in document order.
 
     Raises:
-        ValueError: the URDF cannot be parsed or uses an unsupported geometry (the message names the link).
+        ValueError: the URDF is missing, cannot be parsed, or has an unsupported or malformed element (the
+            message names the link and the element).
     """
-    try:
-        root = ET.parse(urdf).getroot()
-    except ET.ParseError as exc:
-        raise ValueError(f"cannot parse URDF {urdf}: {exc}") from exc
+    urdf = Path(urdf)
+    root = parse_urdf(urdf)
     elements = []
     for link in root.iter("link"):
-        name = link.attrib["name"]
+        name = link.attrib.get("name")
         for i, col in enumerate(link.findall("collision")):
-            where = f"{urdf} link {name!r} collision {i}"
-            origin = col.find("origin")
-            attrs = origin.attrib if origin is not None else {}
-            geometry = col.find("geometry")
-            if geometry is None:
-                raise ValueError(f"{where}: missing <geometry>")
-            elements.append(
-                CollisionElement(
-                    link=name,
-                    geometry=_shape(geometry, where),
-                    position=_floats(attrs.get("xyz"), 3, 0.0),
-                    quaternion=rpy_quat(*_floats(attrs.get("rpy"), 3, 0.0)),
-                )
-            )
+            elements.append(_element(col, name, urdf, f"{urdf.name} link {name!r} collision {i}"))
     return elements
+
+
+def parse_urdf(urdf: Path) -> ET.Element:
+    if not urdf.is_file():
+        raise ValueError(f"URDF not found: {urdf}")
+    try:
+        return ET.parse(urdf).getroot()
+    except ET.ParseError as exc:
+        raise ValueError(f"cannot parse URDF {urdf}: {exc}") from exc
+
+
+def urdf_digest(urdf: str | Path) -> str:
+    """SHA-256 of the URDF text and every mesh file its collision elements use (cache key of derived data)."""
+    urdf = Path(urdf)
+    digest = hashlib.sha256(urdf.read_bytes())
+    for source in sorted({str(e.source) for e in load_collision_elements(urdf) if e.source is not None}):
+        digest.update(Path(source).read_bytes())
+    return digest.hexdigest()

@@ -9,7 +9,7 @@ import numpy as np
 
 from clutter_gym.sim import Sim
 from clutter_gym.worlds.clutter import ClutterSpec, sample_scene
-from clutter_gym.worlds.pool import ObstaclePool
+from clutter_gym.worlds.pool import ObstaclePool, arena_walls
 from clutter_gym.worlds.scene import Obstacle, Scene, parse_scene
 
 RESET_OPTIONS = ("scene",)
@@ -31,11 +31,12 @@ class ClutterArena:
     def load(self, sim: Sim) -> None:
         """Create the ground and walls (once per env)."""
         sim.add_ground(visual_size=self.spec.arena_size + 2.0)
-        self._pool = ObstaclePool(sim, self.spec.arena_size, self.spec.obstacle_height, self.spec.wall_thickness)
+        walls = arena_walls(self.spec.arena_size, self.spec.obstacle_height, self.spec.wall_thickness)
+        self._pool = ObstaclePool(sim, walls)
 
     @property
     def walls(self) -> tuple[Obstacle, ...]:
-        return self._pool.walls
+        return self._pool.fixed
 
     @property
     def pool_size(self) -> int:
@@ -60,4 +61,4 @@ class ClutterArena:
     def place(self, scene: Scene) -> tuple[tuple[Obstacle, ...], list[int]]:
         """Move pooled bodies into ``scene``; returns every obstacle (walls included) and its body ids."""
         bodies = self._pool.place(scene.obstacles)
-        return scene.obstacles + self.walls, bodies + self._pool.wall_bodies
+        return scene.obstacles + self.walls, bodies + self._pool.fixed_bodies

@@ -25,41 +25,39 @@ def _key(o: Obstacle) -> tuple:
     return (o.shape, o.size)
 
 
+def arena_walls(arena: float, height: float, thick: float) -> tuple[Obstacle, ...]:
+    """The four walls around the square [-arena/2, arena/2]^2."""
+    half, span = 0.5 * arena, arena + 2 * thick
+    return (
+        Obstacle("box", (span, thick, height), (0.0, half + 0.5 * thick)),
+        Obstacle("box", (span, thick, height), (0.0, -half - 0.5 * thick)),
+        Obstacle("box", (thick, span, height), (half + 0.5 * thick, 0.0)),
+        Obstacle("box", (thick, span, height), (-half - 0.5 * thick, 0.0)),
+    )
+
+
 class ObstaclePool:
-    """Static bodies for obstacles (reused across resets) and the four arena walls (built once).
+    """Static bodies for obstacles (reused across resets) and for fixed structure (walls, a table; built once).
 
     Args:
         sim: the physics client.
-        arena_size: side of the walled square, metres.
-        wall_height, wall_thickness: metres.
+        fixed: obstacles present in every scene, drawn in the wall colour.
         max_parked: parked bodies kept for reuse; older ones are deleted.
     """
 
-    def __init__(
-        self, sim: Sim, arena_size: float, wall_height: float = 0.5, wall_thickness: float = 0.1, max_parked: int = 48
-    ) -> None:
+    def __init__(self, sim: Sim, fixed: tuple[Obstacle, ...] = (), max_parked: int = 48) -> None:
         self._sim = sim
         self.max_parked = max_parked
         self._parked: OrderedDict[int, tuple] = OrderedDict()  # body -> key, least recently parked first
         self._free: dict[tuple, list[int]] = defaultdict(list)
         self._active: list[tuple[tuple, int]] = []
-        self.walls = self._build_walls(arena_size, wall_height, wall_thickness)
-
-    def _build_walls(self, arena: float, height: float, thick: float) -> tuple[Obstacle, ...]:
-        half, span = 0.5 * arena, arena + 2 * thick
-        walls = (
-            Obstacle("box", (span, thick, height), (0.0, half + 0.5 * thick)),
-            Obstacle("box", (span, thick, height), (0.0, -half - 0.5 * thick)),
-            Obstacle("box", (thick, span, height), (half + 0.5 * thick, 0.0)),
-            Obstacle("box", (thick, span, height), (-half - 0.5 * thick, 0.0)),
-        )
-        self.wall_bodies = []
-        for w in walls:
-            body = self._sim.add_static_box([0.5 * s for s in w.size], _COLOURS["wall"])
-            self._sim.move_static(body, (*w.position, 0.5 * w.size[2]), yaw_quat(0.0))
+        self.fixed = fixed
+        self.fixed_bodies = []
+        for o in fixed:
+            body = self._sim.add_static_box([0.5 * s for s in o.size], _COLOURS["wall"])
+            self._sim.move_static(body, o.centre, yaw_quat(o.yaw))
             self._sim.sleep(body)
-            self.wall_bodies.append(body)
-        return walls
+            self.fixed_bodies.append(body)
 
     @property
     def size(self) -> int:
@@ -90,7 +88,7 @@ class ObstaclePool:
         for o in obstacles:
             key = _key(o)
             body = self._take(key, o)
-            self._sim.move_static(body, (*o.position, 0.5 * o.size[2]), yaw_quat(o.yaw))
+            self._sim.move_static(body, o.centre, yaw_quat(o.yaw))
             self._sim.sleep(body)
             self._active.append((key, body))
             bodies.append(body)

@@ -1,7 +1,8 @@
 """Scenes as plain data: obstacles, start and goal; parsing and validation of user-given scenes.
 
 Coordinates are metres in the world frame: the arena is the square [-L/2, L/2]^2 on the floor (z = 0), walled on
-all four sides. Obstacles stand on the floor; ``position`` is the centre of the footprint, sizes are full extents.
+all four sides. Obstacles are upright boxes and cylinders; ``position`` is the centre of the footprint, ``z`` the
+height of the bottom face (0 = on the floor), sizes are full extents.
 """
 
 from __future__ import annotations
@@ -19,19 +20,26 @@ MAX_OBSTACLE_HEIGHT = 5.0  # metres; anything taller only costs render time
 
 @dataclass(frozen=True)
 class Obstacle:
-    """A static obstacle standing on the floor.
+    """A static upright obstacle: a box or a cylinder standing on the floor or on a surface.
 
     Attributes:
         shape: "box" or "cylinder".
         size: full extents (sx, sy, sz) in metres; a cylinder has sx = sy = 2 * radius.
         position: footprint centre (x, y) in metres.
         yaw: rotation about +z in radians (ignored by the geometry of a cylinder).
+        z: height of the bottom face above the floor, metres.
     """
 
     shape: str
     size: tuple[float, float, float]
     position: tuple[float, float]
     yaw: float = 0.0
+    z: float = 0.0
+
+    @property
+    def centre(self) -> tuple[float, float, float]:
+        """Centre of the obstacle, metres."""
+        return (self.position[0], self.position[1], self.z + 0.5 * self.size[2])
 
     @property
     def radius(self) -> float:
@@ -60,9 +68,10 @@ class Obstacle:
 
     def to_dict(self) -> dict[str, Any]:
         if self.shape == "cylinder":
-            return {"shape": "cylinder", "radius": self.radius, "height": self.size[2],
-                    "position": list(self.position)}
-        return {"shape": "box", "size": list(self.size), "position": list(self.position), "yaw": self.yaw}
+            out = {"shape": "cylinder", "radius": self.radius, "height": self.size[2], "position": list(self.position)}
+        else:
+            out = {"shape": "box", "size": list(self.size), "position": list(self.position), "yaw": self.yaw}
+        return {**out, "z": self.z} if self.z else out
 
 
 @dataclass(frozen=True)
@@ -122,17 +131,20 @@ def parse_obstacle(spec: Any, field: str, arena_size: float) -> Obstacle:
     if not isinstance(spec, Mapping):
         raise ValueError(f"{field} must be a dict with a 'shape' key, got {spec!r}")
     shape = spec.get("shape")
-    allowed = {"box": {"shape", "size", "position", "yaw"}, "cylinder": {"shape", "radius", "height", "position"}}
+    allowed = {"box": {"shape", "size", "position", "yaw", "z"}, "cylinder": {"shape", "radius", "height", "position", "z"}}
     if shape not in allowed:
         raise ValueError(f"{field}.shape must be one of {SHAPES}, got {shape!r}")
     unknown = set(spec) - allowed[shape]
     if unknown:
         raise ValueError(f"{field} has unknown keys {sorted(unknown)}; a {shape} takes {sorted(allowed[shape])}")
-    missing = (allowed[shape] - {"yaw"}) - set(spec)
+    missing = (allowed[shape] - {"yaw", "z"}) - set(spec)
     if missing:
         raise ValueError(f"{field} is missing {sorted(missing)}")
     position = _numbers(spec["position"], 2, f"{field}.position", "x, y in metres")
     _inside(position, f"{field}.position", 0.5 * arena_size)
+    z = float(spec.get("z", 0.0)) if isinstance(spec.get("z", 0.0), (int, float)) else math.nan
+    if not 0.0 <= z <= MAX_OBSTACLE_HEIGHT:
+        raise ValueError(f"{field}.z (bottom height) must be in [0, {MAX_OBSTACLE_HEIGHT}] m, got {spec.get('z')!r}")
     if shape == "box":
         size = _numbers(spec["size"], 3, f"{field}.size", "full extents sx, sy, sz in metres")
         for axis, v in zip("xyz", size):
@@ -140,10 +152,10 @@ def parse_obstacle(spec: Any, field: str, arena_size: float) -> Obstacle:
             if not 0.0 < v <= limit:
                 raise ValueError(f"{field}.size {axis} must be in (0, {limit}] m, got {v}")
         yaw = _number(spec.get("yaw", 0.0), f"{field}.yaw", -math.inf, math.inf, "radians")
-        return Obstacle("box", size, position, yaw)
+        return Obstacle("box", size, position, yaw, z)
     radius = _number(spec["radius"], f"{field}.radius", 0.0, 0.5 * arena_size, "metres")
     height = _number(spec["height"], f"{field}.height", 0.0, MAX_OBSTACLE_HEIGHT, "metres")
-    return Obstacle("cylinder", (2 * radius, 2 * radius, height), position, 0.0)
+    return Obstacle("cylinder", (2 * radius, 2 * radius, height), position, 0.0, z)
 
 
 def parse_scene(spec: Any, arena_size: float, robot_radius: float) -> Scene:

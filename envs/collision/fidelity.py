@@ -1,0 +1,213 @@
+"""FCL shapes for a robot's collision elements at a chosen fidelity level.
+
+| level | a link becomes | a mesh element becomes | URDF primitives |
+|---|---|---|---|
+| ``sphere`` | one sphere enclosing all its elements | (part of the link sphere) | (part of the link sphere) |
+| ``primitive`` | its elements | the enclosing capsule or oriented box, whichever has less volume | as they are |
+| ``convex`` | its elements | its convex hull (``fcl.Convex``) | as they are |
+| ``mesh`` | its elements | its triangles (``fcl.BVHModel``, OBBRSS tree; hull for depth) | as they are |
+
+Every approximation encloses the exact geometry, so a coarser level can report contact early but never late.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import fcl
+import numpy as np
+import trimesh
+
+from clutter_gym.collision.urdf_geometry import CollisionElement
+from clutter_gym.transforms import quat_to_matrix
+
+FIDELITY_LEVELS = ("sphere", "primitive", "convex", "mesh")
+
+
+@dataclass(frozen=True, eq=False)
+class LinkShape:
+    """One FCL shape of a link, placed in the link frame.
+
+    Attributes:
+        link: URDF link name.
+        geometry: the FCL shape in its own frame (cylinders and capsules along z, centred).
+        position: (3,) shape origin in the link frame, metres.
+        rotation: (3, 3) shape orientation in the link frame.
+        kind: "sphere", "box", "cylinder", "capsule", "convex" or "mesh".
+        radius: radius of a ball about the shape origin that encloses the shape, metres (broad-phase bound).
+        hull: for a ``mesh`` shape, its convex hull (``fcl.Convex``), used where FCL's triangle BVH gives no
+            answer: penetration depth (its signed distance returns 0 or -1 on overlap), contact depth and swept
+            checks (a BVH mover is never detected by conservative advancement, and a shape moving against a
+            BVH crashes it). None otherwise.
+    """
+
+    link: str
+    geometry: fcl.CollisionGeometry
+    position: np.ndarray
+    rotation: np.ndarray
+    kind: str
+    radius: float
+    hull: fcl.CollisionGeometry | None = None
+
+
+def check_fidelity(fidelity: str) -> str:
+    if fidelity not in FIDELITY_LEVELS:
+        raise ValueError(f"collision_fidelity must be one of {FIDELITY_LEVELS}, got {fidelity!r}")
+    return fidelity
+
+
+def build_link_shapes(elements: Sequence[CollisionElement], fidelity: str) -> list[LinkShape]:
+    """FCL shapes of ``elements`` at ``fidelity`` (one per element, or one sphere per link)."""
+    check_fidelity(fidelity)
+    if fidelity == "sphere":
+        links = dict.fromkeys(e.link for e in elements)
+        return [_link_sphere(link, [e for e in elements if e.link == link]) for link in links]
+    return [_element_shape(e, fidelity) for e in elements]
+
+
+def _element_shape(e: CollisionElement, fidelity: str) -> LinkShape:
+    rotation = quat_to_matrix(e.quaternion)
+    if e.kind != "mesh":
+        return LinkShape(e.link, _primitive(e.kind, e.size), e.position, rotation, e.kind, _primitive_radius(e.kind, e.size))
+    vertices_radius = float(np.linalg.norm(e.mesh.vertices, axis=1).max())
+    if fidelity == "mesh":
+        return LinkShape(e.link, bvh_model(e.mesh), e.position, rotation, "mesh", vertices_radius, convex(e.mesh))
+    if fidelity == "convex":
+        return LinkShape(e.link, convex(e.mesh), e.position, rotation, "convex", vertices_radius)
+    kind, size, local_position, local_rotation = fitted_primitive(e.mesh.convex_hull.vertices)
+    return LinkShape(e.link, _primitive(kind, size), e.position + rotation @ local_position, rotation @ local_rotation,
+                     kind, _primitive_radius(kind, size))
+
+
+def _primitive_radius(kind: str, size: tuple[float, ...]) -> float:
+    if kind == "box":
+        return 0.5 * float(np.linalg.norm(size))
+    if kind == "cylinder":
+        return float(np.hypot(size[0], 0.5 * size[1]))
+    if kind == "capsule":
+        return size[0] + 0.5 * size[1]
+    return size[0]
+
+
+def _primitive(kind: str, size: tuple[float, ...]) -> fcl.CollisionGeometry:
+    if kind == "box":
+        return fcl.Box(*size)
+    if kind == "cylinder":
+        return fcl.Cylinder(*size)
+    if kind == "capsule":
+        return fcl.Capsule(*size)
+    return fcl.Sphere(size[0])
+
+
+def bvh_model(mesh: trimesh.Trimesh) -> fcl.BVHModel:
+    """Triangle BVH of ``mesh`` (a surface: an object wholly inside it is not in contact)."""
+    model = fcl.BVHModel()
+    model.beginModel(len(mesh.vertices), len(mesh.faces))
+    model.addSubModel(np.asarray(mesh.vertices, dtype=float), np.asarray(mesh.faces, dtype=np.int32))
+    model.endModel()
+    return model
+
+
+def convex(mesh: trimesh.Trimesh) -> fcl.Convex:
+    """``fcl.Convex`` of the convex hull of ``mesh``."""
+    hull = mesh.convex_hull
+    faces = np.hstack([np.full((len(hull.faces), 1), 3), hull.faces]).ravel()
+    return fcl.Convex(np.asarray(hull.vertices, dtype=float), len(hull.faces), faces)
+
+
+def fitted_primitive(points: np.ndarray) -> tuple[str, tuple[float, ...], np.ndarray, np.ndarray]:
+    """The smaller (by volume) of the capsule and the oriented box that enclose ``points``.
+
+    The capsule's axis is the points' principal axis (largest variance); its radius is the largest distance
+    from that axis, and its segment is the shortest one that keeps every point within that radius. The box is
+    trimesh's minimum-volume oriented bounding box.
+
+    Returns:
+        kind ("capsule" or "box"), size ((radius, length) or full extents), and the shape's position (3,) and
+        rotation (3, 3) in the points' frame (capsule axis = rotation's z column).
+    """
+    points = np.asarray(points, dtype=float)
+    mean = points.mean(axis=0)
+    _, _, vt = np.linalg.svd(points - mean, full_matrices=False)
+    axis = vt[0]
+    rel = points - mean
+    t = rel @ axis
+    radial = np.linalg.norm(rel - t[:, None] * axis, axis=1)
+    radius = float(radial.max())
+    reach = np.sqrt(np.maximum(radius**2 - radial**2, 0.0))
+    a, b = float(np.min(t + reach)), float(np.max(t - reach))  # segment [a, b] along the axis
+    if a > b:
+        a = b = 0.5 * (a + b)
+    capsule_volume = np.pi * radius**2 * (b - a) + 4.0 / 3.0 * np.pi * radius**3
+    to_origin, extents = trimesh.bounds.oriented_bounds(points)
+    box_volume = float(np.prod(extents))
+    if box_volume <= capsule_volume:
+        box_pose = np.linalg.inv(to_origin)
+        return "box", tuple(extents.tolist()), box_pose[:3, 3], box_pose[:3, :3]
+    rotation = _frame_with_z(axis)
+    length = b - a
+    if length <= 0.0:  # points fit in a ball: a capsule of zero length is a sphere
+        return "sphere", (radius,), mean + a * axis, np.eye(3)  # points fit in a ball
+    return "capsule", (radius, length), mean + 0.5 * (a + b) * axis, rotation
+
+
+def _frame_with_z(axis: np.ndarray) -> np.ndarray:
+    """A rotation whose z column is ``axis`` (unit)."""
+    helper = np.array([1.0, 0.0, 0.0]) if abs(axis[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    x = helper - (helper @ axis) * axis
+    x /= np.linalg.norm(x)
+    return np.column_stack([x, np.cross(axis, x), axis])
+
+
+def _link_sphere(link: str, elements: Sequence[CollisionElement]) -> LinkShape:
+    """The sphere about the elements' points' minimum enclosing ball centre that encloses every element exactly."""
+    samples, farthest = [], []
+    for e in elements:
+        r = quat_to_matrix(e.quaternion)
+        samples.append(e.position + _surface_points(e) @ r.T)
+        farthest.append(_farthest_distance_fn(e, r))
+    centre, _ = trimesh.nsphere.minimum_nsphere(np.vstack(samples))
+    radius = max(f(centre) for f in farthest)
+    return LinkShape(link, fcl.Sphere(float(radius)), np.asarray(centre, dtype=float), np.eye(3), "sphere",
+                     float(radius))
+
+
+def _surface_points(e: CollisionElement) -> np.ndarray:
+    """Points on the element's surface in its own frame (used only to centre the link sphere)."""
+    if e.kind == "mesh":
+        return np.asarray(e.mesh.convex_hull.vertices)
+    if e.kind == "box":
+        return 0.5 * np.array(e.size) * np.array(np.meshgrid([-1, 1], [-1, 1], [-1, 1])).reshape(3, -1).T
+    a = np.linspace(0.0, 2 * np.pi, 16, endpoint=False)
+    ring = np.c_[np.cos(a), np.sin(a), np.zeros_like(a)]
+    if e.kind == "sphere":
+        return e.size[0] * np.vstack([ring, ring[:, [0, 2, 1]], ring[:, [2, 0, 1]]])
+    radius, half = e.size[0], 0.5 * e.size[1]
+    cap = radius if e.kind == "capsule" else 0.0
+    return np.vstack([radius * ring + [0, 0, half], radius * ring - [0, 0, half], [[0, 0, half + cap]],
+                      [[0, 0, -half - cap]]])
+
+
+def _farthest_distance_fn(e: CollisionElement, r: np.ndarray):
+    """A function of a point c (link frame) giving the largest distance from c to the element, exactly."""
+    if e.kind == "mesh":
+        vertices = e.position + np.asarray(e.mesh.convex_hull.vertices) @ r.T
+        return lambda c: float(np.linalg.norm(vertices - c, axis=1).max())
+    if e.kind in ("box", "sphere"):
+        if e.kind == "sphere":
+            return lambda c: float(np.linalg.norm(e.position - c)) + e.size[0]
+        corners = e.position + _surface_points(e) @ r.T
+        return lambda c: float(np.linalg.norm(corners - c, axis=1).max())
+    radius, half, axis = e.size[0], 0.5 * e.size[1], r[:, 2]
+
+    def farthest(c: np.ndarray) -> float:
+        best = 0.0
+        for end in (e.position + half * axis, e.position - half * axis):
+            d = end - c
+            axial = d @ axis
+            perp = float(np.linalg.norm(d - axial * axis))
+            best = max(best, float(np.linalg.norm(d)) + radius if e.kind == "capsule" else np.hypot(axial, perp + radius))
+        return best
+
+    return farthest

@@ -1,0 +1,140 @@
+"""A robot's FCL objects at one fidelity level, moved to its link poses, and its self-collision queries."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import fcl
+import numpy as np
+
+from clutter_gym.collision.acm import AllowedCollisionMatrix, load_acm
+from clutter_gym.collision.fidelity import LinkShape, build_link_shapes
+from clutter_gym.collision.urdf_geometry import load_collision_elements
+
+
+@dataclass(frozen=True, slots=True)
+class SelfClearance:
+    """Closest enabled pair of links: signed distance (metres, padding subtracted; negative = penetration)."""
+
+    distance: float
+    links: tuple[str, str] | None
+
+
+class RobotCollisionModel:
+    """FCL objects for every shape of a robot, placed at the link poses given to :meth:`sync`.
+
+    Args:
+        shapes: the robot's shapes at one fidelity level (see :func:`build_link_shapes`).
+        link_names: names of the rows of the pose arrays passed to :meth:`sync`.
+        padding: metres added around every link (a float), or per link name (missing links get 0). Padding is
+            applied exactly, as a Minkowski sum with a ball: it is subtracted from every distance.
+        acm: pairs of links whose self-collision is checked; None checks none.
+
+    Raises:
+        ValueError: a shape's link is not among ``link_names``, or a padding is negative or not finite.
+    """
+
+    def __init__(
+        self,
+        shapes: Sequence[LinkShape],
+        link_names: Sequence[str],
+        padding: float | Mapping[str, float] = 0.0,
+        acm: AllowedCollisionMatrix | None = None,
+    ) -> None:
+        self.shapes = list(shapes)
+        self.link_names = tuple(link_names)
+        missing = sorted({s.link for s in self.shapes} - set(self.link_names))
+        if missing:
+            raise ValueError(f"links {missing} have collision shapes but no pose row; rows: {self.link_names}")
+        self.links = tuple(dict.fromkeys(s.link for s in self.shapes))  # links with geometry, in shape order
+        pad = padding if isinstance(padding, Mapping) else dict.fromkeys(self.links, padding)
+        for link, value in pad.items():
+            if not (np.isfinite(value) and 0.0 <= value <= 1.0):
+                raise ValueError(f"padding for link {link!r} must be in [0, 1] metres, got {value!r}")
+        self.padding = np.array([float(pad.get(s.link, 0.0)) for s in self.shapes])
+        self.shape_link = np.array([self.links.index(s.link) for s in self.shapes])  # shape -> link with geometry
+        self._rows = np.array([self.link_names.index(s.link) for s in self.shapes])  # shape -> pose row
+        self._local_pos = np.array([s.position for s in self.shapes])
+        self._local_rot = np.array([s.rotation for s in self.shapes])
+        self.objects = [fcl.CollisionObject(s.geometry, fcl.Transform()) for s in self.shapes]
+        # objects that answer depth and swept queries: the hull of a mesh shape, else the shape itself
+        self.solid_objects = [
+            fcl.CollisionObject(s.hull, fcl.Transform()) if s.hull is not None else o
+            for s, o in zip(self.shapes, self.objects)
+        ]
+        self._hulls = [(o, h) for o, h in zip(self.objects, self.solid_objects) if o is not h]
+        self.geometry_index = {id(s.geometry): i for i, s in enumerate(self.shapes)}  # FCL results name geometries
+        if len(self.geometry_index) != len(self.shapes):
+            raise ValueError("every shape needs its own FCL geometry object (results identify shapes by it)")
+        self.position = np.zeros((len(self.shapes), 3))
+        self.rotation = np.broadcast_to(np.eye(3), (len(self.shapes), 3, 3)).copy()
+        self._collide_request = fcl.CollisionRequest()
+        self._distance_request = fcl.DistanceRequest(enable_signed_distance=True)
+        self.set_acm(acm)
+
+    @classmethod
+    def from_urdf(
+        cls,
+        urdf: str | Path,
+        fidelity: str,
+        link_names: Sequence[str],
+        padding: float | Mapping[str, float] = 0.0,
+        self_collision: bool = True,
+    ) -> RobotCollisionModel:
+        """The model of ``urdf`` at ``fidelity``, with its cached ACM when ``self_collision`` is on."""
+        shapes = build_link_shapes(load_collision_elements(urdf), fidelity)
+        return cls(shapes, link_names, padding, load_acm(urdf, fidelity) if self_collision else None)
+
+    def set_acm(self, acm: AllowedCollisionMatrix | None) -> None:
+        """Check self-collision for the pairs ``acm`` enables (shape pairs of those link pairs)."""
+        self.acm = acm
+        enabled = set(acm.enabled) if acm is not None else set()
+        self.self_pairs = [
+            (i, j)
+            for i in range(len(self.shapes))
+            for j in range(i + 1, len(self.shapes))
+            if tuple(sorted((self.shapes[i].link, self.shapes[j].link))) in enabled
+        ]
+
+    def world_poses(self, positions: np.ndarray, rotations: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """World positions (n, 3) and rotations (n, 3, 3) of every shape for link poses given by row."""
+        rot = rotations[self._rows]
+        return positions[self._rows] + np.einsum("nij,nj->ni", rot, self._local_pos), rot @ self._local_rot
+
+    def sync(self, positions: np.ndarray, rotations: np.ndarray) -> None:
+        """Move every FCL object to its link's pose (``positions`` (L, 3), ``rotations`` (L, 3, 3) by row)."""
+        self.position, self.rotation = self.world_poses(positions, rotations)
+        for obj, r, t in zip(self.objects, self.rotation, self.position):
+            obj.setRotation(r)
+            obj.setTranslation(t)
+        for obj, hull in self._hulls:
+            hull.setTransform(obj.getTransform())
+
+    def self_collision(self) -> tuple[str, str] | None:
+        """The first enabled link pair in collision (padding included), or None."""
+        request, objects, pad = self._collide_request, self.objects, self.padding
+        for i, j in self.self_pairs:
+            if pad[i] + pad[j] > 0.0:
+                hit = self._pair_distance(i, j) <= 0.0
+            else:
+                hit = fcl.collide(objects[i], objects[j], request, fcl.CollisionResult()) > 0
+            if hit:
+                return self.shapes[i].link, self.shapes[j].link
+        return None
+
+    def self_clearance(self) -> SelfClearance:
+        """Smallest signed distance over the enabled link pairs, and that pair."""
+        best, pair = np.inf, None
+        for i, j in self.self_pairs:
+            d = self._pair_distance(i, j)
+            if d < best:
+                best, pair = d, (self.shapes[i].link, self.shapes[j].link)
+        return SelfClearance(float(best), pair)
+
+    def _pair_distance(self, i: int, j: int) -> float:
+        d = fcl.distance(self.objects[i], self.objects[j], self._distance_request, fcl.DistanceResult())
+        if d <= 0.0:  # overlap: the depth comes from the solid shapes (a BVH reports 0 or -1)
+            d = fcl.distance(self.solid_objects[i], self.solid_objects[j], self._distance_request, fcl.DistanceResult())
+        return d - self.padding[i] - self.padding[j]
