@@ -2,8 +2,9 @@
 
 from gymnasium.envs.registration import register
 
-ENV_IDS = ("ClutterNav-v0",)
+ENV_IDS = ("ClutterNav-v0", "ClutterReach-v0")
 
 register(id="ClutterNav-v0", entry_point="clutter_gym.nav:ClutterNavEnv", max_episode_steps=400)
+register(id="ClutterReach-v0", entry_point="clutter_gym.reach:ClutterReachEnv", max_episode_steps=100)
 
 __all__ = ["ENV_IDS"]

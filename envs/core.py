@@ -16,17 +16,17 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from clutter_gym.collision import CollisionChecker
+from clutter_gym.collision import CollisionChecker, CollisionReport
 from clutter_gym.noise.action import ActionChannel
 from clutter_gym.noise.dynamics import sample_dynamics
 from clutter_gym.noise.profiles import NoiseProfile
 from clutter_gym.noise.timing import SampleHoldDelay
-from clutter_gym.robots import DiffDriveRobot, RobotState
+from clutter_gym.robots import DiffDriveRobot, PandaArm, RobotState
 from clutter_gym.sensors import Sensor
 from clutter_gym.sim import Sim
-from clutter_gym.tasks import NavigateTask
+from clutter_gym.tasks import NavigateTask, ReachTask
 from clutter_gym.transforms import yaw_quat
-from clutter_gym.worlds import ClutterArena, Scene
+from clutter_gym.worlds import ClutterArena, ReachScene, Scene, TabletopArena
 
 RENDER_MODES = ("human", "rgb_array")
 
@@ -52,11 +52,11 @@ class ClutterEnv(gym.Env):
     def __init__(
         self,
         sim: Sim,
-        robot: DiffDriveRobot,
-        arena: ClutterArena,
+        robot: DiffDriveRobot | PandaArm,
+        arena: ClutterArena | TabletopArena,
         sensors: Sequence[Sensor],
         checker: CollisionChecker,
-        task: NavigateTask,
+        task: NavigateTask | ReachTask,
         control_hz: float,
         noise: NoiseProfile,
         render_mode: str | None = None,
@@ -79,13 +79,9 @@ class ClutterEnv(gym.Env):
         self._action_low = self.action_space.low.astype(np.float64)
         self._action_high = self.action_space.high.astype(np.float64)
         self.observation_space = spaces.Dict(
-            {
-                **{key: space for s in self.sensors for key, space in s.spaces.items()},
-                task.name: task.observation_space,
-                "velocity": robot.observation_space,
-            }
+            {**{key: space for s in self.sensors for key, space in s.spaces.items()}, **task.spaces, **robot.spaces}
         )
-        self.scene: Scene | None = None
+        self.scene: Scene | ReachScene | None = None
 
     # ------------------------------------------------------------------------------------------ episode
     def reset(
@@ -100,8 +96,8 @@ class ClutterEnv(gym.Env):
         self.robot.apply_dynamics(sample_dynamics(rng, self.noise.dynamics))
         obstacles, bodies = self.arena.place(scene)
         self.checker.set_scene(obstacles, bodies)
-        self.robot.reset_pose(*scene.start)
-        self.sim.move_static(self._goal_marker, (*scene.goal, 0.005), yaw_quat(0.0))
+        self.robot.reset_to(scene.start)
+        self.sim.move_static(self._goal_marker, self.task.marker_position(scene), yaw_quat(0.0))
         self.scene = scene
         state = self.robot.state()
         for sensor, clock in zip(self.sensors, self._clocks):
@@ -110,7 +106,8 @@ class ClutterEnv(gym.Env):
         self._action_channel.reset()
         self.task.reset(scene, state)
         report = self.checker.check(state, self.sim.contact_distances(self.robot.body))
-        obs, info = self._observe(state)
+        self._check_start(report, options)
+        obs, info = self._observe(state, report)
         info.update(
             min_clearance=report.min_clearance, n_contacts=report.n_contacts, is_success=False,
             noise_profile=self.noise.name,
@@ -136,14 +133,19 @@ class ClutterEnv(gym.Env):
         self.sim.step(self.substeps)
         state = self.robot.state()
         report = self.checker.check(state, self.sim.contact_distances(self.robot.body))
-        obs, info = self._observe(state)
+        obs, info = self._observe(state, report)
         outcome = self.task.evaluate(state, report, a)
         info.update(
             reward_terms=outcome.terms,
             cost=outcome.cost,
             is_success=outcome.is_success,
             min_clearance=report.min_clearance,
+            closest_pair=report.closest,
+            witness_points=report.witness,
             n_contacts=report.n_contacts,
+            max_penetration=max((c.depth for c in report.contacts), default=0.0),
+            self_collision=report.self_collision,
+            tunneling=report.tunneling,
             pybullet_contacts=report.pybullet_contacts,
             contact_disagreement=report.disagreement,
         )
@@ -162,7 +164,14 @@ class ClutterEnv(gym.Env):
             raise ValueError(f"action must be finite (no NaN/Inf), got {a.tolist()}")
         return np.minimum(np.maximum(a, self._action_low), self._action_high)
 
-    def _observe(self, state: RobotState) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+    def _check_start(self, report: CollisionReport, options: Mapping[str, Any] | None) -> None:
+        """A user scene must not start in contact; a generated one never does (its sampler keeps clear)."""
+        if report.in_contact or report.self_collision is not None:
+            what = report.contacts[0] if report.contacts else report.self_collision
+            where = "scene" if options and "scene" in options else "generated scene (a bug; please report the seed)"
+            raise ValueError(f"the {where} starts in collision: {what}")
+
+    def _observe(self, state: RobotState, report: CollisionReport) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
         obs: dict[str, np.ndarray] = {}
         info: dict[str, Any] = {}
         for sensor, clock in zip(self.sensors, self._clocks):
@@ -174,8 +183,8 @@ class ClutterEnv(gym.Env):
                 delivered = tuple({k: np.copy(v) for k, v in part.items()} for part in delivered)
             obs.update(delivered[0])
             info.update(delivered[1])
-        obs[self.task.name] = self.task.observe(state)
-        obs["velocity"] = self.robot.observe(state)
+        obs.update(self.task.observe(state, report))
+        obs.update(self.robot.observe(state))
         floats = [v for v in obs.values() if v.dtype.kind == "f"]  # integer images cannot hold NaN/Inf
         if not math.isfinite(sum(float(v.sum()) for v in floats)):  # NaN/Inf anywhere poisons the sum
             bad = [key for key, value in obs.items() if not np.all(np.isfinite(value))]
@@ -188,13 +197,13 @@ class ClutterEnv(gym.Env):
         if self.render_mode is None:
             gym.logger.warn("render() called without a render_mode; pass render_mode= to gym.make")
             return None
-        arena = self.arena.spec.arena_size
+        eye, target = self.arena.overview_camera()
         if self.render_mode == "human":
             position = self.robot.state().position if self.scene is not None else (0.0, 0.0, 0.0)
-            self.sim.follow_camera(position, 0.9 * arena, 0.0, -60.0)
+            self.sim.follow_camera(position, 0.9 * float(np.linalg.norm(np.subtract(eye, target))), 0.0, -60.0)
             return None
         width, height = self.render_size
-        return self.sim.render(width, height, eye=(0.0, -0.62 * arena, 0.78 * arena), target=(0.0, -0.1 * arena, 0.0))
+        return self.sim.render(width, height, eye=eye, target=target)
 
     def close(self) -> None:
         self.sim.close()

@@ -142,7 +142,7 @@ class ClutterNavEnv(ClutterEnv):
         time_weight: float = 0.01,
     ) -> None:
         check_render_mode(render_mode)
-        _check_rates(physics_hz, control_hz, solver_iterations)
+        check_rates(physics_hz, control_hz, solver_iterations)
         if not (math.isfinite(contact_tolerance) and 0.0 <= contact_tolerance <= 0.05):
             raise ValueError(f"contact_tolerance must be in [0, 0.05] metres, got {contact_tolerance!r}")
         robot = DiffDriveRobot(DiffDriveConfig(max_linear_speed=max_linear_speed, max_angular_speed=max_angular_speed))
@@ -182,7 +182,7 @@ class ClutterNavEnv(ClutterEnv):
         )
 
 
-def _check_rates(physics_hz: float, control_hz: float, solver_iterations: int) -> None:
+def check_rates(physics_hz: float, control_hz: float, solver_iterations: int) -> None:
     if not (math.isfinite(control_hz) and 0.0 < control_hz <= 1000.0):
         raise ValueError(f"control_hz must be in (0, 1000] Hz, got {control_hz!r}")
     if not (math.isfinite(physics_hz) and control_hz <= physics_hz <= 10000.0):

@@ -122,7 +122,9 @@ class Sim:
         )
         return self._register(name, self._static_body(shape, visual))
 
-    def load_urdf(self, name: str, path: str | Path, position: Sequence[float] = (0.0, 0.0, 0.0)) -> int:
+    def load_urdf(
+        self, name: str, path: str | Path, position: Sequence[float] = (0.0, 0.0, 0.0), fixed_base: bool = False
+    ) -> int:
         """Load a URDF once and address it by ``name``.
 
         Cylinders stay true cylinders (``URDF_USE_IMPLICIT_CYLINDER``). By default pybullet turns them into
@@ -140,7 +142,8 @@ class Sim:
         try:
             with quiet_c_output():
                 body = pb.loadURDF(
-                    str(path), position, flags=pb.URDF_USE_IMPLICIT_CYLINDER, physicsClientId=self._cid
+                    str(path), position, useFixedBase=fixed_base, flags=pb.URDF_USE_IMPLICIT_CYLINDER,
+                    physicsClientId=self._cid,
                 )
         except pb.error as exc:
             raise ValueError(f"pybullet could not load URDF {path}: {exc}") from exc
@@ -252,10 +255,10 @@ class Sim:
         pb.resetBasePositionAndOrientation(body, position, quaternion, physicsClientId=self._cid)
         pb.resetBaseVelocity(body, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), physicsClientId=self._cid)
 
-    def reset_joints(self, body: int, joints: Sequence[int]) -> None:
-        """Joint angles and velocities to zero."""
-        for j in joints:
-            pb.resetJointState(body, j, 0.0, 0.0, physicsClientId=self._cid)
+    def reset_joints(self, body: int, joints: Sequence[int], positions: Sequence[float] | None = None) -> None:
+        """Joint positions (rad or m; zero if not given) and zero joint velocities."""
+        for k, j in enumerate(joints):
+            pb.resetJointState(body, j, 0.0 if positions is None else positions[k], 0.0, physicsClientId=self._cid)
 
     # ------------------------------------------------------------------------------------ introspection
     def link_indices(self, body: int) -> dict[str, int]:
@@ -299,6 +302,49 @@ class Sim:
             forces=max_forces,
             physicsClientId=self._cid,
         )
+
+    def set_joint_positions(
+        self,
+        body: int,
+        joints: Sequence[int],
+        positions: Sequence[float],
+        velocities: Sequence[float],
+        max_forces: Sequence[float],
+    ) -> None:
+        """Position-controlled motors: PD tracking of target positions and velocities under force limits."""
+        pb.setJointMotorControlArray(
+            body,
+            joints,
+            pb.POSITION_CONTROL,
+            targetPositions=positions,
+            targetVelocities=velocities,
+            forces=max_forces,
+            physicsClientId=self._cid,
+        )
+
+    def joint_states(self, body: int, joints: Sequence[int]) -> tuple[np.ndarray, np.ndarray]:
+        """(positions, velocities) of ``joints`` in one batched call."""
+        rows = pb.getJointStates(body, joints, physicsClientId=self._cid)
+        flat = np.array([r[:2] for r in rows])
+        return flat[:, 0], flat[:, 1]
+
+    def inverse_kinematics(
+        self,
+        body: int,
+        link: int,
+        position: Sequence[float],
+        orientation: Sequence[float],
+        lower: Sequence[float],
+        upper: Sequence[float],
+        rest: Sequence[float],
+    ) -> np.ndarray:
+        """Joint positions of every movable joint that put ``link`` at ``position``/``orientation`` (pybullet's
+        damped least squares, null space pulled towards ``rest`` within [lower, upper])."""
+        ranges = [u - lo for lo, u in zip(lower, upper)]
+        return np.array(pb.calculateInverseKinematics(
+            body, link, position, orientation, lowerLimits=lower, upperLimits=upper, jointRanges=ranges,
+            restPoses=rest, physicsClientId=self._cid,
+        ))
 
     def inertial_properties(self, body: int, links: Sequence[int]) -> list[tuple[float, float, tuple]]:
         """(mass kg, lateral friction coefficient, inertia diagonal kg m^2) of each link (-1 = the base)."""

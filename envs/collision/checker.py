@@ -109,6 +109,8 @@ class CollisionChecker:
         swept_speed: shapes faster than this (m/s, from their displacement over ``dt``) get a swept check;
             ``inf`` turns swept checks off.
         dt: time between two checks (the control period), seconds.
+        fixed_links: links that never move relative to the world (an arm's fixed base): left out of the
+            environment queries, where they would only measure their own mounting, but kept for self-collision.
     """
 
     def __init__(
@@ -119,16 +121,19 @@ class CollisionChecker:
         clearance_range: float = 0.5,
         swept_speed: float = 0.2,
         dt: float = 0.05,
+        fixed_links: Sequence[str] = (),
     ) -> None:
         self.model = model
-        self.links = model.links
+        self.links = tuple(link for link in model.links if link not in fixed_links)
+        moving = [i for i, s in enumerate(model.shapes) if s.link not in fixed_links]
+        self._link_of_shape = np.array([self.links.index(s.link) if s.link in self.links else -1 for s in model.shapes])
         self._base_link = base_link
         self.contact_tolerance = contact_tolerance
         self.clearance_range = clearance_range
         self.swept_speed = swept_speed
         self.dt = dt
         self._robot_manager = fcl.DynamicAABBTreeCollisionManager()
-        self._robot_manager.registerObjects(model.objects)
+        self._robot_manager.registerObjects([model.objects[i] for i in moving])
         self._robot_manager.setup()
         self._sweepers = [fcl.CollisionObject(s.hull or s.geometry, fcl.Transform()) for s in model.shapes]
         self._obstacles: list[fcl.CollisionObject] = []
@@ -223,16 +228,18 @@ class CollisionChecker:
         distance, other, points = self.clearance()
         model = self.model
         n_links = len(self.links)
+        link_of, moving = self._link_of_shape, self._link_of_shape >= 0
         link_clearance = np.full(n_links, min(self.clearance_range, NO_OBSTACLE_CLEARANCE))
-        np.minimum.at(link_clearance, model.shape_link, distance)
+        np.minimum.at(link_clearance, link_of[moving], distance[moving])
         directions = np.zeros((n_links, 3))
         gap = points[:, 1] - points[:, 0]
         norms = np.linalg.norm(gap, axis=1)
         closest_shape = np.full(n_links, -1)
         for i in np.argsort(-distance):  # nearest last, so each link keeps its nearest shape
-            closest_shape[model.shape_link[i]] = i
+            if moving[i]:
+                closest_shape[link_of[i]] = i
         for link, i in enumerate(closest_shape):
-            if other[i] >= 0 and distance[i] > 0.0 and norms[i] > 0.0:
+            if i >= 0 and other[i] >= 0 and distance[i] > 0.0 and norms[i] > 0.0:
                 directions[link] = gap[i] / norms[i]
         k = int(np.argmin(distance))
         found = other[k] >= 0

@@ -54,7 +54,6 @@ class RobotCollisionModel:
             if not (np.isfinite(value) and 0.0 <= value <= 1.0):
                 raise ValueError(f"padding for link {link!r} must be in [0, 1] metres, got {value!r}")
         self.padding = np.array([float(pad.get(s.link, 0.0)) for s in self.shapes])
-        self.shape_link = np.array([self.links.index(s.link) for s in self.shapes])  # shape -> link with geometry
         self._rows = np.array([self.link_names.index(s.link) for s in self.shapes])  # shape -> pose row
         self._local_pos = np.array([s.position for s in self.shapes])
         self._local_rot = np.array([s.rotation for s in self.shapes])

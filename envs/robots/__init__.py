@@ -1,6 +1,7 @@
 """Robots: one module each; a robot loads itself into a Sim, maps actions to motors and reads its state."""
 
 from clutter_gym.robots.diffdrive import DiffDriveConfig, DiffDriveRobot
+from clutter_gym.robots.panda import PandaArm, PandaConfig
 from clutter_gym.robots.state import RobotState
 
-__all__ = ["DiffDriveConfig", "DiffDriveRobot", "RobotState"]
+__all__ = ["DiffDriveConfig", "DiffDriveRobot", "PandaArm", "PandaConfig", "RobotState"]

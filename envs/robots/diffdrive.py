@@ -63,7 +63,7 @@ class DiffDriveRobot:
         self.action_space = spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
         c = self.config
         self.velocity_bound = np.array([2.0 * c.max_linear_speed, 2.0 * c.max_angular_speed], dtype=np.float32)
-        self.observation_space = spaces.Box(-self.velocity_bound, self.velocity_bound, dtype=np.float32)
+        self.spaces = {"velocity": spaces.Box(-self.velocity_bound, self.velocity_bound, dtype=np.float32)}
         self._velocity_limits = (float(self.velocity_bound[0]), float(self.velocity_bound[1]))
         self._sim: Sim | None = None
         self._body = -1
@@ -121,6 +121,10 @@ class DiffDriveRobot:
         self._torques = [self.config.max_wheel_torque * sample.motor_scale] * 2
         self._dynamics = sample
 
+    def reset_to(self, start: tuple[float, float, float]) -> None:
+        """Place the robot at rest at ``start`` = (x m, y m, yaw rad)."""
+        self.reset_pose(*start)
+
     def reset_pose(self, x: float, y: float, yaw: float) -> None:
         """Place the robot at rest on the floor at (x, y) with heading ``yaw`` (rad), wheels stopped."""
         q = yaw_quat(yaw)
@@ -154,10 +158,11 @@ class DiffDriveRobot:
             body=self._body,
         )
 
-    def observe(self, state: RobotState) -> np.ndarray:
-        """(forward speed m/s, yaw rate rad/s) in the base frame, clipped to twice the commanded maxima."""
+    def observe(self, state: RobotState) -> dict[str, np.ndarray]:
+        """``velocity``: (forward speed m/s, yaw rate rad/s) in the base frame, clipped to twice the commanded
+        maxima."""
         r, lin, ang = state.rotation, state.linear_velocity, state.angular_velocity
         v = r[0, 0] * lin[0] + r[1, 0] * lin[1] + r[2, 0] * lin[2]
         w = r[0, 2] * ang[0] + r[1, 2] * ang[1] + r[2, 2] * ang[2]
         v_max, w_max = self._velocity_limits
-        return np.array([min(max(v, -v_max), v_max), min(max(w, -w_max), w_max)], dtype=np.float32)
+        return {"velocity": np.array([min(max(v, -v_max), v_max), min(max(w, -w_max), w_max)], dtype=np.float32)}

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -24,6 +24,8 @@ class RobotState:
         link_names: names of the rows of ``links``.
         link_index: pybullet index of every link of the robot by URDF name (-1 for the base); constant.
         body: pybullet body id of the robot.
+        joint_position: positions of the robot's actuated joints (rad or m), an arm's; empty for the diffbot.
+        joint_velocity: their velocities (rad/s or m/s).
     """
 
     position: np.ndarray
@@ -34,6 +36,8 @@ class RobotState:
     link_names: tuple[str, ...]
     link_index: Mapping[str, int]
     body: int
+    joint_position: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    joint_velocity: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     @property
     def yaw(self) -> float:

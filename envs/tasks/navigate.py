@@ -76,8 +76,6 @@ class NavigateTask:
         robot_radius: footprint radius for the path-distance field, metres.
     """
 
-    name = "goal"
-
     def __init__(
         self,
         weights: NavRewardWeights,
@@ -98,12 +96,15 @@ class NavigateTask:
         self.terminate_on_collision = bool(terminate_on_collision)
         low = np.array([0.0, -1.0, -1.0], dtype=np.float32)
         high = np.array([max_goal_distance, 1.0, 1.0], dtype=np.float32)
-        self.observation_space = spaces.Box(low, high, dtype=np.float32)
+        self.spaces = {"goal": spaces.Box(low, high, dtype=np.float32)}
         self._max_goal_distance = float(high[0])
         self._spec, self._robot_radius = spec, robot_radius
         self._goal = (0.0, 0.0)
         self._path_distance: PathDistance | None = None
         self._previous_path = 0.0
+
+    def marker_position(self, scene: Scene) -> tuple[float, float, float]:
+        return (*scene.goal, 0.005)
 
     def reset(self, scene: Scene, state: RobotState) -> None:
         self._goal = (float(scene.goal[0]), float(scene.goal[1]))
@@ -117,12 +118,13 @@ class NavigateTask:
     def _distance(self, state: RobotState) -> float:
         return float(math.hypot(self._goal[0] - state.position[0], self._goal[1] - state.position[1]))
 
-    def observe(self, state: RobotState) -> np.ndarray:
-        """(distance m, sin bearing, cos bearing); bearing is the goal direction in the robot frame, CCW from +x."""
+    def observe(self, state: RobotState, report: CollisionReport) -> dict[str, np.ndarray]:
+        """``goal``: (distance m, sin bearing, cos bearing); bearing is the goal direction in the robot frame, CCW
+        from +x."""
         dx, dy = self._goal[0] - state.position[0], self._goal[1] - state.position[1]
         bearing = math.atan2(dy, dx) - state.yaw
         distance = min(math.hypot(dx, dy), self._max_goal_distance)
-        return np.array([distance, math.sin(bearing), math.cos(bearing)], dtype=np.float32)
+        return {"goal": np.array([distance, math.sin(bearing), math.cos(bearing)], dtype=np.float32)}
 
     def evaluate(self, state: RobotState, report: CollisionReport, action: np.ndarray) -> StepOutcome:
         """Reward terms and termination after a step, from ground truth only."""

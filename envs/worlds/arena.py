@@ -58,6 +58,11 @@ class ClutterArena:
             return parse_scene(options["scene"], self.spec.arena_size, self.robot_radius)
         return sample_scene(rng, self.spec, self.robot_radius)
 
+    def overview_camera(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+        """(eye, target) of the rgb_array view."""
+        a = self.spec.arena_size
+        return (0.0, -0.62 * a, 0.78 * a), (0.0, -0.1 * a, 0.0)
+
     def place(self, scene: Scene) -> tuple[tuple[Obstacle, ...], list[int]]:
         """Move pooled bodies into ``scene``; returns every obstacle (walls included) and its body ids."""
         bodies = self._pool.place(scene.obstacles)

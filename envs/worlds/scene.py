@@ -66,6 +66,17 @@ class Obstacle:
         outside = np.hypot(np.maximum(qx, 0.0), np.maximum(qy, 0.0))
         return outside + np.minimum(np.maximum(qx, qy), 0.0)
 
+    def distance3d(self, point: np.ndarray) -> float:
+        """Signed distance (metres) from a 3D point to the obstacle's surface; negative inside."""
+        dx, dy = point[0] - self.position[0], point[1] - self.position[1]
+        dz = abs(point[2] - self.z - 0.5 * self.size[2]) - 0.5 * self.size[2]
+        if self.shape == "cylinder":
+            radial = math.hypot(dx, dy) - self.radius
+            return math.hypot(max(radial, 0.0), max(dz, 0.0)) + min(max(radial, dz), 0.0)
+        c, s = math.cos(self.yaw), math.sin(self.yaw)
+        q = (abs(c * dx + s * dy) - 0.5 * self.size[0], abs(-s * dx + c * dy) - 0.5 * self.size[1], dz)
+        return math.sqrt(sum(max(v, 0.0) ** 2 for v in q)) + min(max(q), 0.0)
+
     def to_dict(self) -> dict[str, Any]:
         if self.shape == "cylinder":
             out = {"shape": "cylinder", "radius": self.radius, "height": self.size[2], "position": list(self.position)}

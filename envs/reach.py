@@ -1,0 +1,166 @@
+"""ClutterReach: a Franka Panda brings its end effector to a target among clutter on a table and in a shelf."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+from clutter_gym.collision import CollisionChecker, RobotCollisionModel, check_fidelity
+from clutter_gym.core import ClutterEnv, check_render_mode
+from clutter_gym.nav import check_rates
+from clutter_gym.noise.profiles import NoiseProfile, resolve_noise
+from clutter_gym.robots.panda import LOWER, READY, TRACKED_LINKS, UPPER, PandaArm, PandaConfig
+from clutter_gym.sim import Sim
+from clutter_gym.tasks import ReachRewardWeights, ReachTask
+from clutter_gym.worlds import TableSpec, TabletopArena
+
+
+class ClutterReachEnv(ClutterEnv):
+    """## Description
+
+    A Franka Emika Panda (pybullet_data ``franka_panda/panda.urdf``, fixed base, fingers half open) stands at
+    the back of a table crowded with boxes, cylinders and a shelf, and must bring its end effector (between the
+    fingertips) to a target point without touching the clutter or itself. FCL measures every link's clearance
+    at the chosen ``collision_fidelity``, checks the self-collision pairs the allowed-collision matrix enables,
+    and sweeps fast links between control steps to catch contacts that happen between two checks (tunneling).
+    Contacts, self-contacts and tunneling are penalised and reported as a Safety-Gymnasium style
+    ``info["cost"]``.
+
+    ## Action space
+
+    ``control="joint_velocity"`` (default): ``Box(-1, 1, (7,), float32)``, joint-velocity commands as a
+    fraction ``max_joint_speed`` of the URDF velocity limits (2.175 rad/s for joints 1-4, 2.61 for 5-7); each
+    step moves the joint targets by command x control period, clamped to the joint limits.
+    ``control="ee_position"``: ``Box(-1, 1, (3,), float32)``, an end-effector displacement of up to
+    ``max_ee_step`` metres per step along world x, y, z, through pybullet's IK with the hand pointing down.
+    Finite values outside [-1, 1] are clipped; NaN/Inf or a wrong shape raise ``ValueError``.
+
+    ## Observation space
+
+    ``Dict``, every entry float32:
+
+    | key | shape | content | units, frame | bounds |
+    |---|---|---|---|---|
+    | ``joint_position`` | (7,) | arm joint positions | rad | the URDF limits |
+    | ``joint_velocity`` | (7,) | arm joint velocities | rad/s | +-2x the URDF limits |
+    | ``ee_position`` | (3,) | end-effector position | m, world (base at origin) | +-1.5 |
+    | ``target`` | (3,) | target position | m, world | +-1.5 |
+    | ``clearance`` | (10,) | signed FCL distance of each moving link (panda_link1..7, hand, fingers) to the nearest obstacle | m | +-clearance_range |
+    | ``clearance_direction`` | (10, 3) | unit vector from each link's witness point to its obstacle's (only with ``observe_directions=True``; zero beyond range or in contact) | world | [-1, 1] |
+
+    ## Rewards
+
+    Sum of signed terms, each in ``info["reward_terms"]``; weights are constructor arguments:
+    ``progress`` (+progress_weight per metre the end effector closes on the target), ``success``
+    (+success_weight once), ``contact`` (-contact_weight per step touching an obstacle or the table),
+    ``self_contact`` (-self_contact_weight per step in self-collision), ``clearance`` (-clearance_weight *
+    (margin - clearance) / margin when the arm's clearance < clearance_margin), ``tunneling``
+    (-tunneling_weight per swept hit the end-of-step check missed), ``control`` (-control_weight * |a|^2).
+    ``info["cost"]`` is 1.0 in a step with contact, self-contact or tunneling, else 0.0.
+
+    ## Starting state
+
+    A new layout per reset from the env's ``np_random`` (or exactly ``options["scene"]``, format in the
+    README): up to ``n_obstacles`` boxes and cylinders and, with ``shelf=True``, a shelf on the table; the arm at
+    rest in the ready pose plus uniform noise of +-0.1 rad per joint, clear of everything; the target at least
+    0.06 m from every obstacle within the arm's reach, inside the shelf in 30% of layouts.
+
+    ## Episode end
+
+    ``terminated`` on success (end effector within ``success_radius`` of the target) and, with
+    ``terminate_on_collision=True``, on the first contact, self-contact or tunneling. ``truncated`` by the
+    TimeLimit wrapper at ``max_episode_steps`` (100 steps = 5 s at the default 20 Hz).
+
+    ## Info
+
+    ``reward_terms``, ``cost``, ``is_success``, ``min_clearance`` (m, FCL, negative = penetration, capped at
+    ``clearance_range``), ``closest_pair`` ((link, obstacle index) or None), ``witness_points`` ((2, 3) world
+    points on the link and the obstacle, or None), ``n_contacts``, ``max_penetration`` (m), ``self_collision``
+    ((link, link) or None), ``tunneling`` (swept hits), ``pybullet_contacts`` and ``contact_disagreement``
+    (pybullet's contact points against FCL's verdict), ``noise_profile`` (at reset).
+
+    ## Arguments
+
+    ``render_mode``; ``control`` ("joint_velocity", "ee_position"); ``max_joint_speed`` (0, 1];
+    ``max_ee_step`` m; ``collision_fidelity`` ("sphere", "primitive", "convex", "mesh");
+    ``collision_padding`` m; ``self_collision``; ``n_obstacles`` [0, 20]; ``shelf``; ``noise`` (profile name
+    or overrides; only action noise, timing and dynamics apply: the arm has no exteroceptive sensors);
+    ``physics_hz``; ``control_hz``; ``solver_iterations``; ``success_radius`` m; ``clearance_margin`` m;
+    ``clearance_range`` m; ``observe_directions``; ``terminate_on_collision``; ``contact_tolerance`` m;
+    ``swept_speed`` m/s (``inf`` turns swept checks off); ``*_weight`` reward weights.
+
+    ## Version history
+
+    * v0: initial release.
+    """
+
+    def __init__(
+        self,
+        render_mode: str | None = None,
+        control: str = "joint_velocity",
+        max_joint_speed: float = 0.5,
+        max_ee_step: float = 0.05,
+        collision_fidelity: str = "convex",
+        collision_padding: float = 0.0,
+        self_collision: bool = True,
+        n_obstacles: int = 6,
+        shelf: bool = True,
+        noise: str | Mapping[str, Any] | NoiseProfile | None = "none",
+        physics_hz: float = 240.0,
+        control_hz: float = 20.0,
+        solver_iterations: int = 10,
+        success_radius: float = 0.05,
+        clearance_margin: float = 0.05,
+        clearance_range: float = 0.3,
+        observe_directions: bool = False,
+        terminate_on_collision: bool = False,
+        contact_tolerance: float = 1e-3,
+        swept_speed: float = 0.2,
+        progress_weight: float = 10.0,
+        success_weight: float = 10.0,
+        contact_weight: float = 1.0,
+        self_contact_weight: float = 1.0,
+        clearance_weight: float = 0.2,
+        tunneling_weight: float = 1.0,
+        control_weight: float = 0.005,
+    ) -> None:
+        check_render_mode(render_mode)
+        check_rates(physics_hz, control_hz, solver_iterations)
+        check_fidelity(collision_fidelity)
+        if not (math.isfinite(contact_tolerance) and 0.0 <= contact_tolerance <= 0.05):
+            raise ValueError(f"contact_tolerance must be in [0, 0.05] metres, got {contact_tolerance!r}")
+        if not (math.isfinite(clearance_range) and 0.01 <= clearance_range <= 2.0):
+            raise ValueError(f"clearance_range must be in [0.01, 2] metres, got {clearance_range!r}")
+        if not (swept_speed > 0.0):  # inf allowed: no swept checks
+            raise ValueError(f"swept_speed must be > 0 m/s (inf disables swept checks), got {swept_speed!r}")
+        robot = PandaArm(PandaConfig(control, max_joint_speed, max_ee_step), control_dt=1.0 / control_hz)
+        model = RobotCollisionModel.from_urdf(
+            robot.urdf_path, collision_fidelity, (robot.base_link, *TRACKED_LINKS), collision_padding, self_collision
+        )
+        checker = CollisionChecker(
+            model, base_link=robot.base_link, contact_tolerance=contact_tolerance, clearance_range=clearance_range,
+            swept_speed=swept_speed, dt=1.0 / control_hz, fixed_links=(robot.base_link,),
+        )
+        task = ReachTask(
+            ReachRewardWeights(progress_weight, success_weight, contact_weight, self_contact_weight, clearance_weight,
+                               tunneling_weight, control_weight),
+            ee_row=TRACKED_LINKS.index("panda_grasptarget"),
+            links=checker.links,
+            success_radius=success_radius,
+            clearance_margin=clearance_margin,
+            clearance_range=clearance_range,
+            terminate_on_collision=terminate_on_collision,
+            observe_directions=observe_directions,
+        )
+        super().__init__(
+            sim=Sim(physics_hz=physics_hz, solver_iterations=solver_iterations, gui=render_mode == "human"),
+            robot=robot,
+            arena=TabletopArena(TableSpec(n_obstacles=n_obstacles, shelf=bool(shelf)), READY, LOWER, UPPER),
+            sensors=(),
+            checker=checker,
+            task=task,
+            control_hz=control_hz,
+            noise=resolve_noise(noise),
+            render_mode=render_mode,
+        )
