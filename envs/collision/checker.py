@@ -3,7 +3,7 @@
 The obstacle broad phase (a dynamic AABB tree) is rebuilt on reset only. Each step moves the robot's FCL
 objects to the link poses the robot read in one batched call, then:
 
-1. one robot-tree-vs-obstacle-tree distance traversal gives every link's clearance (capped at
+1. one query per robot shape against the obstacle tree gives every link's clearance (capped at
    ``clearance_range``), its witness points and the closest obstacle;
 2. pairs within ``contact_tolerance`` are enumerated as contacts with their penetration depth;
 3. enabled self pairs (the ACM) are tested, after a bounding-ball filter;
@@ -98,6 +98,14 @@ def obstacle_object(o: Obstacle, shape: fcl.CollisionGeometry | None = None) -> 
     return fcl.CollisionObject(shape or obstacle_shape(o), fcl.Transform(q_wxyz, list(o.centre)))
 
 
+def _half_extents(o: Obstacle) -> tuple[float, float, float]:
+    """Half extents of the world-axis-aligned box around an upright obstacle."""
+    if o.shape == "cylinder":
+        return (o.radius, o.radius, 0.5 * o.size[2])
+    c, s = abs(np.cos(o.yaw)), abs(np.sin(o.yaw))
+    return (0.5 * (c * o.size[0] + s * o.size[1]), 0.5 * (s * o.size[0] + c * o.size[1]), 0.5 * o.size[2])
+
+
 class CollisionChecker:
     """FCL model of one robot and the current scene.
 
@@ -132,13 +140,13 @@ class CollisionChecker:
         self.clearance_range = clearance_range
         self.swept_speed = swept_speed
         self.dt = dt
-        self._robot_manager = fcl.DynamicAABBTreeCollisionManager()
-        self._robot_manager.registerObjects([model.objects[i] for i in moving])
-        self._robot_manager.setup()
+        self._moving = np.array(moving, dtype=int)
+        self._radii = np.array([s.radius for s in model.shapes])
         self._sweepers = [fcl.CollisionObject(s.hull or s.geometry, fcl.Transform()) for s in model.shapes]
         self._obstacles: list[fcl.CollisionObject] = []
         self._obstacle_index: dict[int, int] = {}
         self._obstacle_centres = np.zeros((0, 3))
+        self._obstacle_low = self._obstacle_high = np.zeros((0, 3))
         self._obstacle_radii = np.zeros(0)
         self._obstacle_bodies: frozenset[int] = frozenset()
         self._manager: fcl.DynamicAABBTreeCollisionManager | None = None
@@ -157,6 +165,8 @@ class CollisionChecker:
         self._obstacle_index = {id(g): i for i, g in enumerate(geometries)}
         self._obstacle_centres = np.array([o.centre for o in obstacles]).reshape(-1, 3)
         self._obstacle_radii = np.array([0.5 * float(np.linalg.norm(o.size)) for o in obstacles])
+        half = np.array([_half_extents(o) for o in obstacles]).reshape(-1, 3)
+        self._obstacle_low, self._obstacle_high = self._obstacle_centres - half, self._obstacle_centres + half
         self._obstacle_bodies = frozenset(bodies)
         manager = fcl.DynamicAABBTreeCollisionManager()
         if self._obstacles:
@@ -174,13 +184,15 @@ class CollisionChecker:
         rot = np.concatenate((state.rotation[None], state.links.rotation))[self._rows]
         pos = np.concatenate((state.position[None], state.links.position))[self._rows]
         self.model.sync(pos, rot)
-        self._robot_manager.update()
 
     def clearance(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Per shape: signed distance (capped at the range), obstacle index (-1 beyond it) and witness points.
 
-        Robot objects must be synced. One tree-vs-tree traversal; the running bound handed back to FCL is the
-        largest per-shape best so far (capped at the range), so no pair that could improve a shape is pruned.
+        Robot objects must be synced. One query per moving shape against the obstacle tree: FCL visits the
+        obstacles nearest-box-first and prunes every subtree farther than the running best the callback hands
+        back, so a shape costs one to three narrow-phase calls whatever the number of obstacles. (One
+        robot-tree-vs-obstacle-tree traversal has a single bound for all shapes, the largest per-shape best,
+        and measured twice the narrow-phase calls.)
         """
         n = len(self.model.objects)
         best = np.full(n, self.clearance_range)
@@ -188,33 +200,28 @@ class CollisionChecker:
         points = np.zeros((n, 2, 3))
         if not self._obstacles:
             return np.full(n, NO_OBSTACLE_CLEARANCE), other, points
-        # The callback gets fresh wrappers of the C++ objects; the geometry a DistanceResult hands back is the
-        # very Python object each shape was built with, so it identifies the pair.
-        shape_of, obstacle_of, pad = self.model.geometry_index, self._obstacle_index, self.model.padding
-        request, bound, unset = self._request, [self.clearance_range], [n]
+        obstacle_of, request, manager = self._obstacle_index, self._request, self._manager
+        objects, solid, pad = self.model.objects, self.model.solid_objects, self.model.padding
+        for i in self._moving:
+            shape, raw = objects[i], [self.clearance_range + pad[i]]  # running best, unpadded
 
-        solid = self.model.solid_objects
-
-        def visit(o1: fcl.CollisionObject, o2: fcl.CollisionObject, _data: object) -> tuple[bool, float]:
-            # o1 comes from the robot's tree; as the first argument a BVH reports world-frame points in order
-            result = fcl.DistanceResult()
-            d = fcl.distance(o1, o2, request, result)
-            i, j, p = shape_of[id(result.o1)], obstacle_of[id(result.o2)], result.nearest_points
-            if d <= 0.0 and solid[i] is not self.model.objects[i]:  # a BVH in overlap: depth from its hull
+            def visit(o1: fcl.CollisionObject, _o2: fcl.CollisionObject, _data: object) -> tuple[bool, float]:
+                # o1 is a fresh wrapper of an obstacle; the geometry a DistanceResult hands back is the very Python
+                # object the obstacle was built with, so it names the obstacle. The robot shape goes first: as
+                # the first argument a BVH reports world-frame witness points in order.
                 result = fcl.DistanceResult()
-                d = fcl.distance(solid[i], o2, request, result)
-                p = result.nearest_points
-            d -= pad[i]
-            if d < best[i]:
-                if other[i] < 0:
-                    unset[0] -= 1
-                best[i], other[i] = d, j
-                points[i] = p
-                if unset[0] == 0:
-                    bound[0] = float(best.max())
-            return False, bound[0]
+                d = fcl.distance(shape, o1, request, result)
+                if d <= 0.0 and solid[i] is not shape:  # a BVH in overlap: the depth comes from its hull
+                    result = fcl.DistanceResult()
+                    d = fcl.distance(solid[i], o1, request, result)
+                if d < raw[0]:
+                    raw[0] = d
+                    best[i], other[i] = d - pad[i], obstacle_of[id(result.o2)]
+                    points[i] = result.nearest_points
+                # FCL visits a box only if it is strictly nearer than the bound: keep overlapping boxes in play
+                return False, max(raw[0], 1e-12)
 
-        self._robot_manager.distance(self._manager, None, visit)
+            manager.distance(shape, None, visit)
         return best, other, points
 
     def check(self, state: RobotState, pybullet_contacts: Sequence[tuple[int, float]] = ()) -> CollisionReport:
@@ -244,7 +251,7 @@ class CollisionChecker:
         k = int(np.argmin(distance))
         found = other[k] >= 0
         contacts = self._contacts(distance, other, points)
-        tunneling = self._swept(distance)
+        tunneling = self._swept()
         tol = self.contact_tolerance
         n_pb = sum(1 for body, d in pybullet_contacts if d <= tol and body in self._obstacle_bodies)
         return CollisionReport(
@@ -295,38 +302,39 @@ class CollisionChecker:
         gap = np.linalg.norm(self._obstacle_centres - self.model.position[shape], axis=1)
         return np.flatnonzero(gap - self._obstacle_radii - self.model.shapes[shape].radius <= margin)
 
-    def _swept(self, distance: np.ndarray) -> int:
-        """Count swept hits, for shapes faster than ``swept_speed``, that end the step clear of the obstacle."""
+    def _swept(self) -> int:
+        """Count swept hits, for shapes faster than ``swept_speed``, that end the step clear of the obstacle.
+
+        Candidates are the obstacles whose axis-aligned box overlaps the box around the shape's bounding ball at
+        both ends of the step.
+        """
         model = self.model
         now = (model.position.copy(), model.rotation.copy())
         previous, self._previous = self._previous, now
         if previous is None or not self._obstacles or not np.isfinite(self.swept_speed):
             return 0
-        radius = np.array([s.radius for s in model.shapes])
-        travel = np.linalg.norm(now[0] - previous[0], axis=1)
+        radius = self._radii
         # rotation adds at most angle * radius to the travel of any point of the shape
         cos_angle = np.clip((np.einsum("nij,nij->n", now[1], previous[1]) - 1.0) / 2.0, -1.0, 1.0)
-        travel = travel + np.arccos(cos_angle) * radius
+        travel = np.linalg.norm(now[0] - previous[0], axis=1) + np.arccos(cos_angle) * radius
+        fast = self._moving[travel[self._moving] > self.swept_speed * self.dt]
+        if fast.size == 0:
+            return 0
+        reach = (radius[fast] + model.padding[fast])[:, None]
+        low = np.minimum(previous[0][fast], now[0][fast]) - reach
+        high = np.maximum(previous[0][fast], now[0][fast]) + reach
+        overlap = np.all((low[:, None] <= self._obstacle_high[None]) & (high[:, None] >= self._obstacle_low[None]), axis=2)
         hits = 0
-        for i in np.flatnonzero(travel > self.swept_speed * self.dt):
-            start, end = previous[0][i], now[0][i]
-            centres = self._obstacle_centres
-            axis = end - start
-            t = np.clip((centres - start) @ axis / max(float(axis @ axis), 1e-300), 0.0, 1.0)
-            gap = np.linalg.norm(centres - (start + t[:, None] * axis), axis=1)
-            near = np.flatnonzero(gap <= self._obstacle_radii + radius[i] + model.padding[i])
-            if near.size == 0:
-                continue
-            sweeper = self._sweepers[i]
+        for k, j in zip(*np.nonzero(overlap)):
+            i = fast[k]
+            sweeper, obstacle = self._sweepers[i], self._obstacles[j]
             sweeper.setRotation(previous[1][i])
-            sweeper.setTranslation(start)
-            goal = fcl.Transform(now[1][i], end)
-            for j in near:
-                obstacle = self._obstacles[j]
-                result = fcl.ContinuousCollisionResult()
-                fcl.continuousCollide(sweeper, goal, obstacle, obstacle.getTransform(), self._ccd_request, result)
-                if result.is_collide and self._clear_at_end(i, j):
-                    hits += 1
+            sweeper.setTranslation(previous[0][i])
+            result = fcl.ContinuousCollisionResult()
+            fcl.continuousCollide(sweeper, fcl.Transform(now[1][i], now[0][i]), obstacle, obstacle.getTransform(),
+                                  self._ccd_request, result)
+            if result.is_collide and self._clear_at_end(i, j):
+                hits += 1
         return hits
 
     def _clear_at_end(self, shape: int, obstacle: int) -> bool:
