@@ -15,7 +15,9 @@ enabled band, and checking it costs less than missing it.
 The samples use the unpadded geometry at the requested fidelity. Results are cached as JSON keyed by the URDF's
 content (and its meshes'), the fidelity and the sampling settings: first among the files shipped in
 ``clutter_gym/assets/acm/``, then in the user cache (``$XDG_CACHE_HOME/clutter-gym/acm``, default
-``~/.cache/clutter-gym/acm``), else generated (seconds to a minute) and written there atomically.
+``~/.cache/clutter-gym/acm``), else generated (seconds) and written there atomically. The shipped files
+(the Panda's and the diffbot's, every level) are regenerated with ``save_acm(generate_acm(urdf, level), urdf,
+SHIPPED_DIR)``; a test fails when they no longer match their URDFs.
 """
 
 from __future__ import annotations
@@ -196,10 +198,16 @@ def load_acm(urdf: str | Path, fidelity: str, samples: int = ACM_SAMPLES, seed: 
             if acm.key == key:
                 return acm
     acm = generate_acm(urdf, fidelity, samples, seed)
-    cache = _user_cache_dir()
     try:
-        cache.mkdir(parents=True, exist_ok=True)
-        write_text_atomically(cache / name, acm.to_json())
+        save_acm(acm, urdf, _user_cache_dir())
     except OSError:  # a read-only home still gets a working (uncached) ACM
         pass
     return acm
+
+
+def save_acm(acm: AllowedCollisionMatrix, urdf: str | Path, folder: Path) -> Path:
+    """Write ``acm`` where :func:`load_acm` looks for it (``folder`` = ``SHIPPED_DIR`` to ship it), atomically."""
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / f"{Path(urdf).stem}-{acm.key}.json"
+    write_text_atomically(path, acm.to_json())
+    return path
