@@ -340,10 +340,14 @@ class Sim:
     ) -> np.ndarray:
         """Joint positions of every movable joint that put ``link`` at ``position``/``orientation`` (pybullet's
         damped least squares, null space pulled towards ``rest`` within [lower, upper])."""
+        lower, upper, rest = ([float(v) for v in values] for values in (lower, upper, rest))
         ranges = [u - lo for lo, u in zip(lower, upper)]
+        if not len(lower) == len(upper) == len(rest) == pb.computeDofCount(body, physicsClientId=self._cid):
+            raise ValueError("inverse_kinematics needs lower, upper and rest for every movable joint")
+        # plain lists: pybullet's IK reads numpy arrays out of bounds and crashes
         return np.array(pb.calculateInverseKinematics(
-            body, link, position, orientation, lowerLimits=lower, upperLimits=upper, jointRanges=ranges,
-            restPoses=rest, physicsClientId=self._cid,
+            body, link, [float(v) for v in position], [float(v) for v in orientation], lowerLimits=lower,
+            upperLimits=upper, jointRanges=ranges, restPoses=rest, physicsClientId=self._cid,
         ))
 
     def inertial_properties(self, body: int, links: Sequence[int]) -> list[tuple[float, float, tuple]]:

@@ -1,18 +1,20 @@
-"""python-fcl 0.7 signed distances against closed-form answers, with the request the collision layer uses.
+"""python-fcl 0.7 distances against closed-form answers.
 
-Tolerances (errors measured on 0.7.0.11 are in the report of the change that added this file):
+The project's request (envs/collision/checker.py) is ``DistanceRequest(enable_nearest_points=True,
+enable_signed_distance=True)``. With signed distance on, FCL 0.7 skips its closed-form primitive routines and
+runs libccd GJK/EPA for every pair (FCL issue #294); python-fcl does not expose ``distance_tolerance``.
+Measured on 20000 random poses per case (0.7.0.11), FCL distance minus the closed form, in metres:
 
-* sphere-sphere, touching: FCL has a closed-form sphere-sphere routine; the answer is exact up to rounding,
-  so 1e-9 m.
-* sphere-box, box-box, capsule-capsule: 1e-6 m. Pairs without a dedicated routine go through GJK (libccd),
-  which stops on a tolerance near 1e-6 of the shapes' size, not at rounding; metre-sized shapes here.
-* penetration: sphere-sphere is closed form (1e-6 m); box-box depth comes from EPA, which stops on a coarser
-  tolerance, so 1e-4 m.
-* far from the origin (1e4 m): a double's ulp there is ~2e-12 m, but GJK works on differences of world
-  coordinates and loses more; see FAR_TOL.
+* signed request, separated: median 1e-8..5e-7, but long tails: ~4e-3 sphere-sphere, ~1e-3 sphere-box,
+  2e-2 and 0.3 (GJK stalls, about 1 pose in 1e4) capsule-capsule. GJK never under-estimates (its witness
+  points lie on the shapes). Box-box is exact (~1e-15): GJK on polytopes ends on vertices.
+* unsigned request (closed-form routines): <= 2e-13 at the origin, <= 6e-12 at 1e4 m (a double's ulp there
+  is 1.8e-12) -> EXACT_TOL = 1e-10 for both.
+* EPA penetration depth: sphere-sphere <= 9.9e-7 (EPA stops on a 1e-6 tolerance) -> 1e-5; box-box ~4e-16.
 
-Random rotations and offsets (seeded) keep every pose generic: FCL's GJK is wrong in exactly symmetric,
-face-aligned box-box poses (documented by the xfail test at the end).
+So the signed request is tested against an honest bound (GJK_TOL, ~2x the tails the seeded poses below
+reach, plus median <= 1e-6), the unsigned one at EXACT_TOL, and the GJK stall by a strict xfail. Poses are
+random (seeded): FCL's GJK is wrong in exactly symmetric face-aligned box-box poses (the other xfail).
 """
 
 from __future__ import annotations
@@ -21,18 +23,18 @@ import fcl
 import numpy as np
 import pytest
 
-REQUEST = dict(enable_nearest_points=True, enable_signed_distance=True)  # as envs/collision/checker.py
-TOL = 1e-6
+EXACT_TOL = 1e-10  # closed-form routines, also at 1e4 m
+GJK_TOL = 1e-3  # signed request, separated curved shapes (seeded poses below)
+EPA_TOL = 1e-5  # signed request, sphere-sphere penetration depth
 FAR = np.array([1e4, -1e4, 1e4])
-FAR_TOL = 1e-5
 X, Z = np.eye(3)[0], np.eye(3)[2]
 
 
-def signed_distance(geom_a, tf_a, geom_b, tf_b):
-    """(signed distance, (2, 3) nearest points in the world frame, point 0 on ``geom_a``)."""
+def signed_distance(geom_a, tf_a, geom_b, tf_b, signed=True):
+    """(distance, (2, 3) nearest points in the world frame, point 0 on ``geom_a``), fresh result each call."""
+    request = fcl.DistanceRequest(enable_nearest_points=True, enable_signed_distance=signed)
     result = fcl.DistanceResult()
-    d = fcl.distance(fcl.CollisionObject(geom_a, tf_a), fcl.CollisionObject(geom_b, tf_b),
-                     fcl.DistanceRequest(**REQUEST), result)
+    d = fcl.distance(fcl.CollisionObject(geom_a, tf_a), fcl.CollisionObject(geom_b, tf_b), request, result)
     return d, np.array(result.nearest_points)
 
 
@@ -62,65 +64,122 @@ def align(a, b):
     return np.eye(3) + k + k @ k / (1.0 + float(np.dot(a, b)))
 
 
-# ----------------------------------------------------------------------------------- case generators
-# Each yields (FCL distance, closed-form distance, nearest points, extra data for witness checks).
-
-def sphere_box_cases(rng, region, offset=np.zeros(3), n=50):
-    """Sphere centre in the face (1 axis outside), edge (2) or corner (3) Voronoi region of a rotated box."""
-    outside = {"face": 1, "edge": 2, "corner": 3}[region]
-    for _ in range(n):
-        half, rot, r = rng.uniform(0.1, 0.6, 3), random_rotation(rng), rng.uniform(0.05, 0.3)
-        local = rng.uniform(-0.9, 0.9, 3) * half  # strictly inside the slab on the remaining axes
-        axes = rng.permutation(3)[:outside]
-        local[axes] = rng.choice([-1.0, 1.0], outside) * (half[axes] + rng.uniform(0.35, 0.8, outside))
-        expected = np.linalg.norm(np.maximum(np.abs(local) - half, 0.0)) - r
-        box_pos = offset + rng.uniform(-1.0, 1.0, 3)
-        d, pts = signed_distance(fcl.Sphere(r), tf(np.eye(3), box_pos + rot @ local),
-                                 fcl.Box(*2 * half), tf(rot, box_pos))
-        yield d, expected, pts, (rot, box_pos, half)
+# ---------------------------------------------- separated pairs: yield ((geom_a, tf_a, geom_b, tf_b), exact, info)
+def sphere_sphere(rng, kind, offset):
+    c1, (r1, r2), u = offset + rng.uniform(-1, 1, 3), rng.uniform(0.05, 0.5, 2), random_rotation(rng)[:, 0]
+    c2 = c1 + (r1 + r2 + rng.uniform(0.01, 1.0)) * u
+    return (fcl.Sphere(r1), tf(np.eye(3), c1), fcl.Sphere(r2), tf(np.eye(3), c2)), \
+        np.linalg.norm(c2 - c1) - r1 - r2, (c1, r1, c2, r2)
 
 
-def capsule_cases(rng, kind, offset=np.zeros(3), n=50):
-    """Capsule pairs whose closest axis points are known: parallel, crossing skew, end to end."""
-    for _ in range(n):
-        frame = random_rotation(rng)
-        u, n_, w = frame.T  # A's axis u; n_ is normal to both axes; B's axis is in the (w, u) plane
-        ra, rb, la, lb = *rng.uniform(0.05, 0.3, 2), *rng.uniform(0.2, 1.0, 2)
-        gap = rng.uniform(0.01, 0.5)
-        if kind == "parallel":
-            axis_b = u
-            shift = (ra + rb + gap) * n_ + rng.uniform(-0.45, 0.45) * min(la, lb) * u
-        elif kind == "skew":
-            theta = rng.uniform(0.2, np.pi - 0.2)
-            axis_b = np.cos(theta) * u + np.sin(theta) * w
-            # closest axis points at +a on A and -b on B, inside both segments: axis distance is exactly
-            # the n_ component
-            a, b = rng.uniform(-0.45, 0.45) * la, rng.uniform(-0.45, 0.45) * lb
-            shift = (ra + rb + gap) * n_ + a * u + b * axis_b
-        else:  # end to end along A's axis
-            axis_b = u * rng.choice([-1.0, 1.0])
-            shift = (la / 2 + lb / 2 + ra + rb + gap) * u
-        centre = offset + rng.uniform(-1.0, 1.0, 3)
-        d, pts = signed_distance(fcl.Capsule(ra, la), tf(align(Z, u), centre),
-                                 fcl.Capsule(rb, lb), tf(align(Z, axis_b), centre + shift))
-        yield d, gap, pts, None
+def sphere_box(rng, kind, offset):
+    """Sphere centre in the face (1 axis beyond the box), edge (2) or corner (3) region of a rotated box."""
+    outside = {"face": 1, "edge": 2, "corner": 3}[kind]
+    half, rot, r = rng.uniform(0.1, 0.6, 3), random_rotation(rng), rng.uniform(0.05, 0.3)
+    local = rng.uniform(-0.9, 0.9, 3) * half  # strictly within the slab on the other axes
+    axes = rng.permutation(3)[:outside]
+    local[axes] = rng.choice([-1.0, 1.0], outside) * (half[axes] + rng.uniform(0.35, 0.8, outside))
+    pos = offset + rng.uniform(-1, 1, 3)
+    return (fcl.Sphere(r), tf(np.eye(3), pos + rot @ local), fcl.Box(*2 * half), tf(rot, pos)), \
+        np.linalg.norm(np.maximum(np.abs(local) - half, 0.0)) - r, (rot, pos, half)
 
 
-def box_box_cases(rng, kind, offset=np.zeros(3), n=50):
-    """Box B beyond A's +x face by ``gap``, presenting a face, an edge or a corner; both in a random frame."""
-    for _ in range(n):
-        ha, hb = rng.uniform(0.2, 0.6, 3), rng.uniform(0.05, 0.3, 3)
-        gap = rng.uniform(0.01, 0.5)
-        if kind == "face":  # parallel faces
-            rot_b, reach = np.eye(3), hb[0]
-        elif kind == "edge":  # Rz turns B's (+x, +y) vertical edge to point along -x at A's face
-            rot_b, reach = rotation(Z, np.pi - np.arctan2(hb[1], hb[0])), np.hypot(hb[0], hb[1])
-        else:  # corner: B's (+, +, +) corner turned to point along -x, random spin about x
-            reach = np.linalg.norm(hb)
-            rot_b = rotation(X, rng.uniform(0, 2 * np.pi)) @ align(hb / reach, -X)
-        # lateral offset keeps B's nearest feature in front of A's face, generic in y and z
-        local = np.array([ha[0] + gap + reach, *rng.uniform(-0.8, 0.8, 2) * ha[1:]])
-        frame, pos = random_rotation(rng), offset + rng.uniform(-1.0, 1.0, 3)
-        d, pts = signed_distance(fcl.Box(*2 * ha), tf(frame, pos),
-                                 fcl.Box(*2 * hb), tf(frame @ rot_b, pos + frame @ local))
-        yield d, gap, pts, None
+def capsule_capsule(rng, kind, offset):
+    """Axes parallel, crossing (skew) or end to end; the closest axis points are known by construction."""
+    u, n, w = random_rotation(rng).T  # A's axis u; n is normal to both axes; B's axis lies in the (u, w) plane
+    (ra, rb), (la, lb), gap = rng.uniform(0.05, 0.3, 2), rng.uniform(0.2, 1.0, 2), rng.uniform(0.01, 0.5)
+    if kind == "parallel":  # axial overlap, so the axes' distance is ra + rb + gap
+        v, shift = u, (ra + rb + gap) * n + rng.uniform(-0.45, 0.45) * min(la, lb) * u
+    elif kind == "skew":  # closest axis points at +a on A and -b on B, inside both segments
+        theta = rng.uniform(0.2, np.pi - 0.2)
+        v = np.cos(theta) * u + np.sin(theta) * w
+        shift = (ra + rb + gap) * n + rng.uniform(-0.45, 0.45) * la * u + rng.uniform(-0.45, 0.45) * lb * v
+    else:  # end to end along A's axis
+        v, shift = u * rng.choice([-1.0, 1.0]), (la / 2 + lb / 2 + ra + rb + gap) * u
+    centre = offset + rng.uniform(-1, 1, 3)
+    return (fcl.Capsule(ra, la), tf(align(Z, u), centre), fcl.Capsule(rb, lb), tf(align(Z, v), centre + shift)), \
+        gap, None
+
+
+def box_box(rng, kind, offset):
+    """B beyond A's +x face by ``gap``, presenting a face, an edge or a corner; both in a random frame."""
+    ha, hb, gap = rng.uniform(0.2, 0.6, 3), rng.uniform(0.05, 0.3, 3), rng.uniform(0.01, 0.5)
+    if kind == "face":
+        rot_b, reach = np.eye(3), hb[0]
+    elif kind == "edge":  # B's (+x, +y) vertical edge turned about z to point along -x
+        rot_b, reach = rotation(Z, np.pi - np.arctan2(hb[1], hb[0])), np.hypot(hb[0], hb[1])
+    else:  # B's (+, +, +) corner turned to point along -x (half diagonal), random spin about x
+        reach = np.linalg.norm(hb)
+        rot_b = rotation(X, rng.uniform(0, 2 * np.pi)) @ align(hb / reach, -X)
+    local = np.array([ha[0] + gap + reach, *rng.uniform(-0.8, 0.8, 2) * ha[1:]])  # in front of A's face
+    frame, pos = random_rotation(rng), offset + rng.uniform(-1, 1, 3)
+    return (fcl.Box(*2 * ha), tf(frame, pos), fcl.Box(*2 * hb), tf(frame @ rot_b, pos + frame @ local)), gap, None
+
+
+CASES = [(sphere_sphere, "-")] + [(sphere_box, k) for k in ("face", "edge", "corner")] \
+    + [(capsule_capsule, k) for k in ("parallel", "skew", "end")] + [(box_box, k) for k in ("face", "edge", "corner")]
+PARAMS = pytest.mark.parametrize("offset", [np.zeros(3), FAR], ids=["origin", "far"])
+CASE_PARAMS = pytest.mark.parametrize("make, kind", CASES, ids=[f"{m.__name__}-{k}" for m, k in CASES])
+
+
+def check_witnesses(make, d, pts, info):
+    assert np.linalg.norm(pts[0] - pts[1]) == pytest.approx(d, abs=1e-9)
+    if make is sphere_sphere:  # on each surface, along the centre line
+        c1, r1, c2, r2 = info
+        u = (c2 - c1) / np.linalg.norm(c2 - c1)
+        np.testing.assert_allclose(pts, [c1 + r1 * u, c2 - r2 * u], atol=1e-6)
+    if make is sphere_box:  # point 1 on the box surface
+        rot, pos, half = info
+        assert np.max(np.abs(rot.T @ (pts[1] - pos)) / half) == pytest.approx(1.0, abs=1e-6)
+
+
+@PARAMS
+@CASE_PARAMS
+def test_closed_form_routines_are_exact(make, kind, offset):
+    """Unsigned request: FCL's primitive routines match the closed form to rounding, witnesses included."""
+    rng = np.random.default_rng(1)
+    for _ in range(50):
+        pair, exact, info = make(rng, kind, offset)
+        d, pts = signed_distance(*pair, signed=False)
+        assert d == pytest.approx(exact, abs=EXACT_TOL)
+        check_witnesses(make, d, pts, info)
+
+
+@PARAMS
+@CASE_PARAMS
+def test_project_request_within_gjk_bound(make, kind, offset):
+    """Signed request (GJK): never below the closed form, typically within 1e-6, always within GJK_TOL."""
+    rng, errors = np.random.default_rng(1), []
+    for _ in range(50):
+        pair, exact, info = make(rng, kind, offset)
+        d, pts = signed_distance(*pair)
+        errors.append(d - exact)
+        assert np.linalg.norm(pts[0] - pts[1]) == pytest.approx(d, abs=1e-9)
+        if make is sphere_box:
+            check_witnesses(make, d, pts, info)
+    tol = EXACT_TOL if make is box_box else GJK_TOL  # GJK on polytopes terminates exactly
+    assert min(errors) >= -EXACT_TOL and max(errors) <= tol
+    assert np.median(errors) <= 1e-6
+
+
+@pytest.mark.parametrize("pair", [
+    (fcl.Sphere(0.5), tf(np.eye(3), [0, 0, 0]), fcl.Sphere(0.75), tf(np.eye(3), [1.25, 0, 0])),
+    (fcl.Box(1, 1, 1), tf(np.eye(3), [0, 0, 0]), fcl.Box(0.5, 0.5, 0.5), tf(np.eye(3), [0.75, 0.1, 0.2])),
+    (fcl.Sphere(0.25), tf(np.eye(3), [0.75, 0.125, -0.0625]), fcl.Box(1, 1, 1), tf(np.eye(3), [0, 0, 0])),
+], ids=["sphere-sphere", "box-box", "sphere-box"])
+def test_touching_is_zero(pair):
+    """Exactly touching (dyadic, axis-aligned, so the contact is exact in floating point)."""
+    assert signed_distance(*pair)[0] == pytest.approx(0.0, abs=1e-9)
+
+
+def test_penetration_depth():
+    rng = np.random.default_rng(2)
+    for _ in range(50):
+        c1, (r1, r2), u = rng.uniform(-1, 1, 3), rng.uniform(0.1, 0.5, 2), random_rotation(rng)[:, 0]
+        c2 = c1 + rng.uniform(0.05, 0.95) * (r1 + r2) * u
+        d, _ = signed_distance(fcl.Sphere(r1), tf(np.eye(3), c1), fcl.Sphere(r2), tf(np.eye(3), c2))
+        assert d == pytest.approx(np.linalg.norm(c2 - c1) - r1 - r2, abs=EPA_TOL)
+        ha, hb, frame, pos = rng.uniform(0.2, 0.6, 3), rng.uniform(0.1, 0.3, 3), random_rotation(rng), c1
+        local = np.array([ha[0] + hb[0] - 0.05, *rng.uniform(-0.5, 0.5, 2) * np.clip(ha[1:] - hb[1:], 0, None)])
+        d, _ = signed_distance(fcl.Box(*2 * ha), tf(frame, pos), fcl.Box(*2 * hb), tf(frame, pos + frame @ local))
+        assert d == pytest.approx(-0.05, abs=1e-9)  # EPA on polytopes: ~4e-16 measured

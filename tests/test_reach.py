@@ -1,0 +1,173 @@
+"""ClutterReach-v0: layouts, user scenes and their errors, both control modes, reward terms, and the FCL/pybullet
+cross-check (API and determinism are in test_api.py, parametrised over every env id)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from clutter_gym.worlds.scene import Obstacle
+from clutter_gym.worlds.tabletop import TABLE, TableSpec, point_clearance, sample_reach_scene
+
+READY = [0.0, -math.pi / 4, 0.0, -3 * math.pi / 4, 0.0, math.pi / 2, math.pi / 4]
+READY_EE = np.array([0.307, 0.0, 0.485])  # panda_grasptarget at READY
+
+
+def scene(obstacles=(), target=(0.45, 0.2, 0.3), start=READY) -> dict:
+    return {"obstacles": list(obstacles), "start": list(start), "target": list(target)}
+
+
+@pytest.mark.parametrize("fidelity", ["convex", "mesh"])
+def test_generated_layouts_start_clear_with_a_free_reachable_target(fidelity, make_env):
+    env = make_env("ClutterReach-v0", collision_fidelity=fidelity)
+    for seed in range(25):
+        obs, info = env.reset(seed=seed)
+        scene_ = env.unwrapped.scene
+        assert info["n_contacts"] == 0 and info["min_clearance"] > 0.0
+        assert env.unwrapped.checker.check(env.unwrapped.robot.state()).self_collision is None
+        assert point_clearance(np.array(scene_.target), scene_.obstacles) >= 0.06
+        assert np.linalg.norm(np.array(scene_.target) - [0, 0, 0.333]) <= 0.8
+
+
+def test_layouts_have_a_shelf_and_are_seeded():
+    spec = TableSpec()
+    a = sample_reach_scene(np.random.default_rng(4), spec, READY)
+    b = sample_reach_scene(np.random.default_rng(4), spec, READY)
+    assert a == b and len(a.obstacles) == spec.n_obstacles + 5
+    assert any(o.z > 0 for o in a.obstacles)  # the shelf's boards
+
+
+def test_user_scene_round_trips_and_starts_where_asked(make_env):
+    env = make_env("ClutterReach-v0")
+    env.reset(seed=9)
+    layout = env.unwrapped.scene.to_dict()
+    obs, _ = env.reset(options={"scene": layout})
+    np.testing.assert_allclose(obs["joint_position"], layout["start"], atol=1e-6)
+    np.testing.assert_allclose(obs["target"], layout["target"], atol=1e-6)
+    assert env.unwrapped.scene.to_dict() == layout
+
+
+@pytest.mark.parametrize(
+    ("bad", "message"),
+    [
+        (scene(target=(2.0, 0.0, 0.3)), "scene.target .* beyond the arm's reach"),
+        (scene(start=[0.0] * 6), r"scene.start must be a list of 7 numbers"),
+        (scene(start=[0, 0, 0, 0.5, 0, 0, 0]), r"scene.start\[3\] must be in \[-3.1416, 0.0\]"),
+        ({"target": [0.4, 0, 0.3], "goal": [1, 1]}, "scene has unknown keys \\['goal'\\]"),
+        (scene([{"shape": "box", "size": [0.1, 0.1, 0.1], "position": [0.4, 0.0], "z": -1}]), r"z \(bottom height\)"),
+        (scene([{"shape": "box", "size": [0.2, 0.2, 0.8], "position": [0.3, 0.0]}]), "scene starts in collision"),
+    ],
+)
+def test_bad_scenes_raise_naming_the_field(bad, message, make_env):
+    env = make_env("ClutterReach-v0")
+    with pytest.raises(ValueError, match=message):
+        env.reset(options={"scene": bad})
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"collision_fidelity": "voxel"}, "collision_fidelity must be one of"),
+        ({"control": "torque"}, "control must be one of"),
+        ({"max_joint_speed": 2.0}, r"max_joint_speed must be in \(0, 1\]"),
+        ({"n_obstacles": 40}, r"n_obstacles must be an integer in \[0, 20\]"),
+        ({"clearance_range": 0.0}, r"clearance_range must be in \[0.01, 2\]"),
+        ({"clearance_margin": 0.5}, r"clearance_margin must be in \[0, clearance_range=0.3\]"),
+        ({"collision_padding": -0.01}, "padding for link .* must be in"),
+        ({"swept_speed": 0.0}, "swept_speed must be > 0"),
+        ({"physics_hz": 250.0}, "physics_hz must be an integer multiple of control_hz"),
+    ],
+)
+def test_bad_kwargs_raise_at_make(kwargs, message, make_env):
+    with pytest.raises(ValueError, match=message):
+        make_env("ClutterReach-v0", **kwargs)
+
+
+def test_joint_velocity_actions_move_each_joint_by_speed_times_period(make_env):
+    env = make_env("ClutterReach-v0", max_joint_speed=0.5)
+    env.reset(options={"scene": scene()})
+    action = np.zeros(7, dtype=np.float32)
+    action[0] = 1.0  # joint 1 at half its 2.175 rad/s limit for 4 steps of 0.05 s, then hold
+    for a in [action] * 4 + [np.zeros(7, dtype=np.float32)] * 6:
+        obs, *_ = env.step(a)
+    assert obs["joint_position"][0] == pytest.approx(4 * 0.05 * 0.5 * 2.175, abs=0.005)
+    np.testing.assert_allclose(obs["joint_position"][1:], READY[1:], atol=0.01)
+
+
+def test_ee_position_control_moves_the_hand_where_asked(make_env):
+    env = make_env("ClutterReach-v0", control="ee_position")
+    obs, _ = env.reset(options={"scene": scene()})
+    start = obs["ee_position"].copy()
+    for _ in range(6):
+        obs, *_ = env.step(np.array([1.0, 0.0, -0.5], dtype=np.float32))  # 5 cm forward, 2.5 cm down per step
+    np.testing.assert_allclose(obs["ee_position"] - start, [0.3, 0.0, -0.15], atol=0.03)
+
+
+def test_reaching_the_target_is_a_success_with_the_bonus(make_env):
+    target = READY_EE + [0.1, 0.0, -0.05]
+    env = make_env("ClutterReach-v0", control="ee_position")
+    obs, _ = env.reset(options={"scene": scene(target=target)})
+    for _ in range(20):
+        step = np.clip((obs["target"] - obs["ee_position"]) / 0.05, -1, 1)
+        obs, reward, terminated, _, info = env.step(step)
+        if terminated:
+            break
+    assert info["is_success"] and info["reward_terms"]["success"] == 10.0 and info["cost"] == 0.0
+
+
+def test_pressing_into_a_box_is_a_contact_both_engines_see_and_costs(make_env):
+    box = {"shape": "box", "size": [0.3, 0.4, 0.3], "position": [0.35, 0.0]}  # top at 0.3 m, under the hand
+    env = make_env("ClutterReach-v0", control="ee_position")
+    env.reset(options={"scene": scene([box])})
+    infos = [env.step(np.array([0.0, 0.0, -1.0], dtype=np.float32))[4] for _ in range(8)]
+    touching = [i for i in infos if i["n_contacts"] > 0]
+    assert touching and all(i["cost"] == 1.0 and i["reward_terms"]["contact"] == -1.0 for i in touching)
+    assert all(i["pybullet_contacts"] > 0 for i in touching[1:])  # pybullet sees it too once pressed
+    assert min(i["min_clearance"] for i in infos) < 0.0
+
+
+def test_clearance_observation_matches_the_witness_points(make_env):
+    obstacle = {"shape": "cylinder", "radius": 0.05, "height": 0.3, "position": [0.3, 0.3]}
+    env = make_env("ClutterReach-v0", observe_directions=True)
+    obs, _ = env.reset(options={"scene": scene([obstacle])})
+    obs, _, _, _, info = env.step(np.zeros(7, dtype=np.float32))
+    points = info["witness_points"]
+    assert np.linalg.norm(points[1] - points[0]) == pytest.approx(info["min_clearance"], abs=1e-6)
+    obstacles = (Obstacle("cylinder", (0.1, 0.1, 0.3), (0.3, 0.3)), TABLE)
+    assert abs(obstacles[info["closest_pair"][1]].distance3d(points[1])) < 1e-6  # on the obstacle's surface
+    assert min(obs["clearance"]) == pytest.approx(info["min_clearance"], abs=1e-6)
+    link = env.unwrapped.checker.links.index(info["closest_pair"][0])
+    gap = points[1] - points[0]
+    np.testing.assert_allclose(obs["clearance_direction"][link], gap / np.linalg.norm(gap), atol=1e-5)
+
+
+def test_fcl_and_pybullet_agree_on_contact_in_most_random_steps(make_env):
+    """Measured: 98% agreement (8 of 480 steps differ, all pybullet-only: its contact points reach out to its
+    collision margin while FCL's clearance is still above the 1 mm tolerance)."""
+    env = make_env("ClutterReach-v0", control="ee_position", n_obstacles=12)
+    rng = np.random.default_rng(0)
+    steps = disagreements = contacts = 0
+    for seed in range(4):
+        env.reset(seed=seed)
+        action = np.zeros(3)
+        for _ in range(60):  # a random walk of the hand, drifting down among the clutter
+            action = np.clip(0.7 * action + 0.6 * rng.normal(size=3) + [0, 0, -0.15], -1, 1)
+            info = env.step(action)[4]
+            steps += 1
+            disagreements += info["contact_disagreement"]
+            contacts += info["n_contacts"] > 0
+    assert contacts > 40  # the rollouts do touch things
+    assert disagreements / steps < 0.05
+
+
+def test_obstacle_distance3d_closed_forms():
+    box = Obstacle("box", (0.2, 0.4, 0.3), (1.0, 0.0), math.pi / 2, 0.1)  # rotated: 0.4 along x, 0.2 along y
+    assert box.distance3d(np.array([1.5, 0.0, 0.25])) == pytest.approx(0.3)
+    assert box.distance3d(np.array([1.0, 0.0, 0.0])) == pytest.approx(0.1)  # below its bottom at z = 0.1
+    assert box.distance3d(np.array([1.0, 0.0, 0.25])) == pytest.approx(-0.1)  # inside: nearest face 0.1 away
+    corner = np.array([1.2, 0.1, 0.4]) + [0.03, 0.04, 0.0]
+    assert box.distance3d(corner) == pytest.approx(0.05)
+    cylinder = Obstacle("cylinder", (0.2, 0.2, 0.5), (0.0, 0.0))
+    assert cylinder.distance3d(np.array([0.4, 0.0, 0.8])) == pytest.approx(math.hypot(0.3, 0.3))
