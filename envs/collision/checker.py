@@ -200,29 +200,33 @@ class CollisionChecker:
         points = np.zeros((n, 2, 3))
         if not self._obstacles:
             return np.full(n, NO_OBSTACLE_CLEARANCE), other, points
-        obstacle_of, request, manager = self._obstacle_index, self._request, self._manager
-        objects, solid, pad = self.model.objects, self.model.solid_objects, self.model.padding
         for i in self._moving:
-            shape, raw = objects[i], [self.clearance_range + pad[i]]  # running best, unpadded
-
-            def visit(o1: fcl.CollisionObject, _o2: fcl.CollisionObject, _data: object) -> tuple[bool, float]:
-                # o1 is a fresh wrapper of an obstacle; the geometry a DistanceResult hands back is the very Python
-                # object the obstacle was built with, so it names the obstacle. The robot shape goes first: as
-                # the first argument a BVH reports world-frame witness points in order.
-                result = fcl.DistanceResult()
-                d = fcl.distance(shape, o1, request, result)
-                if d <= 0.0 and solid[i] is not shape:  # a BVH in overlap: the depth comes from its hull
-                    result = fcl.DistanceResult()
-                    d = fcl.distance(solid[i], o1, request, result)
-                if d < raw[0]:
-                    raw[0] = d
-                    best[i], other[i] = d - pad[i], obstacle_of[id(result.o2)]
-                    points[i] = result.nearest_points
-                # FCL visits a box only if it is strictly nearer than the bound: keep overlapping boxes in play
-                return False, max(raw[0], 1e-12)
-
-            manager.distance(shape, None, visit)
+            raw, j, p = self._nearest_obstacle(i, self.clearance_range + self.model.padding[i])
+            if j >= 0:
+                best[i], other[i], points[i] = raw - self.model.padding[i], j, p
         return best, other, points
+
+    def _nearest_obstacle(self, i: int, bound: float) -> tuple[float, int, np.ndarray | None]:
+        """(unpadded distance, obstacle index, witness points) of shape ``i``'s nearest obstacle within ``bound``."""
+        shape, solid, request = self.model.objects[i], self.model.solid_objects[i], self._request
+        found: list = [bound, -1, None]
+
+        def visit(o1: fcl.CollisionObject, _o2: fcl.CollisionObject, _data: object) -> tuple[bool, float]:
+            # o1 is a fresh wrapper of an obstacle; the geometry a DistanceResult hands back is the very Python
+            # object the obstacle was built with, so it names the obstacle. The robot shape goes first: as the
+            # first argument a BVH reports world-frame witness points in order.
+            result = fcl.DistanceResult()
+            d = fcl.distance(shape, o1, request, result)
+            if d <= 0.0 and solid is not shape:  # a BVH in overlap: the depth comes from its hull
+                result = fcl.DistanceResult()
+                d = fcl.distance(solid, o1, request, result)
+            if d < found[0]:
+                found[:] = d, self._obstacle_index[id(result.o2)], result.nearest_points
+            # FCL visits a box only if it is strictly nearer than the bound: keep overlapping boxes in play
+            return False, max(found[0], 1e-12)
+
+        self._manager.distance(shape, None, visit)
+        return found[0], found[1], found[2]
 
     def check(self, state: RobotState, pybullet_contacts: Sequence[tuple[int, float]] = ()) -> CollisionReport:
         """Clearance, contacts, self-collision and tunneling of the robot in ``state``.
