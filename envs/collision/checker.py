@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import fcl
 import numpy as np
 
+from clutter_gym.collision.distance import signed_distance
 from clutter_gym.collision.robot_model import RobotCollisionModel
 from clutter_gym.robots.state import RobotState
 from clutter_gym.worlds.scene import Obstacle
@@ -150,8 +151,6 @@ class CollisionChecker:
         self._obstacle_radii = np.zeros(0)
         self._obstacle_bodies: frozenset[int] = frozenset()
         self._manager: fcl.DynamicAABBTreeCollisionManager | None = None
-        # GJK's error against the closed form is <= 2e-5 m within 0.5 m (benchmarks/fcl_accuracy.py).
-        self._request = fcl.DistanceRequest(enable_nearest_points=True, enable_signed_distance=True)
         self._contact_request = fcl.CollisionRequest(num_max_contacts=4, enable_contact=True)
         self._ccd_request = fcl.ContinuousCollisionRequest()
         self._rows: np.ndarray | None = None
@@ -208,18 +207,14 @@ class CollisionChecker:
 
     def _nearest_obstacle(self, i: int, bound: float) -> tuple[float, int, np.ndarray | None]:
         """(unpadded distance, obstacle index, witness points) of shape ``i``'s nearest obstacle within ``bound``."""
-        shape, solid, request = self.model.objects[i], self.model.solid_objects[i], self._request
+        shape, solid = self.model.objects[i], self.model.solid_objects[i]
         found: list = [bound, -1, None]
 
         def visit(o1: fcl.CollisionObject, _o2: fcl.CollisionObject, _data: object) -> tuple[bool, float]:
             # o1 is a fresh wrapper of an obstacle; the geometry a DistanceResult hands back is the very Python
             # object the obstacle was built with, so it names the obstacle. The robot shape goes first: as the
             # first argument a BVH reports world-frame witness points in order.
-            result = fcl.DistanceResult()
-            d = fcl.distance(shape, o1, request, result)
-            if d <= 0.0 and solid is not shape:  # a BVH in overlap: the depth comes from its hull
-                result = fcl.DistanceResult()
-                d = fcl.distance(solid, o1, request, result)
+            d, result = signed_distance(shape, o1, solid)
             if d < found[0]:
                 found[:] = d, self._obstacle_index[id(result.o2)], result.nearest_points
             # FCL visits a box only if it is strictly nearer than the bound: keep overlapping boxes in play
@@ -289,7 +284,7 @@ class CollisionChecker:
         for i in touching:
             obj = model.solid_objects[i]  # a BVH's contact depths are not meaningful; its hull's are
             for j in self._obstacles_near(i, self.contact_tolerance + model.padding[i]):
-                d = fcl.distance(obj, self._obstacles[j], self._request, fcl.DistanceResult()) - model.padding[i]
+                d = signed_distance(obj, self._obstacles[j])[0] - model.padding[i]
                 if d > self.contact_tolerance:
                     continue
                 result = fcl.CollisionResult()
@@ -343,5 +338,5 @@ class CollisionChecker:
 
     def _clear_at_end(self, shape: int, obstacle: int) -> bool:
         obj = self.model.solid_objects[shape]
-        d = fcl.distance(obj, self._obstacles[obstacle], self._request, fcl.DistanceResult())
+        d = signed_distance(obj, self._obstacles[obstacle])[0]
         return d - self.model.padding[shape] > self.contact_tolerance

@@ -10,6 +10,7 @@ import fcl
 import numpy as np
 
 from clutter_gym.collision.acm import AllowedCollisionMatrix, load_acm
+from clutter_gym.collision.distance import signed_distance
 from clutter_gym.collision.fidelity import LinkShape, build_link_shapes
 from clutter_gym.collision.urdf_geometry import load_collision_elements
 
@@ -70,7 +71,6 @@ class RobotCollisionModel:
         self.position = np.zeros((len(self.shapes), 3))
         self.rotation = np.broadcast_to(np.eye(3), (len(self.shapes), 3, 3)).copy()
         self._collide_request = fcl.CollisionRequest()
-        self._distance_request = fcl.DistanceRequest(enable_signed_distance=True)
         self.set_acm(acm)
 
     @classmethod
@@ -133,7 +133,7 @@ class RobotCollisionModel:
         return SelfClearance(float(best), pair)
 
     def _pair_distance(self, i: int, j: int) -> float:
-        d = fcl.distance(self.objects[i], self.objects[j], self._distance_request, fcl.DistanceResult())
-        if d <= 0.0:  # overlap: the depth comes from the solid shapes (a BVH reports 0 or -1)
-            d = fcl.distance(self.solid_objects[i], self.solid_objects[j], self._distance_request, fcl.DistanceResult())
+        d, _ = signed_distance(self.objects[i], self.objects[j])
+        if d <= 0.0:  # overlap: the depth comes from the solid shapes (a BVH has none)
+            d, _ = signed_distance(self.solid_objects[i], self.solid_objects[j])
         return d - self.padding[i] - self.padding[j]
