@@ -30,14 +30,20 @@ from __future__ import annotations
 import argparse
 import statistics
 import time
+from functools import partial
 from pathlib import Path
 
+import clutter_gym  # noqa: F401  (registers the envs)
 import fcl
 import gymnasium as gym
 import numpy as np
-
-import clutter_gym  # noqa: F401  (registers the envs)
-from clutter_gym.collision import FIDELITY_LEVELS, CollisionChecker, RobotCollisionModel, UrdfKinematics, obstacle_object
+from clutter_gym.collision import (
+    FIDELITY_LEVELS,
+    CollisionChecker,
+    RobotCollisionModel,
+    UrdfKinematics,
+    obstacle_object,
+)
 from clutter_gym.quiet import quiet_c_output
 from clutter_gym.robots import DiffDriveRobot
 from clutter_gym.robots.panda import READY, PandaArm
@@ -107,19 +113,16 @@ def fidelity_table(name: str, robot: Robot, cases: list[dict], self_query: bool)
     res = {f: {"env": [], "self": [], "d": []} for f in FIDELITY_LEVELS}
     for s, case in enumerate(cases):
         for level in np.roll(FIDELITY_LEVELS, s):  # rotate the order: no level always runs first
-            checker, r = robot.checkers[level], res[level]
-            checker.set_scene(case["obstacles"], [])
-            model = checker.model
+            r = res[level]
+            robot.checkers[level].set_scene(case["obstacles"], [])
             for pos, rot in zip(case["pos"], case["rot"]):
                 t0 = time.perf_counter()
-                model.sync(pos, rot)
-                d = float(checker.clearance()[0].min())
+                r["d"].append(robot.clearance(level, pos, rot))  # sync + clearance
                 t1 = time.perf_counter()
                 if self_query:
-                    model.self_clearance()
+                    robot.checkers[level].model.self_clearance()
                 r["env"].append(t1 - t0)
                 r["self"].append(time.perf_counter() - t1)
-                r["d"].append(d)
     mesh = np.array(res["mesh"]["d"])
     emit(f"\n### {name}: {len(mesh)} configurations near obstacles (mesh clearance in (0, {NEAR}] m), "
          f"{len(cases)} scenes\n")
@@ -155,10 +158,9 @@ class BulletWorld:
             pb.removeBody(b, physicsClientId=self.cid)
         self.bodies = []
         for o in obstacles:
-            if o.shape == "cylinder":
-                shape = pb.createCollisionShape(pb.GEOM_CYLINDER, radius=o.radius, height=o.size[2], physicsClientId=self.cid)
-            else:
-                shape = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=[0.5 * s for s in o.size], physicsClientId=self.cid)
+            shape = (pb.createCollisionShape(pb.GEOM_CYLINDER, radius=o.radius, height=o.size[2], physicsClientId=self.cid)
+                     if o.shape == "cylinder" else
+                     pb.createCollisionShape(pb.GEOM_BOX, halfExtents=[0.5 * s for s in o.size], physicsClientId=self.cid))
             quat = pb.getQuaternionFromEuler((0.0, 0.0, o.yaw))
             self.bodies.append(pb.createMultiBody(0.0, shape, basePosition=o.centre, baseOrientation=quat,
                                                   physicsClientId=self.cid))
@@ -190,17 +192,17 @@ class BulletWorld:
 def pybullet_table(panda: Robot, cases: list[dict], fcl_res: dict) -> dict[str, float]:
     world, names = BulletWorld(panda.urdf), [j.name for j in panda.kin.joints]
     res: dict[str, list[float]] = {k: [] for k in ("loop", "broad", "convex", "mesh", "d_loop", "d_broad")}
+    methods = {"loop": lambda p, r: world.clearance(), "broad": lambda p, r: world.clearance_broadphase(),
+               "convex": lambda p, r: panda.clearance("convex", p, r), "mesh": lambda p, r: panda.clearance("mesh", p, r)}
     for case in cases:
         world.set_scene(list(case["obstacles"]))
         for level in ("convex", "mesh"):
             panda.checkers[level].set_scene(case["obstacles"], [])
         for q, pos, rot in zip(case["q"], case["pos"], case["rot"]):
             world.set_joints(q, names)
-            for key, fn in (("loop", world.clearance), ("broad", world.clearance_broadphase),
-                            ("convex", lambda: panda.clearance("convex", pos, rot)),
-                            ("mesh", lambda: panda.clearance("mesh", pos, rot))):
+            for key, fn in methods.items():
                 t0 = time.perf_counter()
-                d = fn()
+                d = fn(pos, rot)
                 res[key].append(time.perf_counter() - t0)
                 if key in ("loop", "broad"):
                     res[f"d_{key}"].append(d)
@@ -226,12 +228,18 @@ def pybullet_table(panda: Robot, cases: list[dict], fcl_res: dict) -> dict[str, 
     return out
 
 
+def brute_force(model: RobotCollisionModel, moving: list, objects: list, pos: np.ndarray, rot: np.ndarray) -> float:
+    """Minimum of fcl.distance over every (moving shape, obstacle) pair, capped at RANGE."""
+    model.sync(pos, rot)
+    request = fcl.DistanceRequest(enable_nearest_points=True, enable_signed_distance=True)  # as the checker's
+    return min(RANGE, min(fcl.distance(a, b, request, fcl.DistanceResult()) for a in moving for b in objects))
+
+
 def scaling_table(panda: Robot, sizes: list[int], n_configs: int, budget_s: float) -> None:
     rng = np.random.default_rng(3)
     checker, world = panda.checkers["convex"], BulletWorld(panda.urdf)
     names = [j.name for j in panda.kin.joints]
     moving = [o for o, s in zip(checker.model.objects, checker.model.shapes) if s.link in checker.links]
-    request = fcl.DistanceRequest(enable_nearest_points=True, enable_signed_distance=True)
     emit("\n### Broad phase: Panda (convex), N boxes of 5-15 cm over a square of side 1.5 sqrt(N/10) m, bottoms at "
          "z in [0, 0.9] m (fixed density); us per clearance query (n = queries timed)\n")
     emit("| N obstacles | FCL tree | brute force fcl.distance | pybullet loop | pybullet broad phase | "
@@ -250,13 +258,9 @@ def scaling_table(panda: Robot, sizes: list[int], n_configs: int, budget_s: floa
         q = rng.uniform(panda.kin.lower, panda.kin.upper, size=(n_configs, len(names)))
         q[:, 7:] = FINGER_OPENING
         pos, rot = panda.poses(q)
-
-        def brute(i: int) -> float:
-            checker.model.sync(pos[i], rot[i])
-            return min(RANGE, min(fcl.distance(a, b, request, fcl.DistanceResult()) for a in moving for b in objects))
-
-        methods = {"tree": lambda i: panda.clearance("convex", pos[i], rot[i]), "brute": brute,
-                   "loop": lambda i: world.clearance(), "broad": lambda i: world.clearance_broadphase()}
+        methods = {"tree": lambda p, r: panda.clearance("convex", p, r),
+                   "brute": partial(brute_force, checker.model, moving, objects),
+                   "loop": lambda p, r: world.clearance(), "broad": lambda p, r: world.clearance_broadphase()}
         times: dict[str, list[float]] = {m: [] for m in methods}
         found: dict[str, list[float]] = {m: [] for m in methods}
         skip = {m for m, (n0, us) in last.items() if us * 1e-6 * n / n0 > SKIP_S}
@@ -266,7 +270,7 @@ def scaling_table(panda: Robot, sizes: list[int], n_configs: int, budget_s: floa
                 if m in skip or (times[m] and sum(times[m]) > budget_s):
                     continue
                 t0 = time.perf_counter()
-                found[m].append(fn(i))
+                found[m].append(fn(pos[i], rot[i]))
                 times[m].append(time.perf_counter() - t0)
         cells = {}
         for m in methods:
@@ -294,8 +298,7 @@ def env_table(rounds: int, steps: int) -> None:
         envs["PandaReach-v3 (panda-gym)"] = gym.make("PandaReach-v3")
     rng, rates = np.random.default_rng(0), {name: [] for name in envs}
     for env in envs.values():
-        with quiet_c_output():
-            env.reset(seed=0)
+        env.reset(seed=0)
     for _ in range(rounds):
         for name, env in envs.items():
             actions = rng.uniform(-1, 1, size=(steps, *env.action_space.shape)).astype(np.float32)
@@ -319,11 +322,13 @@ def env_table(rounds: int, steps: int) -> None:
 def plot(results: dict[str, dict], bullet: dict[str, float], path: Path) -> None:
     fig, ax = plt.subplots(figsize=(6.4, 4.2))
     for (name, res), marker in zip(results.items(), "os"):
-        x = [res[f]["env_us"] for f in FIDELITY_LEVELS]
-        y = [res[f]["err_mm"] for f in FIDELITY_LEVELS]
+        x, y = [res[f]["env_us"] for f in FIDELITY_LEVELS], [res[f]["err_mm"] for f in FIDELITY_LEVELS]
         ax.plot(x, y, marker=marker, linestyle=":", label=name)
+        labels: dict[float, list] = {}  # one label for levels with the same error (the diffbot's primitives)
         for f, xi, yi in zip(FIDELITY_LEVELS, x, y):
-            ax.annotate(f, (xi, yi), textcoords="offset points", xytext=(4, 4), fontsize=8)
+            labels.setdefault(round(yi, 2), [[], xi, yi])[0].append(f)
+        for names, xi, yi in labels.values():
+            ax.annotate(" = ".join(names), (xi, yi), textcoords="offset points", xytext=(4, 4), fontsize=8)
     ax.plot([bullet["loop"]], [bullet["loop_err_mm"]], "*", markersize=12, label="Panda, pybullet getClosestPoints")
     ax.set_xscale("log")
     ax.set_xlabel("time per environment clearance query (us, log)")

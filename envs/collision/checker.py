@@ -189,9 +189,9 @@ class CollisionChecker:
 
         Robot objects must be synced. One query per moving shape against the obstacle tree: FCL visits the
         obstacles nearest-box-first and prunes every subtree farther than the running best the callback hands
-        back, so a shape costs one to three narrow-phase calls whatever the number of obstacles. (One
-        robot-tree-vs-obstacle-tree traversal has a single bound for all shapes, the largest per-shape best,
-        and measured twice the narrow-phase calls.)
+        back: about five narrow-phase calls per shape on the Panda, and the same cost at 1,000 and 10,000
+        obstacles. (One robot-tree-vs-obstacle-tree traversal has a single bound for all shapes, the largest
+        per-shape best, and made twice the narrow-phase calls.)
         """
         n = len(self.model.objects)
         best = np.full(n, self.clearance_range)
