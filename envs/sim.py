@@ -54,6 +54,13 @@ class LinkStates:
     angular_velocity: np.ndarray
 
 
+def pybullet_data_file(relative: str) -> Path:
+    """Absolute path of a file shipped in the ``pybullet_data`` package (the Panda's URDF, for example)."""
+    import pybullet_data
+
+    return Path(pybullet_data.getDataPath()) / relative
+
+
 class Sim:
     """One pybullet physics client.
 

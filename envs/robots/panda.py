@@ -7,12 +7,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import pybullet_data
 from gymnasium import spaces
 
 from clutter_gym.noise.dynamics import DynamicsSample
 from clutter_gym.robots.state import RobotState
-from clutter_gym.sim import Sim
+from clutter_gym.sim import Sim, pybullet_data_file
 
 ARM_JOINTS = tuple(f"panda_joint{i}" for i in range(1, 8))
 FINGER_JOINTS = ("panda_finger_joint1", "panda_finger_joint2")
@@ -88,7 +87,7 @@ class PandaArm:
 
     @property
     def urdf_path(self) -> Path:
-        return Path(pybullet_data.getDataPath()) / "franka_panda" / "panda.urdf"
+        return pybullet_data_file("franka_panda/panda.urdf")
 
     @property
     def body(self) -> int:

@@ -10,9 +10,8 @@ import numpy as np
 from clutter_gym.sim import Sim
 from clutter_gym.worlds.clutter import ClutterSpec, sample_scene
 from clutter_gym.worlds.pool import ObstaclePool, arena_walls
-from clutter_gym.worlds.scene import Obstacle, Scene, parse_scene
+from clutter_gym.worlds.scene import Obstacle, Scene, check_reset_options, parse_scene
 
-RESET_OPTIONS = ("scene",)
 
 
 class ClutterArena:
@@ -48,12 +47,7 @@ class ClutterArena:
         Raises:
             ValueError: unknown option keys or a malformed scene (the message names the field).
         """
-        options = options or {}
-        if not isinstance(options, Mapping):
-            raise ValueError(f"reset options must be a dict, got {type(options).__name__}")
-        unknown = set(options) - set(RESET_OPTIONS)
-        if unknown:
-            raise ValueError(f"unknown reset options {sorted(unknown)}; allowed: {list(RESET_OPTIONS)}")
+        options = check_reset_options(options)
         if "scene" in options:
             return parse_scene(options["scene"], self.spec.arena_size, self.robot_radius)
         return sample_scene(rng, self.spec, self.robot_radius)

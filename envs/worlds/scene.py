@@ -108,6 +108,20 @@ class Scene:
 
 
 # ------------------------------------------------------------------------------------------------ parsing
+RESET_OPTIONS = ("scene",)
+
+
+def check_reset_options(options: Any) -> Mapping[str, Any]:
+    """``reset`` options as a mapping ({} for None); unknown keys raise ``ValueError`` naming them."""
+    options = options or {}
+    if not isinstance(options, Mapping):
+        raise ValueError(f"reset options must be a dict, got {type(options).__name__}")
+    unknown = set(options) - set(RESET_OPTIONS)
+    if unknown:
+        raise ValueError(f"unknown reset options {sorted(unknown)}; allowed: {list(RESET_OPTIONS)}")
+    return options
+
+
 def _numbers(value: Any, n: int, field: str, what: str) -> tuple[float, ...]:
     if isinstance(value, (str, bytes)) or not isinstance(value, Sequence) or len(value) != n:
         raise ValueError(f"{field} must be a list of {n} numbers ({what}), got {value!r}")

@@ -16,7 +16,7 @@ import numpy as np
 
 from clutter_gym.sim import Sim
 from clutter_gym.worlds.pool import ObstaclePool
-from clutter_gym.worlds.scene import Obstacle, _numbers, parse_obstacle
+from clutter_gym.worlds.scene import Obstacle, _numbers, check_reset_options, parse_obstacle
 
 TABLE_GAP = 0.005
 TABLE = Obstacle("box", (1.6, 1.8, 0.05), (0.4, 0.0), 0.0, -0.05 - TABLE_GAP)
@@ -24,7 +24,6 @@ REACH_RADIUS = 0.8  # metres from the shoulder (0, 0, 0.333) within which target
 SHOULDER = np.array([0.0, 0.0, 0.333])
 TABLE_LIMIT = 0.8  # |x|, |y| of user obstacles and targets, metres
 ARM_KEEP_OUT = 0.15  # generated obstacles keep this far from the vertical plane of the start pose's arm, metres
-RESET_OPTIONS = ("scene",)
 
 
 @dataclass(frozen=True)
@@ -211,12 +210,7 @@ class TabletopArena:
         Raises:
             ValueError: unknown option keys or a malformed scene (the message names the field).
         """
-        options = options or {}
-        if not isinstance(options, Mapping):
-            raise ValueError(f"reset options must be a dict, got {type(options).__name__}")
-        unknown = set(options) - set(RESET_OPTIONS)
-        if unknown:
-            raise ValueError(f"unknown reset options {sorted(unknown)}; allowed: {list(RESET_OPTIONS)}")
+        options = check_reset_options(options)
         if "scene" in options:
             scene = parse_reach_scene(options["scene"], len(self.ready), self._lower, self._upper)
             return scene if scene.start is not None else ReachScene(scene.obstacles, self.ready, scene.target)
