@@ -146,9 +146,7 @@ class CollisionChecker:
         self._sweepers = [fcl.CollisionObject(s.hull or s.geometry, fcl.Transform()) for s in model.shapes]
         self._obstacles: list[fcl.CollisionObject] = []
         self._obstacle_index: dict[int, int] = {}
-        self._obstacle_centres = np.zeros((0, 3))
         self._obstacle_low = self._obstacle_high = np.zeros((0, 3))
-        self._obstacle_radii = np.zeros(0)
         self._obstacle_bodies: frozenset[int] = frozenset()
         self._manager: fcl.DynamicAABBTreeCollisionManager | None = None
         self._contact_request = fcl.CollisionRequest(num_max_contacts=4, enable_contact=True)
@@ -162,10 +160,9 @@ class CollisionChecker:
         geometries = [obstacle_shape(o) for o in obstacles]
         self._obstacles = [obstacle_object(o, g) for o, g in zip(obstacles, geometries)]
         self._obstacle_index = {id(g): i for i, g in enumerate(geometries)}
-        self._obstacle_centres = np.array([o.centre for o in obstacles]).reshape(-1, 3)
-        self._obstacle_radii = np.array([0.5 * float(np.linalg.norm(o.size)) for o in obstacles])
+        centres = np.array([o.centre for o in obstacles]).reshape(-1, 3)
         half = np.array([_half_extents(o) for o in obstacles]).reshape(-1, 3)
-        self._obstacle_low, self._obstacle_high = self._obstacle_centres - half, self._obstacle_centres + half
+        self._obstacle_low, self._obstacle_high = centres - half, centres + half
         self._obstacle_bodies = frozenset(bodies)
         manager = fcl.DynamicAABBTreeCollisionManager()
         if self._obstacles:
@@ -249,7 +246,7 @@ class CollisionChecker:
                 directions[link] = gap[i] / norms[i]
         k = int(np.argmin(distance))
         found = other[k] >= 0
-        contacts = self._contacts(distance, other, points)
+        contacts = self._contacts(distance, points)
         tunneling = self._swept()
         tol = self.contact_tolerance
         n_pb = sum(1 for body, d in pybullet_contacts if d <= tol and body in self._obstacle_bodies)
@@ -266,40 +263,42 @@ class CollisionChecker:
             disagreement=bool(contacts) != (n_pb > 0),
         )
 
-    def min_clearance(self, state: RobotState) -> float:
-        """Signed distance from the robot to the nearest obstacle, metres (capped at the clearance range)."""
-        self.sync(state)
-        return float(self.clearance()[0].min())
-
-    def _contacts(self, distance: np.ndarray, other: np.ndarray, points: np.ndarray) -> tuple[Contact, ...]:
+    def _contacts(self, distance: np.ndarray, points: np.ndarray) -> tuple[Contact, ...]:
         """Contacts of the shapes whose nearest obstacle is within the tolerance.
 
-        A shape can touch several obstacles at once: every obstacle within the tolerance of a touching shape is
-        enumerated (a second, bounded traversal), with the penetration depth from ``fcl.collide``.
+        A shape can touch several obstacles at once: every obstacle whose box meets the touching shape's
+        bounding box is measured, and those within the tolerance get their penetration depth from ``fcl.collide``.
         """
         touching = np.flatnonzero(distance <= self.contact_tolerance)
         if touching.size == 0:
             return ()
         model, out = self.model, []
-        for i in touching:
+        centres = model.position[touching]
+        reach = (self._radii[touching] + model.padding[touching] + self.contact_tolerance)[:, None]
+        for k, j in self._boxes_meeting(centres - reach, centres + reach):
+            i = touching[k]
             obj = model.solid_objects[i]  # a BVH's contact depths are not meaningful; its hull's are
-            for j in self._obstacles_near(i, self.contact_tolerance + model.padding[i]):
-                d = signed_distance(obj, self._obstacles[j])[0] - model.padding[i]
-                if d > self.contact_tolerance:
-                    continue
-                result = fcl.CollisionResult()
-                depth, where = max(0.0, -d), points[i].mean(axis=0)
-                if fcl.collide(obj, self._obstacles[j], self._contact_request, result):
-                    deepest = max(result.contacts, key=lambda c: c.penetration_depth)
-                    depth = max(depth, float(deepest.penetration_depth))
-                    where = np.asarray(deepest.pos, dtype=float)
-                out.append(Contact(model.shapes[i].link, int(j), depth + model.padding[i], where))
+            d = self._pair_distance(i, j)
+            if d > self.contact_tolerance:
+                continue
+            result = fcl.CollisionResult()
+            depth, where = max(0.0, -d), points[i].mean(axis=0)
+            if fcl.collide(obj, self._obstacles[j], self._contact_request, result):
+                deepest = max(result.contacts, key=lambda c: c.penetration_depth)
+                depth = max(depth, float(deepest.penetration_depth))
+                where = np.asarray(deepest.pos, dtype=float)
+            out.append(Contact(model.shapes[i].link, int(j), depth + model.padding[i], where))
         return tuple(out)
 
-    def _obstacles_near(self, shape: int, margin: float) -> np.ndarray:
-        """Obstacles whose bounding ball comes within ``margin`` of the shape's bounding ball."""
-        gap = np.linalg.norm(self._obstacle_centres - self.model.position[shape], axis=1)
-        return np.flatnonzero(gap - self._obstacle_radii - self.model.shapes[shape].radius <= margin)
+    def _boxes_meeting(self, low: np.ndarray, high: np.ndarray) -> list[tuple[int, int]]:
+        """(row, obstacle) pairs where the box [low, high] of a row (n, 3) overlaps the obstacle's world AABB."""
+        overlap = np.all((low[:, None] <= self._obstacle_high[None]) & (high[:, None] >= self._obstacle_low[None]), axis=2)
+        return list(zip(*np.nonzero(overlap)))
+
+    def _pair_distance(self, shape: int, obstacle: int) -> float:
+        """Padded signed distance from a robot shape (its solid: a mesh's hull) to an obstacle, metres."""
+        d, _ = signed_distance(self.model.solid_objects[shape], self._obstacles[obstacle])
+        return d - self.model.padding[shape]
 
     def _swept(self) -> int:
         """Count swept hits, for shapes faster than ``swept_speed``, that end the step clear of the obstacle.
@@ -322,9 +321,8 @@ class CollisionChecker:
         reach = (radius[fast] + model.padding[fast])[:, None]
         low = np.minimum(previous[0][fast], now[0][fast]) - reach
         high = np.maximum(previous[0][fast], now[0][fast]) + reach
-        overlap = np.all((low[:, None] <= self._obstacle_high[None]) & (high[:, None] >= self._obstacle_low[None]), axis=2)
         hits = 0
-        for k, j in zip(*np.nonzero(overlap)):
+        for k, j in self._boxes_meeting(low, high):
             i = fast[k]
             sweeper, obstacle = self._sweepers[i], self._obstacles[j]
             sweeper.setRotation(previous[1][i])
@@ -332,11 +330,6 @@ class CollisionChecker:
             result = fcl.ContinuousCollisionResult()
             fcl.continuousCollide(sweeper, fcl.Transform(now[1][i], now[0][i]), obstacle, obstacle.getTransform(),
                                   self._ccd_request, result)
-            if result.is_collide and self._clear_at_end(i, j):
+            if result.is_collide and self._pair_distance(i, j) > self.contact_tolerance:  # clear at the end
                 hits += 1
         return hits
-
-    def _clear_at_end(self, shape: int, obstacle: int) -> bool:
-        obj = self.model.solid_objects[shape]
-        d = signed_distance(obj, self._obstacles[obstacle])[0]
-        return d - self.model.padding[shape] > self.contact_tolerance

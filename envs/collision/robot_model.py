@@ -65,9 +65,6 @@ class RobotCollisionModel:
             for s, o in zip(self.shapes, self.objects)
         ]
         self._hulls = [(o, h) for o, h in zip(self.objects, self.solid_objects) if o is not h]
-        self.geometry_index = {id(s.geometry): i for i, s in enumerate(self.shapes)}  # FCL results name geometries
-        if len(self.geometry_index) != len(self.shapes):
-            raise ValueError("every shape needs its own FCL geometry object (results identify shapes by it)")
         self.position = np.zeros((len(self.shapes), 3))
         self.rotation = np.broadcast_to(np.eye(3), (len(self.shapes), 3, 3)).copy()
         self._collide_request = fcl.CollisionRequest()

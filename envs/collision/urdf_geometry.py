@@ -129,8 +129,6 @@ def _element(col: ET.Element, link: str, urdf: Path, where: str) -> CollisionEle
             raise ValueError(f"{where}: mesh scale must be non-zero, got {a.get('scale')!r}")
         try:
             mesh = _load_mesh(source).copy()
-        except ValueError:
-            raise
         except Exception as exc:  # trimesh raises many types for unreadable files
             raise ValueError(f"{where}: cannot read mesh {source}: {exc}") from exc
         mesh.apply_scale(scale)
