@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import os
+import stat
+
 import numpy as np
 import pytest
 
@@ -47,3 +50,28 @@ def test_bad_video_requests_are_refused(tmp_path):
         write_video(tmp_path / "episode.avi", [np.zeros((4, 4, 3), np.uint8)], fps=10)
     with pytest.raises(ValueError, match="no frames"):
         write_video(tmp_path / "episode.gif", [], fps=10)
+
+
+@pytest.fixture(params=[0o022, 0o077, 0o002])
+def umask(request):
+    old = os.umask(request.param)
+    yield request.param
+    os.umask(old)
+
+
+def test_written_files_and_folders_honour_the_umask(tmp_path, umask):
+    write_text_atomically(tmp_path / "a.json", "{}")
+    with atomic_path(tmp_path / "frame.png") as tmp:
+        tmp.write_bytes(b"\x89PNG")
+    with atomic_folder(tmp_path / "nested" / "model") as folder:
+        (folder / "model.zip").write_bytes(b"PK")
+    with atomic_folder(tmp_path / "nested" / "model") as folder:  # the replacing path too
+        (folder / "model.zip").write_bytes(b"PK")
+    modes = {p.relative_to(tmp_path).as_posix(): stat.S_IMODE(p.stat().st_mode) for p in tmp_path.rglob("*")}
+    assert modes == {
+        "a.json": 0o666 & ~umask,
+        "frame.png": 0o666 & ~umask,
+        "nested": 0o777 & ~umask,
+        "nested/model": 0o777 & ~umask,
+        "nested/model/model.zip": 0o666 & ~umask,
+    }
