@@ -5,7 +5,8 @@ within 15 minutes of wall time per seed on the 2-core reference machine. Prints,
 training, the evaluation under the clean and nominal profiles, and the success / collision rates of the
 training episodes at each quarter of the budget; writes ``OUT/learning.md`` and ``OUT/learning.png``.
 
-    python benchmarks/learning.py --seeds 0 1 [--timesteps N] [--out out/learning]
+    python benchmarks/learning.py --seeds 0 1 [--timesteps N] [--out out/learning] [--hyperparams F.yml]
+        [--env-kwargs KEY=VALUE ...]
 """
 
 from __future__ import annotations
@@ -19,8 +20,8 @@ import numpy as np
 
 from clutter_gym.atomic import write_text_atomically
 from clutter_gym.training.figures import plt, save_figure
-from clutter_gym.training.report import WINDOW, main_job, rolling_rate
-from clutter_gym.training.run_dir import RunDir
+from clutter_gym.training.commands import add_settings_options, settings
+from clutter_gym.training.report import WINDOW, main_job, prepare_run, rolling_rate
 
 
 def main() -> None:
@@ -30,6 +31,7 @@ def main() -> None:
     parser.add_argument("--timesteps", type=int, default=None)
     parser.add_argument("--episodes", type=int, default=100)
     parser.add_argument("--out", default="out/learning")
+    add_settings_options(parser)
     args = parser.parse_args()
     out = Path(args.out)
     lines = ["| seed | train wall (min) | steps | training success / collision at 25 / 50 / 75 / 100% of budget "
@@ -38,9 +40,9 @@ def main() -> None:
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.6), sharey=True)
     for seed in args.seeds:
         t0 = time.perf_counter()
-        main_job(args.env, out / f"seed{seed}", args.timesteps, seed, args.episodes, progress=True)
+        run = prepare_run(args.env, out / f"seed{seed}", args.timesteps, seed, settings(args))
+        main_job(run, out / f"seed{seed}", args.timesteps, args.episodes, progress=True)
         wall = time.perf_counter() - t0
-        run = RunDir(out / f"seed{seed}" / "run")
         rows = run.read_episodes()
         steps = np.array([r["timestep"] for r in rows])
         success, collision = rolling_rate([r["success"] for r in rows]), rolling_rate([r["collision"] for r in rows])

@@ -6,6 +6,7 @@ import argparse
 import json
 import sys
 import time
+import typing
 from pathlib import Path
 
 import gymnasium as gym
@@ -14,7 +15,7 @@ import clutter_gym  # noqa: F401  (registers the envs)
 from clutter_gym import ENV_IDS
 from clutter_gym.noise.profiles import PROFILE_NAMES, profile_description, profile_table_markdown, resolve_noise
 from clutter_gym.training import commands as training_commands
-from clutter_gym.training.commands import positive_int
+from clutter_gym.training.commands import UserError, positive_int
 from clutter_gym.training.baselines import PotentialFieldNavigator
 from clutter_gym.video import write_video
 
@@ -69,18 +70,30 @@ def _print_demo(summary: dict) -> None:
     print(f"  episode GIF    {summary['gif']}")
 
 
+class Parser(argparse.ArgumentParser):
+    """argparse whose errors are one line, ``clutter-gym train: error: ...``, with exit status 2."""
+
+    def error(self, message: str) -> typing.NoReturn:
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="clutter-gym", description=__doc__)
-    sub = parser.add_subparsers(dest="command", required=True)
-    p = sub.add_parser("demo", help="roll out a scripted policy, write an episode GIF and print a summary")
-    p.add_argument("--env", choices=ENV_IDS, default="ClutterNav-v0")
-    p.add_argument("--seed", type=int, default=0)
+    parser = Parser(prog="clutter-gym", description="Robots in cluttered worlds: a scripted demo, the noise "
+                    "profiles, and PPO training, evaluation, sim-to-real sweeps and the main job's report.")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    p = sub.add_parser("demo", help="roll out a scripted policy, write an episode GIF and print a summary",
+                       description="Roll out the scripted potential-field policy, write an episode GIF and print "
+                                   "a summary.")
+    p.add_argument("--env", choices=ENV_IDS, default="ClutterNav-v0", help="env id")
+    p.add_argument("--seed", type=int, default=0, help="reset seed (the layout)")
     p.add_argument("--max-steps", type=positive_int, default=400, help="stop the episode after this many steps")
     p.add_argument("--frame-every", type=positive_int, default=2, help="keep every k-th frame in the GIF")
     p.add_argument("--out", default="out/demo", help="folder for the GIF")
     p.add_argument("--noise", choices=PROFILE_NAMES, default="none", help="sensor/actuation noise profile")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
-    p = sub.add_parser("profiles", help="list the noise profiles; print one's parameters; print the README table")
+    p = sub.add_parser("profiles", help="list the noise profiles; print one's parameters; print the README table",
+                       description="List the noise profiles and their parameters, or print one profile's resolved "
+                                   "parameters as JSON.")
     p.add_argument("name", nargs="?", choices=PROFILE_NAMES, help="print this profile's resolved parameters as JSON")
     training_commands.add_parsers(sub)
     return parser
@@ -97,7 +110,8 @@ def profiles(name: str | None) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    parser = build_parser()
+    args = parser.parse_args(argv)
     if args.command == "demo":
         summary = demo(args)
         if args.json:
@@ -107,7 +121,10 @@ def main(argv: list[str] | None = None) -> int:
     elif args.command == "profiles":
         profiles(args.name)
     else:
-        return args.handler(args)
+        try:
+            return args.handler(args)
+        except UserError as exc:
+            parser.exit(2, f"clutter-gym {args.command}: error: {exc}\n")
     return 0
 
 

@@ -6,10 +6,12 @@ import csv
 
 import pytest
 
+from clutter_gym.training.run_dir import RunDir
 from clutter_gym.training.sweep import SweepSpec, cell_dir, run_sweep
 
 SPEC = SweepSpec(env_id="ClutterNav-v0", train_noise=("none", "nominal"), eval_noise=("none", "harsh"), seeds=1,
-                 timesteps=64, episodes=1)
+                 timesteps=64, episodes=1,
+                 settings={"env_kwargs": {"obstacle_density": 0.05, "noise": {"lidar": {"range_sigma": 0.03}}}})
 
 
 @pytest.fixture(scope="module")
@@ -27,6 +29,9 @@ def test_a_2x2_sweep_fills_its_csv_and_heatmap(swept):
                                                                   for e in SPEC.eval_noise}
     assert all(0.0 <= float(r["success_rate"]) <= 1.0 and r["episodes"] == "1" for r in rows)
     assert (out / "heatmap.png").stat().st_size > 5000
+    config = RunDir(cell_dir(out, "nominal", 0) / "run").read_config()
+    assert config.noise == "nominal" and config.env_kwargs["obstacle_density"] == 0.05
+    assert config.make_kwargs("harsh")["noise"] == {"profile": "harsh", "lidar": {"range_sigma": 0.03}}
 
 
 def test_a_restarted_sweep_skips_finished_cells_and_redoes_only_missing_ones(swept):

@@ -83,9 +83,10 @@ def test_cli_rejects_malformed_options(argv, capsys):
     assert "error" in capsys.readouterr().err
 
 
-def test_resume_refuses_options_that_would_change_the_config(tmp_path):
-    with pytest.raises(SystemExit, match="seed"):
+def test_resume_refuses_options_that_would_change_the_config(tmp_path, capsys):
+    with pytest.raises(SystemExit) as exit_info:
         main(["train", "--resume", str(tmp_path), "--seed", "3"])
+    assert exit_info.value.code == 2 and "drop --seed" in capsys.readouterr().err
 
 
 def test_wilson_interval_matches_published_values():

@@ -10,9 +10,10 @@ import numpy as np
 import pytest
 
 from clutter_gym.cli import main
+from clutter_gym.training import load
 from clutter_gym.training.config import config_for
 from clutter_gym.training.episode_stats import EPISODE_KEYS, EpisodeStats
-from clutter_gym.training.evaluate import METRICS, TrainedPolicy, evaluate
+from clutter_gym.training.evaluate import METRICS, evaluate
 from clutter_gym.training.run_dir import MODEL_FILE, NORMALIZER_FILE, RunDir
 from clutter_gym.training.train import start, train
 
@@ -40,13 +41,13 @@ def test_a_tiny_run_leaves_a_complete_loadable_run_folder(trained):
     assert [step for step, _ in run.checkpoints()] == [128, 256]  # every checkpoint_every steps
     assert any(run.tb_dir.glob("events.out.tfevents.*"))
     assert json.loads(run.eval_file.read_text())["metrics"].keys() == set(METRICS)
-    policy = TrainedPolicy(run.model_dir)
-    env = gym.make("ClutterNav-v0")
+    agent = load(run.root)
+    env = agent.make_env()
     obs, _ = env.reset(seed=0)
-    action = policy(obs)
+    action, state = agent.predict(obs)
     env.close()
-    assert action.shape == (2,) and np.all(np.isfinite(action))
-    assert policy.model.num_timesteps == 256
+    assert action.shape == (2,) and np.all(np.isfinite(action)) and state is None
+    assert agent.step == 256 and agent.folder == run.model_dir
     assert summary["model_step"] == 256
 
 
@@ -60,8 +61,7 @@ def test_resume_continues_the_step_count_from_the_newest_checkpoint(tmp_path):
     shutil.rmtree(run.latest_checkpoint()[1])
     assert run.latest_checkpoint()[0] == 128
     train(run, progress=False, timesteps=384)
-    policy = TrainedPolicy(run.policy_folder())
-    assert policy.model.num_timesteps == 384
+    assert load(run.root).step == 384
     assert run.read_config().timesteps == 384
     steps = [row["timestep"] for row in run.read_episodes()]
     assert steps == sorted(steps)
@@ -81,7 +81,7 @@ def test_an_interrupted_checkpoint_write_leaves_the_previous_checkpoint_intact(t
         run.save_checkpoint(DiesMidWrite(), None, step=10_000, keep=3)
     assert run.latest_checkpoint() == before
     assert not list(run.checkpoints_dir.glob(".step_*")), "the temporary folder must be removed"
-    TrainedPolicy(before[1])  # still loads
+    assert load(run.root, step=before[0]).folder == before[1]  # still loads
 
 
 def test_a_new_run_refuses_a_folder_that_already_holds_one(trained):

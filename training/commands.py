@@ -1,21 +1,41 @@
 """The ``train``, ``eval``, ``sweep`` and ``report`` sub-commands of ``clutter-gym`` (parsers and handlers).
 
 Parsers import nothing heavy, so ``clutter-gym demo`` works without the ``train`` extra; the handlers import
-stable-baselines3 and torch when they run.
+stable-baselines3 and torch when they run. Handlers check what they were asked first (settings, files, run
+folders) and report a mistake there as a :class:`UserError`, which the CLI prints as one line.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import re
 import typing
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
+import yaml
+
 from clutter_gym import ENV_IDS
 from clutter_gym.noise.profiles import PROFILE_NAMES
-from clutter_gym.training.config import EVAL_SEED, PPOHyperparams
+from clutter_gym.training.config import EVAL_SEED, PPOHyperparams, deep_merge
+
+
+class UserError(Exception):
+    """A mistake in what the user asked for; the CLI prints it as one ``error:`` line and exits with status 2."""
+
+
+@contextmanager
+def user_errors() -> Iterator[None]:
+    """Treat the checks' exceptions (bad values, missing or occupied folders, unloadable runs) as user errors."""
+    try:
+        yield
+    except (ValueError, FileNotFoundError, FileExistsError) as exc:
+        raise UserError(str(exc)) from None
+
 
 def positive_int(text: str) -> int:
     value = int(text)
@@ -39,79 +59,160 @@ def _int_tuple(text: str) -> tuple[int, ...]:
         raise argparse.ArgumentTypeError(f"must be comma-separated integers such as 64,64, got {text!r}") from None
 
 
+def env_kwarg(text: str) -> tuple[str, Any]:
+    """``KEY=VALUE`` with a YAML value (``0.05``, ``true``, ``[lidar,imu]``); dotted keys reach into mappings."""
+    key, sep, value = text.partition("=")
+    if not sep or not re.fullmatch(r"[A-Za-z_]\w*(\.[A-Za-z_]\w*)*", key):
+        raise argparse.ArgumentTypeError(f"must be KEY=VALUE such as obstacle_density=0.05 or "
+                                         f"noise.lidar.range_sigma=0.02, got {text!r}")
+    try:
+        return key, yaml.safe_load(value)
+    except yaml.YAMLError:
+        raise argparse.ArgumentTypeError(f"{key}: {value!r} is not a YAML value") from None
+
+
+def nest(pairs: list[tuple[str, Any]] | None) -> dict[str, Any]:
+    """``[("noise.lidar.range_sigma", 0.02), ...]`` as nested mappings; later pairs win."""
+    nested: dict[str, Any] = {}
+    for key, value in pairs or ():
+        for part in reversed(key.split(".")):
+            value = {part: value}
+        nested = deep_merge(nested, value)
+    return nested
+
+
+def field_docs(cls: type) -> dict[str, str]:
+    """The one-line descriptions of a dataclass's fields, from the ``Attributes:`` section of its docstring."""
+    docs: dict[str, str] = {}
+    section = (cls.__doc__ or "").partition("Attributes:")[2]
+    for match in re.finditer(r"^\s+(\w+): (.+?)(?=^\s+\w+: |\Z)", section, re.M | re.S):
+        docs[match.group(1)] = " ".join(match.group(2).split())
+    return docs
+
+
+def _help(text: str) -> str:
+    return text.replace("%", "%%")  # argparse %-formats help strings
+
+
+def add_settings_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--env-kwargs", dest="env_kwargs", metavar="KEY=VALUE", nargs="+", action="extend",
+                        type=env_kwarg, default=None,
+                        help="gym.make arguments on top of the hyperparameter files' env_kwargs, YAML values "
+                             "(obstacle_density=0.05 sensors=[lidar,imu]); noise.SECTION.PARAM=VALUE overrides one "
+                             "noise parameter on top of every profile (noise.lidar.range_sigma=0.02)")
+    parser.add_argument("--hyperparams", metavar="FILE.yml", default=None,
+                        help="your own hyperparameter file, in the form of the shipped ppo.yml ('default' and "
+                             "env-id blocks); it goes on top of the shipped file, and options go on top of it")
+
+
 def _add_ppo_options(parser: argparse.ArgumentParser) -> None:
     """One typed option per PPOHyperparams field (--learning-rate FLOAT, --net-arch 64,64, --[no-]normalize-obs)."""
-    group = parser.add_argument_group("PPO hyperparameters (override training/hyperparams/ppo.yml)")
-    hints = typing.get_type_hints(PPOHyperparams)
+    group = parser.add_argument_group("PPO hyperparameters (default: the hyperparameter files)")
+    hints, docs = typing.get_type_hints(PPOHyperparams), field_docs(PPOHyperparams)
     for f in fields(PPOHyperparams):
-        flag = "--" + f.name.replace("_", "-")
-        kind = hints[f.name]
+        flag, kind, text = "--" + f.name.replace("_", "-"), hints[f.name], _help(docs[f.name].rstrip("."))
         if kind is bool:
-            group.add_argument(flag, dest=f"ppo.{f.name}", action=argparse.BooleanOptionalAction, default=None)
+            group.add_argument(flag, dest=f"ppo.{f.name}", action=argparse.BooleanOptionalAction, default=None,
+                               help=text)
         elif kind in (int, float):
-            group.add_argument(flag, dest=f"ppo.{f.name}", type=kind, default=None, metavar=kind.__name__.upper())
+            group.add_argument(flag, dest=f"ppo.{f.name}", type=kind, default=None, metavar=kind.__name__.upper(),
+                               help=text)
         else:
-            group.add_argument(flag, dest=f"ppo.{f.name}", type=_int_tuple, default=None, metavar="N,N")
+            group.add_argument(flag, dest=f"ppo.{f.name}", type=_int_tuple, default=None, metavar="N,N", help=text)
 
 
 _TRAIN_KEYS = ("seed", "noise", "timesteps", "n_envs", "checkpoint_every", "final_eval_episodes")
 
 
+def _given(args: argparse.Namespace) -> dict[str, Any]:
+    """The train options given on the command line, by destination (``ppo.*`` for PPO fields)."""
+    keys = (*_TRAIN_KEYS, "env_kwargs", "hyperparams", "env", "out")
+    return {k: v for k, v in vars(args).items() if v is not None and (k in keys or k.startswith("ppo."))}
+
+
+def settings(args: argparse.Namespace) -> dict[str, Any]:
+    """Config overrides from ``--hyperparams`` and ``--env-kwargs`` (in that order) for ``args.env``."""
+    from clutter_gym.training.config import read_hyperparams_file, user_settings
+
+    table = read_hyperparams_file(args.hyperparams) if args.hyperparams else {}
+    return deep_merge(user_settings(table, args.env), {"env_kwargs": nest(args.env_kwargs)})
+
+
 def train_overrides(args: argparse.Namespace) -> dict[str, Any]:
-    """The options given on the command line, as a config override mapping."""
-    overrides: dict[str, Any] = {k: getattr(args, k) for k in _TRAIN_KEYS if getattr(args, k) is not None}
+    """The file settings, then the options given on the command line, as a config override mapping."""
+    overrides = settings(args)
+    overrides.update({k: getattr(args, k) for k in _TRAIN_KEYS if getattr(args, k) is not None})
     ppo = {k.split(".", 1)[1]: v for k, v in vars(args).items() if k.startswith("ppo.") and v is not None}
-    if ppo:
-        overrides["ppo"] = ppo
-    return overrides
+    return deep_merge(overrides, {"ppo": ppo})
 
 
 def add_parsers(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("train", help="train PPO into a run folder (or --resume one)")
+    p = sub.add_parser("train", help="train PPO into a run folder (or --resume one)",
+                       description="Train PPO into a run folder, or continue one with --resume.")
     p.add_argument("--env", choices=ENV_IDS, default=None, help="env id (default ClutterNav-v0)")
-    p.add_argument("--timesteps", type=positive_int, default=None, help="total env steps (default from ppo.yml)")
-    p.add_argument("--n-envs", type=positive_int, default=None, help="parallel envs (default from ppo.yml)")
-    p.add_argument("--seed", type=int, default=None, help="seed (default 0)")
+    p.add_argument("--timesteps", type=positive_int, default=None, help="total env steps (default from the files)")
+    p.add_argument("--n-envs", type=positive_int, default=None, help="parallel envs (default from the files)")
+    p.add_argument("--seed", type=int, default=None, help="seeds PPO and the envs (env i gets SEED + i; default 0)")
     p.add_argument("--noise", choices=PROFILE_NAMES, default=None, help="noise profile to train under (default none)")
     p.add_argument("--checkpoint-every", type=positive_int, default=None, help="env steps between checkpoints")
-    p.add_argument("--final-eval-episodes", type=int, default=None, help="episodes of the evaluation after training")
+    p.add_argument("--final-eval-episodes", type=int, default=None,
+                   help="episodes of the evaluation written to eval.json after training (0: none)")
     p.add_argument("--out", default=None, help="the run folder (default runs/ENV/NOISE-seedSEED)")
     p.add_argument("--resume", metavar="RUN_DIR", default=None,
-                   help="continue this run from its newest checkpoint with its saved config (only --timesteps may change)")
+                   help="continue this run from its newest checkpoint with its saved settings (only --timesteps "
+                        "may change)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_settings_options(p)
     _add_ppo_options(p)
     p.set_defaults(handler=run_train)
 
-    p = sub.add_parser("eval", help="evaluate a run under a noise profile: rates and means with 95% intervals")
-    p.add_argument("run", help="run folder")
-    p.add_argument("--noise", choices=PROFILE_NAMES, default="none", help="noise profile to evaluate under")
-    p.add_argument("--episodes", type=positive_int, default=100)
+    p = sub.add_parser("eval", help="evaluate a run under a noise profile: rates and means with 95%% intervals",
+                       description="Evaluate a trained run: success and collision rates, cost, return, length and "
+                                   "clearance, each with its 95%% interval.")
+    p.add_argument("run", help="run folder (written by train, or out/main/run by report)")
+    p.add_argument("--noise", choices=PROFILE_NAMES, default="none",
+                   help="noise profile to evaluate under (the run's noise overrides apply on top)")
+    p.add_argument("--episodes", type=positive_int, default=100, help="episodes to roll out")
     p.add_argument("--seed", type=int, default=EVAL_SEED, help="episode i is reset with seed SEED + i")
+    p.add_argument("--env-kwargs", dest="env_kwargs", metavar="KEY=VALUE", nargs="+", action="extend",
+                   type=env_kwarg, default=None,
+                   help="change the run's env arguments for this evaluation (obstacle_density=0.2, "
+                        "noise.lidar.range_sigma=0.05); the observation and action shapes must stay the same")
     p.add_argument("--json", action="store_true", help="print the summary as JSON (per-episode rows included)")
     p.add_argument("--video", default=None, help="write the first episode to this .gif or .mp4")
     p.set_defaults(handler=run_eval)
 
-    p = sub.add_parser("sweep", help="sim-to-real sweep: train under profiles, evaluate under profiles, CSV + heatmap")
-    p.add_argument("--env", choices=ENV_IDS, default="ClutterNav-v0")
-    p.add_argument("--train-noise", type=profile_list, default=["none", "nominal"], help="comma-separated profiles")
-    p.add_argument("--eval-noise", type=profile_list, default=["none", "nominal", "harsh"], help="comma-separated profiles")
+    p = sub.add_parser("sweep", help="sim-to-real sweep: train under profiles, evaluate under profiles, CSV + heatmap",
+                       description="Train under each --train-noise profile and seed, evaluate every run under "
+                                   "each --eval-noise profile; write sweep.csv and heatmap.png.")
+    p.add_argument("--env", choices=ENV_IDS, default="ClutterNav-v0", help="env id")
+    p.add_argument("--train-noise", type=profile_list, default=["none", "nominal"],
+                   help="comma-separated profiles to train under")
+    p.add_argument("--eval-noise", type=profile_list, default=["none", "nominal", "harsh"],
+                   help="comma-separated profiles to evaluate every run under")
     p.add_argument("--seeds", type=positive_int, default=2, help="training seeds per train profile (0..N-1)")
-    p.add_argument("--timesteps", type=positive_int, default=None, help="env steps per training run (default from ppo.yml)")
+    p.add_argument("--timesteps", type=positive_int, default=None,
+                   help="env steps per training run (default from the files)")
     p.add_argument("--episodes", type=positive_int, default=50, help="evaluation episodes per (run, eval profile)")
     p.add_argument("--out", default="runs/sweep", help="sweep folder (cells, sweep.csv, heatmap.png)")
     p.add_argument("--workers", type=positive_int, default=None, help="cells run at once (default: CPU cores)")
     p.add_argument("--n-envs", type=positive_int, default=1, help="envs per training cell")
     p.add_argument("--ray-address", default=None,
                    help="run cells as Ray tasks on this cluster ('auto', 'ray://host:10001', or 'local' for a local Ray)")
+    add_settings_options(p)
     p.set_defaults(handler=run_sweep)
 
-    p = sub.add_parser("report", help="the main job: train PPO, evaluate clean and nominal, write a report")
-    p.add_argument("--env", choices=ENV_IDS, default="ClutterNav-v0")
-    p.add_argument("--timesteps", type=positive_int, default=None, help="training budget in env steps (default from ppo.yml)")
-    p.add_argument("--seed", type=int, default=0)
+    p = sub.add_parser("report", help="the main job: train PPO, evaluate clean and nominal, write a report",
+                       description="The main job: train PPO with the defaults (or resume that run), evaluate it "
+                                   "with clean sensors and under the nominal profile, and write report.md, a "
+                                   "learning curve and an episode GIF.")
+    p.add_argument("--env", choices=ENV_IDS, default="ClutterNav-v0", help="env id")
+    p.add_argument("--timesteps", type=positive_int, default=None, help="training budget in env steps (default from the files)")
+    p.add_argument("--seed", type=int, default=0, help="training seed")
     p.add_argument("--episodes", type=positive_int, default=100, help="evaluation episodes per profile")
-    p.add_argument("--out", default="out/main", help="report folder (the run is RUN/run)")
+    p.add_argument("--out", default="out/main", help="report folder (the run is OUT/run)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_settings_options(p)
     p.set_defaults(handler=run_report)
 
 
@@ -120,18 +221,21 @@ def run_train(args: argparse.Namespace) -> int:
     from clutter_gym.training.run_dir import RunDir
     from clutter_gym.training.train import start, train
 
-    overrides = train_overrides(args)
-    if args.resume is not None:
-        extra = sorted(set(overrides) - {"timesteps"}) + (["--env"] if args.env else []) + (["--out"] if args.out else [])
-        if extra:
-            raise SystemExit(f"clutter-gym train: --resume continues with the run's saved config; drop {extra}")
-        run = RunDir(args.resume)
-        run.read_config()
-    else:
-        config = config_for(args.env or "ClutterNav-v0", overrides)
-        run = start(config, args.out or f"runs/{config.env_id}/{config.noise}-seed{config.seed}")
+    with user_errors():
+        if args.resume is not None:
+            extra = sorted(set(_given(args)) - {"timesteps"})
+            if extra:
+                flags = ", ".join("--" + k.removeprefix("ppo.").replace("_", "-") for k in extra)
+                raise UserError(f"--resume continues the run with its saved settings; only --timesteps may "
+                                f"change, so drop {flags}")
+            run = RunDir(args.resume)
+            run.read_config()
+        else:
+            args.env = args.env or "ClutterNav-v0"
+            config = config_for(args.env, train_overrides(args))
+            run = start(config, args.out or f"runs/{config.env_id}/{config.noise}-seed{config.seed}")
     print(f"run folder: {run.root}")
-    summary = train(run, progress=not args.no_progress, timesteps=overrides.get("timesteps"))
+    summary = train(run, progress=not args.no_progress, timesteps=args.timesteps)
     if summary is not None:
         print_summary(summary)
     return 0
@@ -140,7 +244,9 @@ def run_train(args: argparse.Namespace) -> int:
 def run_eval(args: argparse.Namespace) -> int:
     from clutter_gym.training.evaluate import evaluate
 
-    summary = evaluate(args.run, noise=args.noise, episodes=args.episodes, seed=args.seed, video=args.video)
+    with user_errors():
+        summary = evaluate(args.run, noise=args.noise, episodes=args.episodes, seed=args.seed, video=args.video,
+                           env_overrides=nest(args.env_kwargs))
     if args.json:
         print(json.dumps(summary))
     else:
@@ -159,10 +265,13 @@ def print_summary(summary: dict[str, Any]) -> None:
 
 
 def run_sweep(args: argparse.Namespace) -> int:
-    from clutter_gym.training.sweep import SweepSpec, run_sweep as sweep
+    from clutter_gym.training.sweep import SweepSpec, check_spec, run_sweep as sweep
 
-    spec = SweepSpec(env_id=args.env, train_noise=tuple(args.train_noise), eval_noise=tuple(args.eval_noise),
-                     seeds=args.seeds, timesteps=args.timesteps, episodes=args.episodes, n_envs=args.n_envs)
+    with user_errors():
+        spec = SweepSpec(env_id=args.env, train_noise=tuple(args.train_noise), eval_noise=tuple(args.eval_noise),
+                         seeds=args.seeds, timesteps=args.timesteps, episodes=args.episodes, n_envs=args.n_envs,
+                         settings=settings(args))
+        check_spec(spec, Path(args.out))
     result = sweep(spec, Path(args.out), workers=args.workers, ray_address=args.ray_address)
     print(f"sweep: {result['cells_run']} cells run, {result['cells_skipped']} already done")
     print(f"  {result['csv']}\n  {result['heatmap']}")
@@ -170,9 +279,11 @@ def run_sweep(args: argparse.Namespace) -> int:
 
 
 def run_report(args: argparse.Namespace) -> int:
-    from clutter_gym.training.report import main_job
+    from clutter_gym.training.report import main_job, prepare_run
 
-    report = main_job(args.env, Path(args.out), timesteps=args.timesteps, seed=args.seed, episodes=args.episodes,
+    with user_errors():
+        run = prepare_run(args.env, Path(args.out), timesteps=args.timesteps, seed=args.seed, settings=settings(args))
+    report = main_job(run, Path(args.out), timesteps=args.timesteps, episodes=args.episodes,
                       progress=not args.no_progress)
     print(Path(report).read_text())
     return 0

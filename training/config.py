@@ -1,15 +1,19 @@
-"""Training configuration: typed dataclasses, loaded from ``hyperparams/ppo.yml`` and overridden from the CLI.
+"""Training configuration: typed dataclasses, loaded from ``hyperparams/ppo.yml`` and overridden by the user.
 
-The YAML file holds a ``default`` block and one block per env id that overrides it key by key (``ppo`` and
-``env_kwargs`` are merged one level down). Every value is checked against its field's type and range here, so a
-typo in the file or on the command line fails before any env is built, naming the field.
+The YAML file holds a ``default`` block and one block per env id that overrides it. A user's own file of the
+same form (``--hyperparams FILE.yml``) and the command-line options go on top, in that order. Mappings merge key
+by key at every depth (``ppo``, ``env_kwargs``, ``env_kwargs.noise``); every other value replaces. Every value is
+checked against its field's type and range here, so a typo in a file or on the command line fails before any
+env is built, naming the field.
 """
 
 from __future__ import annotations
 
+import inspect
 import math
 from dataclasses import asdict, dataclass, field, fields
 from importlib import resources
+from pathlib import Path
 from typing import Any
 
 import yaml
@@ -21,10 +25,24 @@ EVAL_SEED = 1_000_000
 
 @dataclass(frozen=True)
 class PPOHyperparams:
-    """The stable-baselines3 PPO settings this project exposes (see SB3's PPO docs for their meaning).
+    """The stable-baselines3 PPO settings this project exposes (SB3's PPO docs give the algorithm's details).
 
-    ``net_arch`` is the hidden layer sizes of both the policy and the value network; ``normalize_obs`` and
-    ``normalize_reward`` wrap the vector env in SB3's ``VecNormalize`` (running mean/std, clipped at 10).
+    Each attribute's line below is also its ``clutter-gym train --help`` text.
+
+    Attributes:
+        learning_rate: Adam step size.
+        n_steps: env steps per env in each rollout (a rollout holds n_steps x n_envs steps).
+        batch_size: minibatch size of the gradient steps.
+        n_epochs: passes over each rollout.
+        gamma: discount factor.
+        gae_lambda: GAE bias/variance trade-off (1 = Monte Carlo returns).
+        clip_range: PPO ratio clipping.
+        ent_coef: entropy bonus weight.
+        vf_coef: value loss weight.
+        max_grad_norm: gradient norm clipping.
+        net_arch: hidden layer sizes of both the policy and the value network.
+        normalize_obs: normalise the float observation entries by running mean and std (SB3 VecNormalize).
+        normalize_reward: scale rewards by the running std of the discounted return (SB3 VecNormalize).
     """
 
     learning_rate: float = 3e-4
@@ -77,7 +95,9 @@ class TrainConfig:
         checkpoint_every: env steps between checkpoints.
         keep_checkpoints: how many of the newest checkpoints to keep.
         final_eval_episodes: episodes of the evaluation written to ``eval.json`` after training (0: none).
-        env_kwargs: extra ``gym.make`` keyword arguments.
+        env_kwargs: extra ``gym.make`` keyword arguments. Its ``noise`` entry, if any, holds noise-section
+            overrides (``{"lidar": {"range_sigma": 0.02}}``) applied on top of whichever profile the env is
+            made under, for training and evaluation alike.
         ppo: PPO hyperparameters.
     """
 
@@ -106,12 +126,18 @@ class TrainConfig:
         _check_range("checkpoint_every", self.checkpoint_every, 1, 10**10)
         _check_range("keep_checkpoints", self.keep_checkpoints, 1, 1000)
         _check_range("final_eval_episodes", self.final_eval_episodes, 0, 100_000)
-        if not isinstance(self.env_kwargs, dict) or "noise" in self.env_kwargs:
-            raise ValueError("env_kwargs must be a mapping of gym.make keyword arguments without 'noise' "
-                             "(the noise profile is its own option)")
+        check_env_kwargs(self.env_id, self.noise, self.env_kwargs)
         if self.ppo.batch_size > self.ppo.n_steps * self.n_envs:
             raise ValueError(f"ppo.batch_size must be in [2, n_steps * n_envs = {self.ppo.n_steps * self.n_envs}], "
                              f"got {self.ppo.batch_size}")
+
+    def make_kwargs(self, noise: str | None = None) -> dict[str, Any]:
+        """``gym.make`` keyword arguments for the run's env under profile ``noise`` (default: the training one)."""
+        kwargs = dict(self.env_kwargs)
+        sections = kwargs.pop("noise", None)
+        profile = self.noise if noise is None else noise
+        kwargs["noise"] = {"profile": profile, **sections} if sections else profile
+        return kwargs
 
     def to_dict(self) -> dict[str, Any]:
         data = asdict(self)
@@ -122,9 +148,9 @@ class TrainConfig:
     def from_dict(cls, data: dict[str, Any]) -> TrainConfig:
         """Build from a plain mapping (a YAML block or a saved ``config.yaml``); unknown keys are errors."""
         data = dict(data)
-        _reject_unknown("config", data, {f.name for f in fields(cls)})
+        _reject_unknown("config key(s)", data, {f.name for f in fields(cls)})
         ppo = dict(data.pop("ppo", {}) or {})
-        _reject_unknown("ppo", ppo, {f.name for f in fields(PPOHyperparams)})
+        _reject_unknown("ppo key(s)", ppo, {f.name for f in fields(PPOHyperparams)})
         if "net_arch" in ppo:
             ppo["net_arch"] = tuple(ppo["net_arch"])
         data["env_kwargs"] = dict(data.get("env_kwargs") or {})
@@ -140,10 +166,51 @@ def _check_range(name: str, value: Any, low: float, high: float, low_open: bool 
         raise ValueError(f"{name} must be a number in {bracket}{low}, {high}], got {value!r}")
 
 
-def _reject_unknown(where: str, data: dict[str, Any], known: set[str]) -> None:
+def _reject_unknown(what: str, data: dict[str, Any], known: set[str]) -> None:
     unknown = sorted(set(data) - known)
     if unknown:
-        raise ValueError(f"unknown {where} key(s) {unknown}; allowed: {sorted(known)}")
+        raise ValueError(f"unknown {what} {unknown}; allowed: {sorted(known)}")
+
+
+def env_arguments(env_id: str) -> list[str]:
+    """The keys ``env_kwargs`` may hold for ``env_id``: its constructor's arguments, less ``render_mode`` (the
+    tools set it), plus gym.make's ``max_episode_steps``."""
+    import gymnasium as gym
+    from gymnasium.envs.registration import load_env_creator
+
+    creator = load_env_creator(gym.spec(env_id).entry_point)
+    return sorted({*inspect.signature(creator).parameters, "max_episode_steps"} - {"render_mode"})
+
+
+def check_env_kwargs(env_id: str, noise: str, env_kwargs: Any) -> None:
+    """Names and noise overrides of ``env_kwargs`` (their values are the env's to check, when it is made).
+
+    Raises:
+        ValueError: not a mapping, an unknown key (the message lists the allowed ones), or bad noise overrides.
+    """
+    from clutter_gym.noise.profiles import resolve_noise
+
+    if not isinstance(env_kwargs, dict):
+        raise ValueError(f"env_kwargs must be a mapping of gym.make keyword arguments, got {env_kwargs!r}")
+    _reject_unknown(f"env_kwargs key(s) for {env_id}", env_kwargs, set(env_arguments(env_id)))
+    sections = env_kwargs.get("noise")
+    if sections is None:
+        return
+    if not isinstance(sections, dict) or "profile" in sections:
+        raise ValueError("env_kwargs.noise takes noise-section overrides such as noise.lidar.range_sigma=0.02, "
+                         f"applied on top of the profile (the profile is the 'noise' option), got {sections!r}")
+    resolve_noise({"profile": noise, **sections})
+
+
+def deep_merge(base: dict[str, Any], top: dict[str, Any]) -> dict[str, Any]:
+    """``base`` updated by ``top``: mappings merge key by key at every depth, other values replace."""
+    merged = dict(base)
+    for key, value in top.items():
+        if isinstance(value, dict) and isinstance(merged.get(key), dict):
+            merged[key] = deep_merge(merged[key], value)
+        else:
+            merged[key] = value
+    return merged
 
 
 def hyperparams_table() -> dict[str, Any]:
@@ -152,14 +219,38 @@ def hyperparams_table() -> dict[str, Any]:
     return yaml.safe_load(text)
 
 
+def read_hyperparams_file(path: str | Path) -> dict[str, Any]:
+    """A user's hyperparameter file: the shipped file's form (``default`` and env-id blocks), checked by name.
+
+    Raises:
+        FileNotFoundError: no such file.
+        ValueError: not YAML, not a mapping of blocks, or a block named neither ``default`` nor an env id.
+    """
+    from clutter_gym import ENV_IDS
+
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"hyperparameter file {str(path)!r} does not exist")
+    try:
+        table = yaml.safe_load(path.read_text())
+    except yaml.YAMLError as exc:
+        raise ValueError(f"hyperparameter file {str(path)!r} is not valid YAML: {exc}".replace("\n", " ")) from None
+    if table is None:
+        return {}
+    if not isinstance(table, dict) or not all(isinstance(block, dict | None) for block in table.values()):
+        raise ValueError(f"hyperparameter file {str(path)!r} must map 'default' and env ids to blocks of settings "
+                         "(the form of clutter_gym/training/hyperparams/ppo.yml)")
+    _reject_unknown(f"block name(s) in {str(path)!r}", table, {"default", *ENV_IDS})
+    return table
+
+
+def user_settings(table: dict[str, Any], env_id: str) -> dict[str, Any]:
+    """A user table's settings for ``env_id``: its ``default`` block with the env's block on top."""
+    return deep_merge(table.get("default") or {}, table.get(env_id) or {})
+
+
 def config_for(env_id: str, overrides: dict[str, Any] | None = None) -> TrainConfig:
-    """The YAML default block, then the env's block, then ``overrides`` (``ppo`` and ``env_kwargs`` merged by key)."""
+    """The shipped ``default`` block, then the env's block, then ``overrides`` (a user's file, then options)."""
     table = hyperparams_table()
-    merged: dict[str, Any] = {"env_id": env_id}
-    for layer in (table.get("default", {}), table.get(env_id, {}), overrides or {}):
-        for key, value in layer.items():
-            if key in ("ppo", "env_kwargs"):
-                merged[key] = {**merged.get(key, {}), **(value or {})}
-            else:
-                merged[key] = value
-    return TrainConfig.from_dict(merged)
+    merged = deep_merge({"env_id": env_id}, user_settings(table, env_id))
+    return TrainConfig.from_dict(deep_merge(merged, overrides or {}))

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from clutter_gym.atomic import write_text_atomically
-from clutter_gym.training.config import EVAL_SEED, config_for
+from clutter_gym.training.config import EVAL_SEED, config_for, deep_merge
 from clutter_gym.training.evaluate import evaluate
 from clutter_gym.training.run_dir import RunDir
 from clutter_gym.training.train import start, train
@@ -23,14 +23,44 @@ PROFILES = ("none", "nominal")
 WINDOW = 100
 
 
-def main_job(env_id: str, out: Path, timesteps: int | None, seed: int, episodes: int, progress: bool = True) -> Path:
-    """Train (or resume / reuse) ``OUT/run``, evaluate it under each of PROFILES, write the report; returns its path."""
+def prepare_run(env_id: str, out: Path, timesteps: int | None, seed: int, settings: dict | None = None) -> RunDir:
+    """``OUT/run``: started with the resolved settings, or the run already there if it has those settings.
+
+    Raises:
+        ValueError: ``OUT/run`` holds a run with other settings (another budget is fine: the run continues to
+            it), or a setting is bad (named).
+    """
     run = RunDir(out / "run")
+    overrides = deep_merge(settings or {}, {"seed": seed, "final_eval_episodes": 0})
+    if timesteps is not None:
+        overrides["timesteps"] = timesteps
+    config = config_for(env_id, overrides)
     if not run.config_file.is_file():
-        overrides = {"seed": seed, "final_eval_episodes": 0}
-        if timesteps is not None:
-            overrides["timesteps"] = timesteps
-        start(config_for(env_id, overrides), run.root)
+        return start(config, run.root)
+    saved = run.read_config()
+    differ = _differences(saved.to_dict(), config.to_dict(), ignore={"timesteps"})
+    if differ:
+        raise ValueError(f"{run.root} holds a run with other settings ({', '.join(differ)}); pass another --out, "
+                         "or the options it was started with")
+    return run
+
+
+def _differences(saved: dict, wanted: dict, ignore: set[str], prefix: str = "") -> list[str]:
+    """The settings (dotted names, both values) that differ between two config dicts, less those in ``ignore``."""
+    names = []
+    for key in sorted(set(saved) | set(wanted)):
+        a, b = saved.get(key), wanted.get(key)
+        if prefix + key in ignore or a == b:
+            continue
+        if isinstance(a, dict) and isinstance(b, dict):
+            names += _differences(a, b, ignore, f"{prefix}{key}.")
+        else:
+            names.append(f"{prefix}{key}: {a!r} in the run, {b!r} asked")
+    return names
+
+
+def main_job(run: RunDir, out: Path, timesteps: int | None, episodes: int, progress: bool = True) -> Path:
+    """Train (or resume / reuse) ``run``, evaluate it under each of PROFILES, write the report; returns its path."""
     t0 = time.perf_counter()
     if not run.is_finished() or (timesteps is not None and timesteps != run.read_config().timesteps):
         train(run, progress=progress, timesteps=timesteps)

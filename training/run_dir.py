@@ -2,7 +2,7 @@
 
 ```
 RUN/
-  config.yaml            the resolved TrainConfig
+  config.yaml            the resolved TrainConfig, the run format and the package versions that wrote it
   episodes.csv           one row per finished training episode (timestep + EpisodeStats fields)
   tb/                    TensorBoard event files
   checkpoints/step_<N>/  model.zip + vecnormalize.pkl, every ``checkpoint_every`` steps (newest few kept)
@@ -17,8 +17,10 @@ complete; a run killed mid-write leaves only a hidden temporary folder, which th
 from __future__ import annotations
 
 import csv
+import platform
 import re
 import shutil
+from importlib import metadata
 from pathlib import Path
 from typing import Any
 
@@ -30,6 +32,24 @@ from clutter_gym.training.config import TrainConfig
 MODEL_FILE = "model.zip"
 NORMALIZER_FILE = "vecnormalize.pkl"
 _STEP_DIR = re.compile(r"^step_(\d+)$")
+#: Layout version of a run folder. A config.yaml without one predates the field and has format 1.
+RUN_FORMAT = 1
+_PACKAGES = ("clutter-gym", "stable-baselines3", "torch", "gymnasium", "numpy")
+
+
+class IncompatibleRunError(ValueError):
+    """A run folder that this version of clutter-gym cannot rebuild (another format, settings or model file)."""
+
+
+def package_versions() -> dict[str, str]:
+    """Versions of the packages a run's files depend on, and Python's."""
+    versions = {}
+    for name in _PACKAGES:
+        try:
+            versions[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            versions[name] = "not installed"
+    return {**versions, "python": platform.python_version()}
 
 
 class RunDir:
@@ -46,12 +66,42 @@ class RunDir:
 
     # -- config ---------------------------------------------------------------------------------------------
     def write_config(self, config: TrainConfig) -> None:
-        write_text_atomically(self.config_file, yaml.safe_dump(config.to_dict(), sort_keys=False))
+        data = {"run_format": RUN_FORMAT, "written_by": package_versions(), **config.to_dict()}
+        write_text_atomically(self.config_file, yaml.safe_dump(data, sort_keys=False))
+
+    def written_by(self) -> dict[str, str]:
+        """The package versions recorded when the config was last written (empty for runs that predate them)."""
+        return dict(self._read_config_file().get("written_by") or {})
 
     def read_config(self) -> TrainConfig:
+        """The run's config.
+
+        Raises:
+            FileNotFoundError: the folder holds no run.
+            IncompatibleRunError: the run's format or settings do not fit this version of clutter-gym.
+        """
+        data = self._read_config_file()
+        run_format, written_by = data.pop("run_format", 1), data.pop("written_by", None) or {}
+        wrote = f"clutter-gym {written_by.get('clutter-gym', '0.1.0 or older')}"
+        here = f"clutter-gym {package_versions()['clutter-gym']}"
+        if run_format != RUN_FORMAT:
+            raise IncompatibleRunError(f"{self.root} is a run of format {run_format!r}, written by {wrote}; this "
+                                       f"{here} reads format {RUN_FORMAT}: use the version that wrote it")
+        try:
+            return TrainConfig.from_dict(data)
+        except (TypeError, ValueError) as exc:
+            raise IncompatibleRunError(f"{self.config_file} (written by {wrote}) does not fit {here}: {exc}") from None
+
+    def _read_config_file(self) -> dict:
         if not self.config_file.is_file():
             raise FileNotFoundError(f"{self.root} is not a run folder: it has no config.yaml")
-        return TrainConfig.from_dict(yaml.safe_load(self.config_file.read_text()))
+        try:
+            data = yaml.safe_load(self.config_file.read_text())
+        except yaml.YAMLError as exc:
+            raise IncompatibleRunError(f"{self.config_file} is not valid YAML: {exc}") from None
+        if not isinstance(data, dict):
+            raise IncompatibleRunError(f"{self.config_file} is not a mapping of settings")
+        return data
 
     # -- checkpoints ----------------------------------------------------------------------------------------
     def checkpoints(self) -> list[tuple[int, Path]]:

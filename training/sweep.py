@@ -21,14 +21,14 @@ import csv
 import json
 import os
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
 import yaml
 
 from clutter_gym.atomic import atomic_path, write_text_atomically
-from clutter_gym.training.config import EVAL_SEED, config_for
+from clutter_gym.training.config import EVAL_SEED, TrainConfig, config_for, deep_merge
 
 CSV_METRICS = ("success_rate", "collision_rate", "mean_cost", "mean_return", "mean_length", "mean_min_clearance")
 
@@ -45,6 +45,8 @@ class SweepSpec:
         timesteps: env steps per training run (None: the env's ppo.yml value).
         episodes: evaluation episodes per (run, eval profile); episode i uses seed 1,000,000 + i.
         n_envs: envs per training run.
+        settings: config overrides for every run (a user's hyperparameter file and ``--env-kwargs``), resolved
+            into plain data so that they travel to Ray workers.
     """
 
     env_id: str
@@ -54,9 +56,16 @@ class SweepSpec:
     timesteps: int | None
     episodes: int
     n_envs: int = 1
+    settings: dict[str, Any] = field(default_factory=dict)
 
     def cells(self) -> list[tuple[str, int]]:
         return [(noise, seed) for noise in self.train_noise for seed in range(self.seeds)]
+
+    def cell_config(self, train_noise: str, seed: int) -> TrainConfig:
+        overrides = {"seed": seed, "noise": train_noise, "n_envs": self.n_envs, "final_eval_episodes": 0}
+        if self.timesteps is not None:
+            overrides["timesteps"] = self.timesteps
+        return config_for(self.env_id, deep_merge(self.settings, overrides))
 
     def to_dict(self) -> dict[str, Any]:
         data = asdict(self)
@@ -84,10 +93,7 @@ def run_cell(spec_data: dict[str, Any], out: str, train_noise: str, seed: int) -
     folder = cell_dir(Path(out), train_noise, seed)
     run = RunDir(folder / "run")
     if not run.config_file.is_file():
-        overrides = {"seed": seed, "noise": train_noise, "n_envs": spec.n_envs, "final_eval_episodes": 0}
-        if spec.timesteps is not None:
-            overrides["timesteps"] = spec.timesteps
-        start(config_for(spec.env_id, overrides), run.root)
+        start(spec.cell_config(train_noise, seed), run.root)
     if not run.is_finished():
         train(run, progress=False)
     for profile in spec.eval_noise:
@@ -105,13 +111,9 @@ def run_sweep(spec: SweepSpec, out: Path, workers: int | None = None, ray_addres
     ``ray_address`` is passed to ``ray.init``: ``"auto"`` or ``"ray://head:10001"`` for a running cluster, or
     ``"local"`` to start a throwaway local Ray instance (how the tests exercise this path).
     """
-    out.mkdir(parents=True, exist_ok=True)
+    check_spec(spec, out)
     spec_file = out / "sweep.yaml"
-    if spec_file.is_file():
-        saved = yaml.safe_load(spec_file.read_text())
-        if saved != spec.to_dict():
-            raise ValueError(f"{out} holds a sweep with another spec ({saved}); use a new --out")
-    else:
+    if not spec_file.is_file():
         write_text_atomically(spec_file, yaml.safe_dump(spec.to_dict(), sort_keys=False))
     todo = [cell for cell in spec.cells() if not cell_done(spec, out, *cell)]
     if todo:
@@ -122,6 +124,23 @@ def run_sweep(spec: SweepSpec, out: Path, workers: int | None = None, ray_addres
     heatmap = write_heatmap(rows, spec, out / "heatmap.png")
     return {"cells_run": len(todo), "cells_skipped": len(spec.cells()) - len(todo), "csv": str(csv_path),
             "heatmap": str(heatmap), "rows": rows}
+
+
+def check_spec(spec: SweepSpec, out: Path) -> None:
+    """Refuse settings that no cell could train with, and a folder that holds a sweep with another spec.
+
+    Raises:
+        ValueError: a bad setting (named), or a different sweep in ``out``.
+    """
+    from clutter_gym.training.train import check_env_builds
+
+    for noise in spec.train_noise:
+        check_env_builds(spec.cell_config(noise, 0))
+    spec_file = out / "sweep.yaml"
+    if spec_file.is_file():
+        saved = {"settings": {}, **yaml.safe_load(spec_file.read_text())}  # sweeps older than settings had none
+        if saved != spec.to_dict():
+            raise ValueError(f"{out} holds a sweep with another spec ({saved}); use a new --out")
 
 
 def _run_on_pool(spec: SweepSpec, out: Path, todo: list[tuple[str, int]], workers: int | None) -> None:

@@ -6,6 +6,7 @@ import json
 from pathlib import Path
 from typing import Any
 
+import gymnasium as gym
 import torch
 from stable_baselines3 import PPO
 from stable_baselines3.common.logger import configure
@@ -19,12 +20,30 @@ from clutter_gym.training.run_dir import NORMALIZER_FILE, RunDir
 from clutter_gym.training.vec_env import build_vec_env, normalize, policy_name
 
 
+def check_env_builds(config: TrainConfig) -> None:
+    """Make and close the config's env once, so a bad env argument fails here, named, not in a worker process.
+
+    Raises:
+        ValueError: the env refused its arguments.
+    """
+    try:
+        gym.make(config.env_id, **config.make_kwargs()).close()
+    except TypeError as exc:  # a value of the wrong type that the env did not check itself
+        raise ValueError(f"env_kwargs {config.env_kwargs} do not build {config.env_id}: {exc}") from None
+
+
 def start(config: TrainConfig, out: str | Path) -> RunDir:
-    """A new run folder for ``config``; refuses a folder that already holds a run (resume that instead)."""
+    """A new run folder for ``config``; refuses a folder that already holds a run (resume that instead).
+
+    Raises:
+        FileExistsError: ``out`` holds a run.
+        ValueError: the config's env cannot be made with its arguments.
+    """
     run = RunDir(out)
     if run.config_file.exists():
         raise FileExistsError(f"{run.root} already holds a run; pass --resume {run.root} to continue it, "
                               "or choose another --out")
+    check_env_builds(config)
     run.root.mkdir(parents=True, exist_ok=True)
     run.write_config(config)
     return run

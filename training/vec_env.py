@@ -15,16 +15,16 @@ from clutter_gym.training.config import TrainConfig
 from clutter_gym.training.episode_stats import EpisodeStats
 
 
-def make_env(env_id: str, noise: str, env_kwargs: dict[str, Any], render_mode: str | None = None) -> gym.Env:
+def make_env(env_id: str, make_kwargs: dict[str, Any], render_mode: str | None = None) -> gym.Env:
     """One env with SB3's Monitor and the EpisodeStats wrapper (importable in a fresh worker process)."""
     import clutter_gym  # noqa: F401  (registers the ids in SubprocVecEnv workers)
 
-    return EpisodeStats(Monitor(gym.make(env_id, noise=noise, render_mode=render_mode, **env_kwargs)))
+    return EpisodeStats(Monitor(gym.make(env_id, render_mode=render_mode, **make_kwargs)))
 
 
 def build_vec_env(config: TrainConfig, seed: int) -> VecEnv:
     """``config.n_envs`` envs (worker processes above 1), seeded ``seed, seed + 1, ...`` at their first reset."""
-    factory = functools.partial(make_env, config.env_id, config.noise, config.env_kwargs)
+    factory = functools.partial(make_env, config.env_id, config.make_kwargs())
     fns = [factory] * config.n_envs
     venv: VecEnv = DummyVecEnv(fns) if config.n_envs == 1 else SubprocVecEnv(fns)
     venv.seed(seed)

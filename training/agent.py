@@ -1,0 +1,154 @@
+"""A trained run, ready to act: ``agent = clutter_gym.training.load(run_dir)``.
+
+```python
+from clutter_gym.training import load
+
+agent = load("out/main/run")
+env = agent.make_env()                      # the env the run trained on; agent.make_env(noise="harsh") for another
+obs, info = env.reset(seed=0)
+state, done = None, False                   # None: the start of an episode
+while not done:
+    action, state = agent.predict(obs, state)
+    obs, reward, terminated, truncated, info = env.step(action)
+    done = terminated or truncated
+```
+
+The run folder's ``config.yaml`` is the recipe: env id, env arguments, noise profile and the PPO settings, which
+say which observation processing the policy was trained behind. The model folder holds SB3's ``model.zip`` and,
+when observations were normalised, the ``VecNormalize`` statistics.
+"""
+
+from __future__ import annotations
+
+import pickle
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from clutter_gym.training.config import TrainConfig, deep_merge
+from clutter_gym.training.run_dir import MODEL_FILE, NORMALIZER_FILE, IncompatibleRunError, RunDir
+
+if TYPE_CHECKING:
+    from stable_baselines3 import PPO
+
+
+class Agent:
+    """A run's policy behind the observation processing it was trained with; acts on plain env observations.
+
+    Attributes:
+        run: the run folder.
+        config: the run's settings (env id, env arguments, training noise profile, PPO settings).
+        model: the stable-baselines3 PPO model.
+        folder: the model folder that was loaded (``model/``, or a checkpoint's).
+        step: env steps the model was trained for.
+    """
+
+    def __init__(self, run: RunDir, config: TrainConfig, model: PPO, normalizer: Any | None, folder: Path) -> None:
+        self.run, self.config, self.model, self.folder = run, config, model, folder
+        self.step = int(model.num_timesteps)
+        self._normalizer = normalizer if normalizer is not None and normalizer.norm_obs else None
+
+    def predict(self, obs: dict[str, np.ndarray] | np.ndarray, state: Any = None,
+                deterministic: bool = True) -> tuple[np.ndarray, Any]:
+        """The action for one observation of the run's env (or a batch of them, one per row).
+
+        Args:
+            obs: an observation as the env returns it.
+            state: the agent's memory; None at the start of an episode, then what the previous call returned.
+                (Policies trained today are memoryless and return None; pass it back all the same.)
+            deterministic: the mean action (True) or a sample from the policy's distribution.
+
+        Returns:
+            ``(action, state)``, as SB3's ``predict``.
+        """
+        self._check_obs(obs)
+        if self._normalizer is not None:
+            obs = self._normalizer.normalize_obs(obs)
+        action, _ = self.model.predict(obs, deterministic=deterministic)
+        return action, state
+
+    def make_env(self, noise: str | None = None, render_mode: str | None = None, **overrides: Any) -> gym.Env:
+        """The run's env: its env arguments under ``noise`` (default: the training profile), with ``overrides``.
+
+        The run's noise-section overrides apply on top of whichever profile is asked for, as in training.
+
+        Raises:
+            ValueError: an unknown profile or env argument (named, with the allowed ones), or settings that
+                change the observation or action shapes the policy was trained on.
+        """
+        data = deep_merge(self.config.to_dict(), {"noise": noise or self.config.noise, "env_kwargs": overrides})
+        config = TrainConfig.from_dict(data)
+        env = gym.make(config.env_id, render_mode=render_mode, **config.make_kwargs())
+        try:
+            for what, trained, built in (("observation", self.model.observation_space, env.observation_space),
+                                         ("action", self.model.action_space, env.action_space)):
+                if _shapes(trained) != _shapes(built):
+                    raise ValueError(f"these settings give {what}s of shape {_shapes(built)}; the policy of "
+                                     f"{self.run.root} was trained on {_shapes(trained)}")
+        except BaseException:
+            env.close()
+            raise
+        return env
+
+    def _check_obs(self, obs: Any) -> None:
+        expected = self.model.observation_space
+        if isinstance(expected, spaces.Dict):
+            if not isinstance(obs, dict) or set(obs) != set(expected.spaces):
+                keys = sorted(obs) if isinstance(obs, dict) else type(obs).__name__
+                raise ValueError(f"obs must be a dict with keys {sorted(expected.spaces)}, got {keys}")
+            for key, space in expected.spaces.items():
+                _check_shape(f"obs[{key!r}]", np.shape(obs[key]), space.shape)
+        else:
+            _check_shape("obs", np.shape(obs), expected.shape)
+
+
+def _shapes(space: spaces.Space) -> Any:
+    if isinstance(space, spaces.Dict):
+        return {key: sub.shape for key, sub in space.spaces.items()}
+    return space.shape
+
+
+def _check_shape(name: str, shape: tuple[int, ...], expected: tuple[int, ...]) -> None:
+    if shape != expected and shape[1:] != expected:
+        raise ValueError(f"{name} must have shape {expected} (or (n, {', '.join(map(str, expected))}) for a "
+                         f"batch), got {shape}")
+
+
+def load(run_dir: str | Path, step: int | None = None) -> Agent:
+    """Load a trained run as an :class:`Agent`.
+
+    Args:
+        run_dir: a run folder written by ``clutter-gym train`` (or by the main job: ``out/main/run``).
+        step: load the checkpoint of this step; None loads the final model, or the newest checkpoint of a
+            run that has not finished.
+
+    Raises:
+        FileNotFoundError: no run, model or checkpoint there (the message lists the checkpoints there are).
+        IncompatibleRunError: a run this version of clutter-gym cannot rebuild; the message names the
+            version that wrote it.
+    """
+    from stable_baselines3 import PPO
+
+    run = RunDir(run_dir)
+    config = run.read_config()
+    if step is None:
+        folder = run.policy_folder()
+    else:
+        found = dict(run.checkpoints())
+        if step not in found:
+            raise FileNotFoundError(f"{run.root} has no checkpoint of step {step}; it has {sorted(found)}")
+        folder = found[step]
+    try:
+        model = PPO.load(folder / MODEL_FILE, device="cpu")
+        normalizer = None
+        if (folder / NORMALIZER_FILE).is_file():
+            with (folder / NORMALIZER_FILE).open("rb") as f:
+                normalizer = pickle.load(f)  # VecNormalize without its env: normalize_obs needs only the statistics
+    except Exception as exc:  # pickle and SB3 raise many kinds; all mean "cannot rebuild this model here"
+        wrote = run.written_by().get("clutter-gym", "0.1.0 or older")
+        raise IncompatibleRunError(f"{folder} cannot be loaded ({type(exc).__name__}: {exc}); it was written by "
+                                   f"clutter-gym {wrote} ({run.written_by() or 'versions not recorded'})") from None
+    return Agent(run, config, model, normalizer, folder)
