@@ -1,0 +1,34 @@
+"""The shipped PPO settings in rl-zoo3's hyperparameter format, so the zoo trains these envs as we do.
+
+    python -m rl_zoo3.train --algo ppo --env ClutterNav-v0 --gym-packages clutter_gym \\
+        --conf-file clutter_gym.training.zoo
+
+rl-zoo3 imports this module and reads ``hyperparams`` (a block per env id). Without it the zoo falls back to
+its ``default`` block, whose ``MlpPolicy`` cannot take these envs' Dict observations.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from clutter_gym import ENV_IDS
+from clutter_gym.training.config import TrainConfig, config_for
+
+
+def zoo_block(config: TrainConfig) -> dict[str, Any]:
+    """One env's rl-zoo3 block: PPO arguments plus the zoo's ``n_timesteps``, ``n_envs``, ``policy``,
+    ``normalize`` and ``env_kwargs`` keys."""
+    ppo = config.ppo
+    block: dict[str, Any] = {
+        "n_timesteps": config.timesteps,
+        "n_envs": config.n_envs,
+        "policy": "MultiInputPolicy",
+        **ppo.sb3_kwargs(),
+        "env_kwargs": config.make_kwargs(),
+    }
+    if ppo.normalize_obs or ppo.normalize_reward:
+        block["normalize"] = {"norm_obs": ppo.normalize_obs, "norm_reward": ppo.normalize_reward}
+    return block
+
+
+hyperparams: dict[str, dict[str, Any]] = {env_id: zoo_block(config_for(env_id)) for env_id in ENV_IDS}
