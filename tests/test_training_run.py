@@ -150,3 +150,14 @@ def test_subprocess_vector_env_trains_with_two_workers(tmp_path):
     run = tiny_run(tmp_path, n_envs=2, timesteps=128, final_eval_episodes=0)
     train(run, progress=False)
     assert RunDir(run.root).is_finished()
+
+
+def test_evaluation_takes_env_overrides_and_records_them(trained, capsys):
+    run, _ = trained
+    overrides = {"obstacle_density": 0.2, "noise": {"lidar": {"range_sigma": 0.05}}}
+    summary = evaluate(run.root, noise="nominal", episodes=1, seed=3, env_overrides=overrides)
+    assert summary["env_overrides"] == overrides and summary["eval_noise"] == "nominal"
+    with pytest.raises(SystemExit) as exit_info:
+        main(["eval", str(run.root), "--episodes", "1", "--env-kwargs", "n_rays=8"])
+    err = capsys.readouterr().err
+    assert exit_info.value.code == 2 and "observations of shape" in err and len(err.strip().splitlines()) == 1
