@@ -134,3 +134,18 @@ def test_a_run_folder_is_readable_by_other_users_under_umask_022(tmp_path):
     assert any(p.name == MODEL_FILE for p in modes)
     assert {p.name: m for p, m in modes.items() if m & 0o044 != 0o044} == {}
     assert {p.name: m for p, m in modes.items() if p.is_dir() and m & 0o055 != 0o055} == {}
+
+
+def test_make_env_takes_noise_overrides_on_top_of_the_runs(tmp_path):
+    config = config_for("ClutterNav-v0", {**TINY, "timesteps": 64, "checkpoint_every": 64,
+                                          "env_kwargs": {"noise": {"lidar": {"range_sigma": 0.03}}}})
+    run = start(config, tmp_path / "run")
+    train(run, progress=False)
+    agent = load(run.root)
+    env = agent.make_env(noise={"profile": "harsh", "imu": {"latency_steps": 0}})
+    assert env.unwrapped.spec.kwargs["noise"] == {"profile": "harsh", "lidar": {"range_sigma": 0.03},
+                                                  "imu": {"latency_steps": 0}}
+    env.close()
+    env = agent.make_env()
+    assert env.unwrapped.spec.kwargs["noise"] == {"profile": "none", "lidar": {"range_sigma": 0.03}}
+    env.close()

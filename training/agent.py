@@ -70,16 +70,25 @@ class Agent:
         action, _ = self.model.predict(obs, deterministic=deterministic)
         return action, state
 
-    def make_env(self, noise: str | None = None, render_mode: str | None = None, **overrides: Any) -> gym.Env:
+    def make_env(self, noise: str | dict[str, Any] | None = None, render_mode: str | None = None,
+                 **overrides: Any) -> gym.Env:
         """The run's env: its env arguments under ``noise`` (default: the training profile), with ``overrides``.
 
-        The run's noise-section overrides apply on top of whichever profile is asked for, as in training.
+        Args:
+            noise: a profile name, or a mapping as ``gym.make`` takes it (``{"profile": "harsh", "lidar":
+                {"range_sigma": 0.05}}``). The run's own noise-section overrides apply underneath, as in training.
+            render_mode: passed to ``gym.make``.
+            **overrides: env arguments on top of the run's.
 
         Raises:
             ValueError: an unknown profile or env argument (named, with the allowed ones), or settings that
                 change the observation or action shapes the policy was trained on.
         """
-        data = deep_merge(self.config.to_dict(), {"noise": noise or self.config.noise, "env_kwargs": overrides})
+        sections = {"profile": noise} if isinstance(noise, str) else dict(noise or {})
+        profile = sections.pop("profile", self.config.noise)
+        if sections:
+            overrides = {**overrides, "noise": sections}
+        data = deep_merge(self.config.to_dict(), {"noise": profile, "env_kwargs": overrides})
         config = TrainConfig.from_dict(data)
         env = gym.make(config.env_id, render_mode=render_mode, **config.make_kwargs())
         try:

@@ -41,7 +41,9 @@ def evaluate(
     if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
         raise ValueError(f"episodes must be an integer >= 1, got {episodes!r}")
     agent = load(run_dir)
-    env = EpisodeStats(agent.make_env(noise=noise, render_mode="rgb_array" if video else None, **(env_overrides or {})))
+    overrides = dict(env_overrides or {})
+    noise_spec = {"profile": noise, **overrides.pop("noise", {})}
+    env = EpisodeStats(agent.make_env(noise=noise_spec, render_mode="rgb_array" if video else None, **overrides))
     rows, frames = [], []
     try:
         for i in range(episodes):
