@@ -157,7 +157,8 @@ def load(run_dir: str | Path, step: int | None = None) -> Agent:
             with (folder / NORMALIZER_FILE).open("rb") as f:
                 normalizer = pickle.load(f)  # VecNormalize without its env: normalize_obs needs only the statistics
     except Exception as exc:  # pickle and SB3 raise many kinds; all mean "cannot rebuild this model here"
-        wrote = run.written_by().get("clutter-gym", "0.1.0 or older")
+        versions = run.written_by()
         raise IncompatibleRunError(f"{folder} cannot be loaded ({type(exc).__name__}: {exc}); it was written by "
-                                   f"clutter-gym {wrote} ({run.written_by() or 'versions not recorded'})") from None
+                                   f"clutter-gym {versions.get('clutter-gym', '0.1.0 or older')} "
+                                   f"({versions or 'versions not recorded'})") from None
     return Agent(run, config, model, normalizer, folder)

@@ -94,12 +94,15 @@ def _help(text: str) -> str:
     return text.replace("%", "%%")  # argparse %-formats help strings
 
 
-def add_settings_options(parser: argparse.ArgumentParser) -> None:
+def _add_env_kwargs_option(parser: argparse.ArgumentParser, help: str) -> None:
     parser.add_argument("--env-kwargs", dest="env_kwargs", metavar="KEY=VALUE", nargs="+", action="extend",
-                        type=env_kwarg, default=None,
-                        help="gym.make arguments on top of the hyperparameter files' env_kwargs, YAML values "
-                             "(obstacle_density=0.05 sensors=[lidar,imu]); noise.SECTION.PARAM=VALUE overrides one "
-                             "noise parameter on top of every profile (noise.lidar.range_sigma=0.02)")
+                        type=env_kwarg, default=None, help=help)
+
+
+def add_settings_options(parser: argparse.ArgumentParser) -> None:
+    _add_env_kwargs_option(parser, "gym.make arguments on top of the hyperparameter files' env_kwargs, YAML values "
+                                   "(obstacle_density=0.05 sensors=[lidar,imu]); noise.SECTION.PARAM=VALUE overrides "
+                                   "one noise parameter on top of every profile (noise.lidar.range_sigma=0.02)")
     parser.add_argument("--hyperparams", metavar="FILE.yml", default=None,
                         help="your own hyperparameter file, in the form of the shipped ppo.yml ('default' and "
                              "env-id blocks); it goes on top of the shipped file, and options go on top of it")
@@ -174,10 +177,8 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
                    help="noise profile to evaluate under (the run's noise overrides apply on top)")
     p.add_argument("--episodes", type=positive_int, default=100, help="episodes to roll out")
     p.add_argument("--seed", type=int, default=EVAL_SEED, help="episode i is reset with seed SEED + i")
-    p.add_argument("--env-kwargs", dest="env_kwargs", metavar="KEY=VALUE", nargs="+", action="extend",
-                   type=env_kwarg, default=None,
-                   help="change the run's env arguments for this evaluation (obstacle_density=0.2, "
-                        "noise.lidar.range_sigma=0.05); the observation and action shapes must stay the same")
+    _add_env_kwargs_option(p, "change the run's env arguments for this evaluation (obstacle_density=0.2, "
+                              "noise.lidar.range_sigma=0.05); the observation and action shapes must stay the same")
     p.add_argument("--json", action="store_true", help="print the summary as JSON (per-episode rows included)")
     p.add_argument("--video", default=None, help="write the first episode to this .gif or .mp4")
     p.set_defaults(handler=run_eval)
