@@ -44,10 +44,11 @@ class ClutterNavEnv(ClutterEnv):
     | ``camera_depth`` | (h, w) | depth along the optical axis, 0 = no data | m | [0, camera_far] |
     | ``camera_segmentation`` | (h, w) uint8 | class per pixel: nothing, ground, obstacle, robot, goal | - | [0, 4] |
     | ``goal`` | (3,) | distance, sin(bearing), cos(bearing) | m, -, -; robot frame | [0, arena diagonal], [-1, 1] |
+    | ``subgoal`` | (3,) | distance, sin(bearing), cos(bearing) of the waypoint ``subgoal_lookahead`` ahead on the shortest path | m, -, -; robot frame | [0, subgoal_lookahead], [-1, 1] |
     | ``velocity`` | (2,) | forward speed, yaw rate | m/s, rad/s; base frame | +-2x the commanded maxima |
 
     Sensor entries are present only when listed in ``sensors`` (camera entries only for its ``camera_modes``;
-    ``(w, h) = camera_size``). The IMU reads +9.81 m/s^2 on z at rest. With a noise profile the entries carry
+    ``(w, h) = camera_size``); ``subgoal`` only when ``subgoal_lookahead > 0``. The IMU reads +9.81 m/s^2 on z at rest. With a noise profile the entries carry
     that profile's noise, update rate (held between updates) and latency; a LIDAR beam without a return reads 1.
 
     ## Rewards
@@ -96,7 +97,13 @@ class ClutterNavEnv(ClutterEnv):
     ("tiny" or "egl"); ``physics_hz`` (a multiple of
     ``control_hz``); ``control_hz``; ``solver_iterations``; ``max_linear_speed`` m/s; ``max_angular_speed`` rad/s;
     ``success_radius`` m; ``clearance_margin`` m; ``terminate_on_collision``; ``contact_tolerance`` m;
-    ``*_weight`` reward weights. Defaults are in the signature.
+    ``*_weight`` reward weights; ``subgoal_lookahead`` m (0: off).
+
+    ``subgoal_lookahead > 0`` makes the env map-based: the ``subgoal`` entry comes from the shortest path on the
+    known layout (the grid search that also shapes the progress reward), as a global planner on a map hands
+    waypoints to a local controller. The default env is mapless: it knows only the goal's relative position.
+
+    Defaults are in the signature.
 
     ## Version history
 
@@ -140,6 +147,7 @@ class ClutterNavEnv(ClutterEnv):
         clearance_weight: float = 0.5,
         control_weight: float = 0.01,
         time_weight: float = 0.01,
+        subgoal_lookahead: float = 0.0,
     ) -> None:
         check_render_mode(render_mode)
         check_rates(physics_hz, control_hz, solver_iterations)
@@ -161,6 +169,7 @@ class ClutterNavEnv(ClutterEnv):
             max_goal_distance=math.sqrt(2.0) * arena_size,
             spec=spec,
             robot_radius=robot.config.footprint_radius,
+            subgoal_lookahead=subgoal_lookahead,
         )
         model = RobotCollisionModel.from_urdf(
             robot.urdf_path, check_fidelity(collision_fidelity), ("base_link", *TRACKED_LINKS), collision_padding

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from clutter_gym.worlds.clutter import ClutterSpec, sample_scene
+from clutter_gym.tasks.navigate import SUBGOAL_PLAN_MARGIN
 from clutter_gym.worlds.path_distance import PathDistance
 from clutter_gym.worlds.scene import Obstacle, Scene
 
@@ -59,3 +60,83 @@ def test_progress_reward_follows_the_path_not_the_straight_line():
         progress += info["reward_terms"]["progress"]
     env.close()
     assert progress > 0.5
+
+
+# -- the subgoal: a point a fixed length ahead on the same shortest path -----------------------------------------
+
+def test_in_an_empty_arena_the_waypoint_lies_on_the_straight_line():
+    goal = (2.0, 1.5)
+    field = PathDistance(Scene((), (0.0, 0.0, 0.0), goal), SPEC, R, plan_margin=0.25)
+    start = (-2.0, -1.0)
+    point = field.waypoint(*start, lookahead=1.0)
+    # A grid path runs through cell centres, and the search picks one of several equally short orders of its
+    # moves (here diagonal steps first, straight ones later), so it strays from the straight line by up to a
+    # couple of cells and a lookahead of 1 m of path ends short of 1 m along the line (0.84 m here).
+    direction = np.subtract(goal, start) / math.dist(start, goal)
+    offset = np.subtract(point, start)
+    assert abs(direction[0] * offset[1] - direction[1] * offset[0]) < 2 * SPEC.resolution
+    assert 0.8 < float(offset @ direction) <= 1.0 + 1e-9
+
+
+def test_near_the_goal_the_waypoint_is_the_goal():
+    goal = (2.0, 1.5)
+    field = PathDistance(Scene((), (0.0, 0.0, 0.0), goal), SPEC, R, plan_margin=0.25)
+    assert field.waypoint(1.6, 1.3, lookahead=1.0) == pytest.approx(goal)
+    with pytest.raises(RuntimeError, match="plan_margin"):
+        PathDistance(Scene((), (0.0, 0.0, 0.0), goal), SPEC, R).waypoint(0.0, 0.0, 1.0)
+
+
+def test_the_waypoint_leads_around_a_wall_and_keeps_the_footprint_free():
+    # The wall of test_a_wall_across_the_way...: from (-1, 0) the path to (1, 0) first climbs to the wall's top.
+    wall = Obstacle("box", (0.1, 4.0, 0.5), (0.0, -1.0), 0.0)
+    field = PathDistance(Scene((wall,), (-1.0, 0.0, 0.0), (1.0, 0.0)), SPEC, R, plan_margin=0.25)
+    point = field.waypoint(-1.0, 0.0, lookahead=1.0)
+    assert point[1] > 0.5  # heads up towards the corner, not at the goal through the wall
+    assert point[0] < -0.05 - R + SPEC.resolution  # still on the start's side, a footprint off the wall
+    # Walking waypoint to waypoint reaches the goal; the planner rounds the wall's top a margin wider than the
+    # shortest path does, and every waypoint keeps the footprint plus most of the margin off the wall.
+    position, walked, closest = (-1.0, 0.0), 0.0, math.inf
+    for _ in range(20):
+        nxt = field.waypoint(*position, lookahead=0.5)
+        walked += math.dist(position, nxt)
+        position = nxt
+        closest = min(closest, _box_distance(position, centre=(0.0, -1.0), half=(0.05, 2.0)))
+    assert position == pytest.approx((1.0, 0.0))
+    assert field(-1.0, 0.0) - SPEC.resolution < walked < field(-1.0, 0.0) + 2 * math.pi * 0.25
+    assert closest > R + 0.15
+
+
+def test_the_subgoal_observation_points_at_the_waypoint_in_the_robot_frame():
+    import gymnasium as gym
+
+    wall = {"shape": "box", "size": [0.1, 4.0, 0.5], "position": [0.0, -1.0]}
+    scene = {"obstacles": [wall], "start": [-1.0, 0.0, 0.0], "goal": [1.0, 0.0]}
+    env = gym.make("ClutterNav-v0", subgoal_lookahead=1.0)
+    obs, _ = env.reset(seed=0, options={"scene": scene})
+    field = PathDistance(Scene((Obstacle("box", (0.1, 4.0, 0.5), (0.0, -1.0), 0.0),), (-1.0, 0.0, 0.0), (1.0, 0.0)),
+                         SPEC, R, plan_margin=SUBGOAL_PLAN_MARGIN)
+    x, y = env.unwrapped.robot.state().position[:2]
+    yaw = env.unwrapped.robot.state().yaw
+    px, py = field.waypoint(x, y, 1.0)
+    bearing = math.atan2(py - y, px - x) - yaw
+    np.testing.assert_allclose(obs["subgoal"], [math.hypot(px - x, py - y), math.sin(bearing), math.cos(bearing)],
+                               atol=1e-5)
+    assert obs["subgoal"][1] > 0.7  # the waypoint is to the robot's left (+y), while the goal is straight ahead
+    assert obs["goal"][2] > 0.99
+    assert env.observation_space["subgoal"].contains(obs["subgoal"])
+    env.close()
+
+
+def test_the_subgoal_entry_is_opt_in_and_its_lookahead_is_checked():
+    import gymnasium as gym
+
+    env = gym.make("ClutterNav-v0")
+    assert "subgoal" not in env.observation_space.spaces
+    env.close()
+    with pytest.raises(ValueError, match="subgoal_lookahead must be in"):
+        gym.make("ClutterNav-v0", subgoal_lookahead=-1.0)
+
+
+def _box_distance(point: tuple[float, float], centre: tuple[float, float], half: tuple[float, float]) -> float:
+    qx, qy = abs(point[0] - centre[0]) - half[0], abs(point[1] - centre[1]) - half[1]
+    return math.hypot(max(qx, 0.0), max(qy, 0.0)) + min(max(qx, qy), 0.0)

@@ -61,8 +61,8 @@ def test_config_round_trips_through_a_plain_dict():
 
 
 def test_sb3_kwargs_carry_net_arch_as_policy_kwargs():
-    kwargs = PPOHyperparams(net_arch=(8, 8)).sb3_kwargs()
-    assert kwargs["policy_kwargs"] == {"net_arch": [8, 8]}
+    kwargs = PPOHyperparams(net_arch=(8, 8), log_std_init=-1.0).sb3_kwargs()
+    assert kwargs["policy_kwargs"] == {"net_arch": [8, 8], "log_std_init": -1.0}
     assert "normalize_obs" not in kwargs and "net_arch" not in kwargs
 
 

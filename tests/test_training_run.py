@@ -161,3 +161,40 @@ def test_evaluation_takes_env_overrides_and_records_them(trained, capsys):
         main(["eval", str(run.root), "--episodes", "1", "--env-kwargs", "n_rays=8"])
     err = capsys.readouterr().err
     assert exit_info.value.code == 2 and "observations of shape" in err and len(err.strip().splitlines()) == 1
+
+
+def test_validations_keep_the_best_policy_which_load_and_evaluation_then_use(tmp_path):
+    run = tiny_run(tmp_path, validate_every=128, validate_episodes=2,
+                   env_kwargs={"obstacle_density": 0.05, "max_episode_steps": 30})
+    summary = train(run, progress=False)
+    rows = run.read_validations()
+    assert [r["step"] for r in rows] == [128, 256]
+    assert rows[0]["best"] == 1.0  # the first validation is always the best so far
+    best = max(rows, key=lambda r: (r["success"] - r["collision"], -r["step"]))
+    assert sum(r["best"] for r in rows) >= 1 and all(0.0 <= r["success"] <= 1.0 for r in rows)
+    assert (run.best_dir / MODEL_FILE).is_file() and (run.best_dir / NORMALIZER_FILE).is_file()
+    agent = load(run.root)
+    assert agent.folder == run.best_dir and agent.step == best["step"]
+    assert summary["model"] == "best" and summary["model_step"] == best["step"]
+
+
+def test_the_same_policy_validates_alike_on_its_fixed_held_out_layouts(tmp_path):
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.logger import configure
+
+    from clutter_gym.training.callbacks import BestPolicyKeeper
+
+    run = tiny_run(tmp_path, validate_every=64, validate_episodes=2,
+                   env_kwargs={"obstacle_density": 0.05, "max_episode_steps": 20})
+    config = run.read_config()
+    model = PPO("MultiInputPolicy", gym.make("ClutterNav-v0", obstacle_density=0.05), seed=0, device="cpu",
+                n_steps=64, batch_size=32)
+    model.set_logger(configure(None, []))
+    keepers = [BestPolicyKeeper(run, config) for _ in range(2)]
+    results = []
+    for keeper in keepers:
+        keeper.init_callback(model)
+        keeper._on_training_start()
+        results.append(keeper.validate())
+        keeper._on_training_end()
+    assert results[0] == {**results[1], "best": 1.0} and results[1]["best"] == 0.0  # equal is not better

@@ -17,36 +17,52 @@ class PotentialFieldNavigator:
     error; forward command shrinks with the heading error and with free space ahead. It gets stuck in local
     minima (U-shaped clutter) by design: it is a baseline, not a planner.
 
+    Given ``goal_key="subgoal"`` (an env made with ``subgoal_lookahead > 0``) it steers for the waypoint on the
+    shortest path over the known layout instead: a global planner with this field as its local controller, the
+    map-based reference a learned policy can be compared with.
+
     Args:
         lidar_angles: beam angles in the robot frame, radians (None: goal seeking only).
         lidar_range: metres, to undo the observation's normalisation.
         influence: distance below which obstacles repel, metres.
         repulsion: weight of the repulsive sum relative to the unit goal vector.
         turn_gain: angular command per radian of heading error.
+        goal_key: the observation entry to steer for, ``"goal"`` or ``"subgoal"``.
     """
 
     def __init__(
         self,
         lidar_angles: np.ndarray | None,
         lidar_range: float,
-        influence: float = 0.7,
-        repulsion: float = 0.25,
+        influence: float = 0.5,
+        repulsion: float = 0.1,
         turn_gain: float = 1.5,
+        goal_key: str = "goal",
     ) -> None:
+        if goal_key not in ("goal", "subgoal"):
+            raise ValueError(f"goal_key must be 'goal' or 'subgoal', got {goal_key!r}")
         self.angles = None if lidar_angles is None else np.asarray(lidar_angles, dtype=float)
         self.lidar_range = lidar_range
         self.influence, self.repulsion, self.turn_gain = influence, repulsion, turn_gain
+        self.goal_key = goal_key
 
     @classmethod
-    def for_env(cls, env: gym.Env) -> PotentialFieldNavigator:
-        """Configured from a ClutterNav env's LIDAR (or goal seeking only when it has none)."""
+    def for_env(cls, env: gym.Env, goal_key: str = "goal") -> PotentialFieldNavigator:
+        """Configured from a ClutterNav env's LIDAR (or goal seeking only when it has none).
+
+        Raises:
+            ValueError: ``goal_key`` is not an entry of the env's observations.
+        """
+        if goal_key not in env.observation_space.spaces:
+            raise ValueError(f"the env has no {goal_key!r} observation"
+                             + (" (make it with subgoal_lookahead > 0)" if goal_key == "subgoal" else ""))
         lidar = next((s for s in env.unwrapped.sensors if s.name == "lidar"), None)
         if lidar is None:
-            return cls(None, 1.0)
-        return cls(lidar.config.angles, lidar.config.max_range)
+            return cls(None, 1.0, goal_key=goal_key)
+        return cls(lidar.config.angles, lidar.config.max_range, goal_key=goal_key)
 
     def __call__(self, obs: Mapping[str, np.ndarray]) -> np.ndarray:
-        _, sin_b, cos_b = (float(v) for v in obs["goal"])
+        _, sin_b, cos_b = (float(v) for v in obs[self.goal_key])
         heading = np.array([cos_b, sin_b])
         ahead = 1.0
         if self.angles is not None and "lidar" in obs:

@@ -1,8 +1,10 @@
-"""The training loop's side work: episode log, TensorBoard scalars, checkpoints and the progress bar."""
+"""The training loop's side work: episode log, TensorBoard scalars, checkpoints, the progress bar, and the
+validations that keep the best policy."""
 
 from __future__ import annotations
 
 import csv
+import math
 import time
 from collections import deque
 
@@ -94,3 +96,67 @@ class RunMonitor(BaseCallback):
         if self._bar is not None:
             self._bar.set_postfix(self._postfix())
             self._bar.close()
+
+
+class BestPolicyKeeper(BaseCallback):
+    """Every ``validate_every`` env steps, runs the current policy on held-out layouts and keeps the best in
+    ``best/``.
+
+    A validation is ``validate_episodes`` deterministic episodes, reset with seeds ``VALIDATION_SEED + i``: the
+    same layouts every time, so validations compare policies, never scenes. Score: success rate minus collision
+    rate (a policy that reaches the goal by crashing less wins); a later policy must beat the best strictly.
+    Each validation is a row of ``validation.csv`` and TensorBoard scalars under ``validation/``.
+    """
+
+    def __init__(self, run: RunDir, config: TrainConfig) -> None:
+        super().__init__()
+        self.run, self.config = run, config
+        self._env = None
+
+    def _on_training_start(self) -> None:
+        every = self.config.validate_every
+        self._next = (self.num_timesteps // every + 1) * every
+        kept = [r for r in self.run.read_validations() if r["best"]]
+        self.best_score = max((r["success"] - r["collision"] for r in kept), default=-math.inf)
+
+    def _on_step(self) -> bool:
+        if self.num_timesteps >= self._next:
+            self._next += self.config.validate_every
+            self.validate()
+        return True
+
+    def validate(self) -> dict[str, float]:
+        """One validation of the current policy; saves it to ``best/`` if it beats the best so far."""
+        from clutter_gym.training.config import VALIDATION_SEED
+        from clutter_gym.training.vec_env import make_env
+
+        if self._env is None:
+            self._env = make_env(self.config.env_id, self.config.make_kwargs())
+        normalizer = self.model.get_vec_normalize_env()
+        rows = []
+        for i in range(self.config.validate_episodes):
+            obs, _ = self._env.reset(seed=VALIDATION_SEED + i)
+            while True:
+                if normalizer is not None:
+                    obs = normalizer.normalize_obs(obs)
+                action, _ = self.model.predict(obs, deterministic=True)
+                obs, _, terminated, truncated, info = self._env.step(action)
+                if terminated or truncated:
+                    rows.append(info["episode_stats"])
+                    break
+        success = float(np.mean([r["success"] for r in rows]))
+        collision = float(np.mean([r["collision"] for r in rows]))
+        best = success - collision > self.best_score
+        if best:
+            self.best_score = success - collision
+            self.run.save_model(self.model, normalizer, self.run.best_dir)
+        row = {"step": float(self.num_timesteps), "success": success, "collision": collision, "best": float(best)}
+        self.run.append_validation(row)
+        self.logger.record("validation/success_rate", success)
+        self.logger.record("validation/collision_rate", collision)
+        return row
+
+    def _on_training_end(self) -> None:
+        if self._env is not None:
+            self._env.close()
+            self._env = None

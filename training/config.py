@@ -21,6 +21,9 @@ import yaml
 HYPERPARAMS_FILE = "ppo.yml"
 #: First evaluation seed by default: far from the seeds training starts its envs with (seed, seed + 1, ...).
 EVAL_SEED = 1_000_000
+#: First seed of the validation episodes run during training to pick the best model; apart from both the
+#: training seeds and the evaluation seeds, so the model is chosen on layouts the final evaluation never sees.
+VALIDATION_SEED = 2_000_000
 
 
 @dataclass(frozen=True)
@@ -41,6 +44,8 @@ class PPOHyperparams:
         vf_coef: value loss weight.
         max_grad_norm: gradient norm clipping.
         net_arch: hidden layer sizes of both the policy and the value network.
+        log_std_init: initial log standard deviation of the Gaussian actions (0: std 1, i.e. actions in [-1, 1]
+            start as mostly noise).
         normalize_obs: normalise the float observation entries by running mean and std (SB3 VecNormalize).
         normalize_reward: scale rewards by the running std of the discounted return (SB3 VecNormalize).
     """
@@ -56,6 +61,7 @@ class PPOHyperparams:
     vf_coef: float = 0.5
     max_grad_norm: float = 0.5
     net_arch: tuple[int, ...] = (64, 64)
+    log_std_init: float = 0.0
     normalize_obs: bool = True
     normalize_reward: bool = True
 
@@ -70,15 +76,16 @@ class PPOHyperparams:
         _check_range("ppo.ent_coef", self.ent_coef, 0.0, 1.0)
         _check_range("ppo.vf_coef", self.vf_coef, 0.0, 10.0)
         _check_range("ppo.max_grad_norm", self.max_grad_norm, 0.0, 100.0, low_open=True)
+        _check_range("ppo.log_std_init", self.log_std_init, -5.0, 2.0)
         if not self.net_arch or any(not isinstance(n, int) or not 1 <= n <= 4096 for n in self.net_arch):
             raise ValueError(f"ppo.net_arch must be 1 or more layer sizes in [1, 4096], got {self.net_arch!r}")
 
     def sb3_kwargs(self) -> dict[str, Any]:
         """Keyword arguments for ``stable_baselines3.PPO`` (normalisation is applied to the env, not here)."""
         kwargs = asdict(self)
-        for key in ("net_arch", "normalize_obs", "normalize_reward"):
+        for key in ("net_arch", "log_std_init", "normalize_obs", "normalize_reward"):
             kwargs.pop(key)
-        kwargs["policy_kwargs"] = {"net_arch": list(self.net_arch)}
+        kwargs["policy_kwargs"] = {"net_arch": list(self.net_arch), "log_std_init": self.log_std_init}
         return kwargs
 
 
@@ -95,6 +102,10 @@ class TrainConfig:
         checkpoint_every: env steps between checkpoints.
         keep_checkpoints: how many of the newest checkpoints to keep.
         final_eval_episodes: episodes of the evaluation written to ``eval.json`` after training (0: none).
+        validate_every: env steps between validations of the current policy (0: none). A validation runs
+            ``validate_episodes`` deterministic episodes on held-out layouts; the best policy so far is kept in
+            ``best/`` and is the one ``load()``, evaluation and the report use.
+        validate_episodes: episodes per validation.
         env_kwargs: extra ``gym.make`` keyword arguments. Its ``noise`` entry, if any, holds noise-section
             overrides (``{"lidar": {"range_sigma": 0.02}}``) applied on top of whichever profile the env is
             made under, for training and evaluation alike.
@@ -109,6 +120,8 @@ class TrainConfig:
     checkpoint_every: int = 50_000
     keep_checkpoints: int = 3
     final_eval_episodes: int = 20
+    validate_every: int = 0
+    validate_episodes: int = 20
     env_kwargs: dict[str, Any] = field(default_factory=dict)
     ppo: PPOHyperparams = field(default_factory=PPOHyperparams)
 
@@ -126,6 +139,8 @@ class TrainConfig:
         _check_range("checkpoint_every", self.checkpoint_every, 1, 10**10)
         _check_range("keep_checkpoints", self.keep_checkpoints, 1, 1000)
         _check_range("final_eval_episodes", self.final_eval_episodes, 0, 100_000)
+        _check_range("validate_every", self.validate_every, 0, 10**10)
+        _check_range("validate_episodes", self.validate_episodes, 1, 100_000)
         check_env_kwargs(self.env_id, self.noise, self.env_kwargs)
         if self.ppo.batch_size > self.ppo.n_steps * self.n_envs:
             raise ValueError(f"ppo.batch_size must be in [2, n_steps * n_envs = {self.ppo.n_steps * self.n_envs}], "

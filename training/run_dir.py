@@ -7,6 +7,8 @@ RUN/
   tb/                    TensorBoard event files
   checkpoints/step_<N>/  model.zip + vecnormalize.pkl, every ``checkpoint_every`` steps (newest few kept)
   model/                 the final model.zip + vecnormalize.pkl
+  best/                  the policy that did best in the validations during training (when they are on)
+  validation.csv         one row per validation: step, success and collision rates, whether it became best/
   eval.json              the evaluation after training
 ```
 
@@ -62,6 +64,8 @@ class RunDir:
         self.tb_dir = self.root / "tb"
         self.checkpoints_dir = self.root / "checkpoints"
         self.model_dir = self.root / "model"
+        self.best_dir = self.root / "best"
+        self.validation_file = self.root / "validation.csv"
         self.eval_file = self.root / "eval.json"
 
     # -- config ---------------------------------------------------------------------------------------------
@@ -138,9 +142,11 @@ class RunDir:
                 normalizer.save(tmp / NORMALIZER_FILE)
 
     def policy_folder(self) -> Path:
-        """The final model if training finished, else the newest checkpoint."""
-        if (self.model_dir / MODEL_FILE).is_file():
-            return self.model_dir
+        """The best validated policy if there is one, else the final model if training finished, else the newest
+        checkpoint."""
+        for folder in (self.best_dir, self.model_dir):
+            if (folder / MODEL_FILE).is_file():
+                return folder
         latest = self.latest_checkpoint()
         if latest is None:
             raise FileNotFoundError(f"{self.root} holds no model and no checkpoint yet")
@@ -149,18 +155,33 @@ class RunDir:
     def is_finished(self) -> bool:
         return (self.model_dir / MODEL_FILE).is_file()
 
+    # -- validation log -------------------------------------------------------------------------------------
+    def read_validations(self) -> list[dict[str, float]]:
+        return _read_rows(self.validation_file)
+
+    def append_validation(self, row: dict[str, float]) -> None:
+        """Add one validation row (the whole file is rewritten atomically: it holds a few dozen rows)."""
+        _write_rows(self.validation_file, [*self.read_validations(), row])
+
     # -- episode log ----------------------------------------------------------------------------------------
     def read_episodes(self) -> list[dict[str, float]]:
-        if not self.episodes_file.is_file():
-            return []
-        with self.episodes_file.open(newline="") as f:
-            return [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
+        return _read_rows(self.episodes_file)
 
     def truncate_episodes(self, last_step: int) -> None:
         """Drop episode rows logged after ``last_step`` (the steps a resumed run will redo)."""
-        rows = [row for row in self.read_episodes() if row["timestep"] <= last_step]
-        with atomic_path(self.episodes_file) as tmp, tmp.open("w", newline="") as f:
-            if rows:
-                writer = csv.DictWriter(f, fieldnames=list(rows[0]))
-                writer.writeheader()
-                writer.writerows(rows)
+        _write_rows(self.episodes_file, [row for row in self.read_episodes() if row["timestep"] <= last_step])
+
+
+def _read_rows(path: Path) -> list[dict[str, float]]:
+    if not path.is_file():
+        return []
+    with path.open(newline="") as f:
+        return [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
+
+
+def _write_rows(path: Path, rows: list[dict[str, float]]) -> None:
+    with atomic_path(path) as tmp, tmp.open("w", newline="") as f:
+        if rows:
+            writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+            writer.writeheader()
+            writer.writerows(rows)

@@ -9,11 +9,12 @@ from typing import Any
 import gymnasium as gym
 import torch
 from stable_baselines3 import PPO
+from stable_baselines3.common.callbacks import CallbackList
 from stable_baselines3.common.logger import configure
 from stable_baselines3.common.vec_env import VecNormalize
 
 from clutter_gym.atomic import write_text_atomically
-from clutter_gym.training.callbacks import RunMonitor
+from clutter_gym.training.callbacks import BestPolicyKeeper, RunMonitor
 from clutter_gym.training.config import EVAL_SEED, TrainConfig
 from clutter_gym.training.evaluate import evaluate
 from clutter_gym.training.run_dir import NORMALIZER_FILE, RunDir
@@ -52,6 +53,9 @@ def start(config: TrainConfig, out: str | Path) -> RunDir:
 def train(run: RunDir, progress: bool = True, timesteps: int | None = None) -> dict[str, Any] | None:
     """Train (or continue) the run in ``run`` up to its configured timesteps, then save and evaluate.
 
+    With ``validate_every`` set, the policy is validated on held-out layouts on that schedule and the best one
+    is kept in ``best/``; the final evaluation (like ``load()``) uses that one.
+
     A run with checkpoints continues from the newest one, with the config saved in the folder: the steps after
     that checkpoint are redone (and their episode rows dropped), so a killed run loses at most one checkpoint
     interval. ``timesteps`` raises the run's total (to extend a finished run). The continued run draws new env
@@ -81,8 +85,11 @@ def train(run: RunDir, progress: bool = True, timesteps: int | None = None) -> d
             run.truncate_episodes(step)
         model.set_logger(configure(str(run.tb_dir), ["tensorboard"]))
         remaining = config.timesteps - model.num_timesteps
+        callbacks = [RunMonitor(run, config, progress)]
+        if config.validate_every:
+            callbacks.append(BestPolicyKeeper(run, config))
         if remaining > 0:
-            model.learn(remaining, callback=RunMonitor(run, config, progress), reset_num_timesteps=latest is None)
+            model.learn(remaining, callback=CallbackList(callbacks), reset_num_timesteps=latest is None)
         run.save_model(model, model.get_vec_normalize_env(), run.model_dir)
     finally:
         venv.close()

@@ -19,6 +19,8 @@ from clutter_gym.worlds.path_distance import PathDistance
 from clutter_gym.worlds.scene import Scene
 
 MAX_TILT_COS = 0.5  # the base z axis more than 60 degrees from vertical counts as flipped
+#: Clearance beyond the footprint below which the subgoal's planner prefers other ways (its costmap inflation).
+SUBGOAL_PLAN_MARGIN = 0.25
 
 
 @dataclass(frozen=True)
@@ -74,6 +76,8 @@ class NavigateTask:
         max_goal_distance: upper bound of the distance observation (the arena diagonal), metres.
         spec: the arena's layout parameters (size and grid of the path-distance field).
         robot_radius: footprint radius for the path-distance field, metres.
+        subgoal_lookahead: metres along the shortest path on the known layout to the ``subgoal`` observation
+            entry, in [0, max_goal_distance]; 0 leaves the entry out (the mapless default).
     """
 
     def __init__(
@@ -85,11 +89,15 @@ class NavigateTask:
         max_goal_distance: float,
         spec: ClutterSpec,
         robot_radius: float,
+        subgoal_lookahead: float = 0.0,
     ) -> None:
         if not (math.isfinite(success_radius) and 0.0 < success_radius <= 2.0):
             raise ValueError(f"success_radius must be in (0, 2] metres, got {success_radius!r}")
         if not (math.isfinite(clearance_margin) and 0.0 <= clearance_margin <= 1.0):
             raise ValueError(f"clearance_margin must be in [0, 1] metres, got {clearance_margin!r}")
+        if not (math.isfinite(subgoal_lookahead) and 0.0 <= subgoal_lookahead <= max_goal_distance):
+            raise ValueError(f"subgoal_lookahead must be in [0, {max_goal_distance:.4g}] metres (0: no subgoal "
+                             f"entry), got {subgoal_lookahead!r}")
         self.weights = weights
         self.success_radius = success_radius
         self.clearance_margin = clearance_margin
@@ -97,6 +105,10 @@ class NavigateTask:
         low = np.array([0.0, -1.0, -1.0], dtype=np.float32)
         high = np.array([max_goal_distance, 1.0, 1.0], dtype=np.float32)
         self.spaces = {"goal": spaces.Box(low, high, dtype=np.float32)}
+        self.subgoal_lookahead = float(subgoal_lookahead)
+        if self.subgoal_lookahead > 0.0:
+            sub_high = np.array([self.subgoal_lookahead, 1.0, 1.0], dtype=np.float32)
+            self.spaces["subgoal"] = spaces.Box(low, sub_high, dtype=np.float32)
         self._max_goal_distance = float(high[0])
         self._spec, self._robot_radius = spec, robot_radius
         self._goal = (0.0, 0.0)
@@ -108,7 +120,8 @@ class NavigateTask:
 
     def reset(self, scene: Scene, state: RobotState) -> None:
         self._goal = (float(scene.goal[0]), float(scene.goal[1]))
-        self._path_distance = PathDistance(scene, self._spec, self._robot_radius)
+        margin = SUBGOAL_PLAN_MARGIN if self.subgoal_lookahead > 0.0 else None
+        self._path_distance = PathDistance(scene, self._spec, self._robot_radius, plan_margin=margin)
         self._previous_path = self.path_distance(state)
 
     def path_distance(self, state: RobotState) -> float:
@@ -120,11 +133,14 @@ class NavigateTask:
 
     def observe(self, state: RobotState, report: CollisionReport) -> dict[str, np.ndarray]:
         """``goal``: (distance m, sin bearing, cos bearing); bearing is the goal direction in the robot frame, CCW
-        from +x."""
-        dx, dy = self._goal[0] - state.position[0], self._goal[1] - state.position[1]
-        bearing = math.atan2(dy, dx) - state.yaw
-        distance = min(math.hypot(dx, dy), self._max_goal_distance)
-        return {"goal": np.array([distance, math.sin(bearing), math.cos(bearing)], dtype=np.float32)}
+        from +x. ``subgoal`` (when enabled): the same for the point ``subgoal_lookahead`` metres ahead on the
+        shortest path (the goal itself when nearer)."""
+        x, y = float(state.position[0]), float(state.position[1])
+        obs = {"goal": _polar(self._goal, x, y, state.yaw, self._max_goal_distance)}
+        if self.subgoal_lookahead > 0.0:
+            point = self._path_distance.waypoint(x, y, self.subgoal_lookahead)
+            obs["subgoal"] = _polar(point, x, y, state.yaw, self.subgoal_lookahead)
+        return obs
 
     def evaluate(self, state: RobotState, report: CollisionReport, action: np.ndarray) -> StepOutcome:
         """Reward terms and termination after a step, from ground truth only."""
@@ -145,3 +161,10 @@ class NavigateTask:
         flipped = state.rotation[2, 2] < MAX_TILT_COS
         terminated = success or flipped or (self.terminate_on_collision and report.in_contact)
         return StepOutcome(sum(terms.values()), terms, terminated, success, 1.0 if report.in_contact else 0.0)
+
+
+def _polar(point: tuple[float, float], x: float, y: float, yaw: float, max_distance: float) -> np.ndarray:
+    """(distance, sin bearing, cos bearing) of ``point`` seen from a robot at (x, y) heading ``yaw``."""
+    dx, dy = point[0] - x, point[1] - y
+    bearing = math.atan2(dy, dx) - yaw
+    return np.array([min(math.hypot(dx, dy), max_distance), math.sin(bearing), math.cos(bearing)], dtype=np.float32)

@@ -5,6 +5,10 @@ the length of the shortest 16-connected grid path through cells where the robot'
 above its radius), computed once per episode by Dijkstra from the goal cell. Cells the footprint does not fit
 in (the robot touching an obstacle) take the value of the nearest reachable cell plus the distance to it, so
 the field is finite everywhere and a robot pushed against an obstacle still has a well-defined progress.
+
+The same search gives the path itself (each cell's next cell towards the goal), which the optional ``subgoal``
+observation reads: the point a fixed length ahead on that path, as a global planner on a known map would hand
+it to a local controller.
 """
 
 from __future__ import annotations
@@ -30,6 +34,10 @@ _MOVES = (
 )
 
 
+#: Cost per metre at zero clearance on the planner's costmap, on top of the 1 every metre costs.
+INFLATION_COST = 4.0
+
+
 class PathDistance:
     """Path length from a point to the goal, metres (bilinear in the cell-centre values).
 
@@ -37,18 +45,27 @@ class PathDistance:
         scene: the episode's layout (obstacles and goal).
         spec: arena size and grid resolution.
         robot_radius: footprint radius, metres.
+        plan_margin: None, or the clearance (metres beyond the footprint) below which the planner behind
+            :meth:`waypoint` charges extra; None skips that search.
     """
 
-    def __init__(self, scene: Scene, spec: ClutterSpec, robot_radius: float) -> None:
+    def __init__(self, scene: Scene, spec: ClutterSpec, robot_radius: float, plan_margin: float | None = None) -> None:
         self._centres = spec.cell_centres
         self._res = float(self._centres[1] - self._centres[0])
         self._origin, self._top = float(self._centres[0]), float(len(self._centres) - 1)  # first centre, last index
-        clearance = clearance_field(scene.obstacles, spec, cap=robot_radius + self._res)
+        reach = self._res if plan_margin is None else max(self._res, plan_margin)
+        clearance = clearance_field(scene.obstacles, spec, cap=robot_radius + reach)
         free = clearance > robot_radius
         goal_cell = self._nearest_cell(scene.goal)
         free[goal_cell] = True
-        self.values = _fill_unreachable(_dijkstra_from(goal_cell, free, self._res), self._res)
+        distance, _ = _dijkstra_from(goal_cell, free, self._res)
+        self.values, self._nearest_reachable = _fill_unreachable(distance, self._res)
+        self._goal_cell = goal_cell[0] * len(self._centres) + goal_cell[1]
         self._goal = scene.goal
+        self._next: np.ndarray | None = None
+        if plan_margin is not None:
+            shortfall = np.clip((robot_radius + plan_margin - clearance) / max(plan_margin, 1e-9), 0.0, 1.0)
+            _, self._next = _dijkstra_from(goal_cell, free, self._res, 1.0 + INFLATION_COST * shortfall**2)
 
     def _nearest_cell(self, point: tuple[float, float]) -> tuple[int, int]:
         n = len(self._centres)
@@ -67,8 +84,45 @@ class PathDistance:
         return max(float(grid), math.hypot(x - self._goal[0], y - self._goal[1]))
 
 
-def _dijkstra_from(source: tuple[int, int], free: np.ndarray, res: float) -> np.ndarray:
-    """(n, n) shortest 16-connected path length through ``free`` cells from ``source``; inf where unreachable."""
+    def waypoint(self, x: float, y: float, lookahead: float) -> tuple[float, float]:
+        """The point ``lookahead`` metres along the shortest path from (x, y) to the goal (the goal if nearer).
+
+        The path starts at the cell nearest (x, y) that the footprint fits in and runs through cell centres to
+        the goal cell, then to the goal itself; the point is interpolated on the segment where the length runs out.
+
+        Raises:
+            RuntimeError: the field was made without ``plan_margin``.
+        """
+        if self._next is None:
+            raise RuntimeError("waypoint() needs a PathDistance made with a plan_margin")
+        n = len(self._centres)
+        i, j = self._nearest_cell((x, y))
+        cell = int(self._nearest_reachable[i * n + j])
+        points = [(x, y)]
+        travelled = 0.0
+        while travelled < lookahead:
+            if cell == self._goal_cell:
+                target = self._goal
+            else:
+                target = (float(self._centres[cell // n]), float(self._centres[cell % n]))
+            step = math.hypot(target[0] - points[-1][0], target[1] - points[-1][1])
+            if travelled + step >= lookahead:
+                t = (lookahead - travelled) / step
+                return (points[-1][0] + t * (target[0] - points[-1][0]), points[-1][1] + t * (target[1] - points[-1][1]))
+            travelled += step
+            points.append(target)
+            if cell == self._goal_cell:
+                break
+            cell = int(self._next[cell])
+        return (float(self._goal[0]), float(self._goal[1]))
+
+
+def _dijkstra_from(source: tuple[int, int], free: np.ndarray, res: float,
+                   cost: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(n, n) shortest 16-connected path length through ``free`` cells from ``source`` (inf where unreachable),
+    and (n * n,) each cell's next cell on its path to ``source`` (negative where there is none).
+
+    ``cost`` (n, n), if given, weighs each metre of a move by the mean cost of the cells it joins."""
     n = free.shape[0]
     padded = np.pad(free, 2, constant_values=False)
 
@@ -83,13 +137,20 @@ def _dijkstra_from(source: tuple[int, int], free: np.ndarray, res: float) -> np.
         source_ids = np.flatnonzero(ok)
         rows.append(source_ids)
         cols.append(source_ids + di * n + dj)
-        weights.append(np.full(source_ids.size, res * math.hypot(di, dj)))
+        weight = np.full(source_ids.size, res * math.hypot(di, dj))
+        if cost is not None:
+            flat = cost.ravel()
+            weight *= 0.5 * (flat[source_ids] + flat[source_ids + di * n + dj])
+        weights.append(weight)
     graph = coo_matrix((np.concatenate(weights), (np.concatenate(rows), np.concatenate(cols))), shape=(n * n, n * n))
-    return dijkstra(graph.tocsr(), directed=False, indices=source[0] * n + source[1]).reshape(n, n)
+    distance, predecessors = dijkstra(graph.tocsr(), directed=False, indices=source[0] * n + source[1],
+                                      return_predecessors=True)
+    return distance.reshape(n, n), predecessors
 
 
-def _fill_unreachable(distance: np.ndarray, res: float) -> np.ndarray:
-    """Unreachable cells get the nearest reachable cell's value plus the straight distance to it."""
+def _fill_unreachable(distance: np.ndarray, res: float) -> tuple[np.ndarray, np.ndarray]:
+    """Unreachable cells get the nearest reachable cell's value plus the straight distance to it; also returns
+    (n * n,) the flat index of each cell's nearest reachable cell (itself where reachable)."""
     reachable = np.isfinite(distance)
     gap, (ni, nj) = ndimage.distance_transform_edt(~reachable, return_indices=True)
-    return distance[ni, nj] + gap * res
+    return distance[ni, nj] + gap * res, (ni * distance.shape[1] + nj).ravel()
