@@ -57,7 +57,8 @@ class ClutterNavEnv(ClutterEnv):
     ``progress`` (+progress_weight per metre the shortest path to the goal around the clutter shrinks),
     ``success`` (+success_weight once), ``contact`` (-contact_weight per step in contact), ``clearance`` (-clearance_weight * (margin - clearance) /
     margin per step when clearance < clearance_margin), ``control`` (-control_weight * |a|^2),
-    ``time`` (-time_weight per step). ``info["cost"]`` is 1.0 in a step with contact, else 0.0.
+    ``time`` (-time_weight per step), and only when ``reverse_weight > 0`` ``reverse`` (-reverse_weight per m/s
+    of backward speed, per step). ``info["cost"]`` is 1.0 in a step with contact, else 0.0.
 
     ## Starting state
 
@@ -148,6 +149,7 @@ class ClutterNavEnv(ClutterEnv):
         control_weight: float = 0.01,
         time_weight: float = 0.01,
         subgoal_lookahead: float = 0.0,
+        reverse_weight: float = 0.0,
     ) -> None:
         check_render_mode(render_mode)
         check_rates(physics_hz, control_hz, solver_iterations)
@@ -162,7 +164,7 @@ class ClutterNavEnv(ClutterEnv):
         sensor_objects = build_sensors(sensors, profile, lidar, ImuConfig(dt=1.0 / control_hz), camera)
         task = NavigateTask(
             NavRewardWeights(progress_weight, success_weight, contact_weight, clearance_weight, control_weight,
-                             time_weight),
+                             time_weight, reverse_weight),
             success_radius=success_radius,
             clearance_margin=clearance_margin,
             terminate_on_collision=terminate_on_collision,

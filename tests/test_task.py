@@ -58,3 +58,22 @@ def test_weights_scale_their_terms(make_env):
         info_b = b.step(np.array([1.0, 0.0]))[4]
     assert info_a["n_contacts"] > 0
     assert info_b["reward_terms"]["contact"] == 3 * info_a["reward_terms"]["contact"]
+
+
+def test_the_reverse_term_charges_backward_speed_only_when_asked():
+    import gymnasium as gym
+
+    scene = {"obstacles": [], "start": [0.0, 0.0, 0.3], "goal": [2.5, 2.5]}
+    for weight, command in ((0.5, -1.0), (0.5, 1.0), (0.0, -1.0)):
+        env = gym.make("ClutterNav-v0", reverse_weight=weight)
+        obs, _ = env.reset(seed=0, options={"scene": scene})
+        for _ in range(20):
+            obs, _, _, _, info = env.step(np.array([command, 0.0], dtype=np.float32))
+        env.close()
+        speed = float(obs["velocity"][0])  # forward speed, m/s (clean sensors: exact)
+        if weight == 0.0:
+            assert "reverse" not in info["reward_terms"]  # the default reward is unchanged
+        elif command < 0:
+            assert speed < -0.3 and info["reward_terms"]["reverse"] == pytest.approx(weight * speed, abs=0.02)
+        else:
+            assert info["reward_terms"]["reverse"] == 0.0

@@ -14,6 +14,7 @@ it to a local controller.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 
 import numpy as np
 from scipy import ndimage
@@ -85,36 +86,42 @@ class PathDistance:
 
 
     def waypoint(self, x: float, y: float, lookahead: float) -> tuple[float, float]:
-        """The point ``lookahead`` metres along the shortest path from (x, y) to the goal (the goal if nearer).
-
-        The path starts at the cell nearest (x, y) that the footprint fits in and runs through cell centres to
-        the goal cell, then to the goal itself; the point is interpolated on the segment where the length runs out.
+        """The point ``lookahead`` metres along the planned path from (x, y) to the goal (the goal if nearer).
 
         Raises:
             RuntimeError: the field was made without ``plan_margin``.
         """
+        points = self._chain(x, y)
+        previous, travelled = next(points), 0.0
+        for point in points:
+            step = math.hypot(point[0] - previous[0], point[1] - previous[1])
+            if travelled + step >= lookahead:
+                t = (lookahead - travelled) / step
+                return (previous[0] + t * (point[0] - previous[0]), previous[1] + t * (point[1] - previous[1]))
+            travelled += step
+            previous = point
+        return (float(self._goal[0]), float(self._goal[1]))
+
+    def path(self, x: float, y: float) -> np.ndarray:
+        """(k, 2) the planned path from (x, y) to the goal, metres.
+
+        Raises:
+            RuntimeError: the field was made without ``plan_margin``.
+        """
+        return np.array(list(self._chain(x, y)))
+
+    def _chain(self, x: float, y: float) -> Iterator[tuple[float, float]]:
+        """(x, y), then the cell centres of the planned path from the reachable cell nearest it, then the goal."""
         if self._next is None:
-            raise RuntimeError("waypoint() needs a PathDistance made with a plan_margin")
+            raise RuntimeError("the planned path needs a PathDistance made with a plan_margin")
         n = len(self._centres)
         i, j = self._nearest_cell((x, y))
         cell = int(self._nearest_reachable[i * n + j])
-        points = [(x, y)]
-        travelled = 0.0
-        while travelled < lookahead:
-            if cell == self._goal_cell:
-                target = self._goal
-            else:
-                target = (float(self._centres[cell // n]), float(self._centres[cell % n]))
-            step = math.hypot(target[0] - points[-1][0], target[1] - points[-1][1])
-            if travelled + step >= lookahead:
-                t = (lookahead - travelled) / step
-                return (points[-1][0] + t * (target[0] - points[-1][0]), points[-1][1] + t * (target[1] - points[-1][1]))
-            travelled += step
-            points.append(target)
-            if cell == self._goal_cell:
-                break
+        yield (x, y)
+        while cell != self._goal_cell:
+            yield (float(self._centres[cell // n]), float(self._centres[cell % n]))
             cell = int(self._next[cell])
-        return (float(self._goal[0]), float(self._goal[1]))
+        yield (float(self._goal[0]), float(self._goal[1]))
 
 
 def _dijkstra_from(source: tuple[int, int], free: np.ndarray, res: float,
