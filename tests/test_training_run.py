@@ -187,7 +187,7 @@ def test_the_same_policy_validates_alike_on_its_fixed_held_out_layouts(tmp_path)
     run = tiny_run(tmp_path, validate_every=64, validate_episodes=2,
                    env_kwargs={"obstacle_density": 0.05, "max_episode_steps": 20})
     config = run.read_config()
-    model = PPO("MultiInputPolicy", gym.make("ClutterNav-v0", obstacle_density=0.05), seed=0, device="cpu",
+    model = PPO("MultiInputPolicy", gym.make("ClutterNav-v0", **config.make_kwargs()), seed=0, device="cpu",
                 n_steps=64, batch_size=32)
     model.set_logger(configure(None, []))
     keepers = [BestPolicyKeeper(run, config) for _ in range(2)]
@@ -198,3 +198,36 @@ def test_the_same_policy_validates_alike_on_its_fixed_held_out_layouts(tmp_path)
         results.append(keeper.validate())
         keeper._on_training_end()
     assert results[0] == {**results[1], "best": 1.0} and results[1]["best"] == 0.0  # equal is not better
+
+
+def test_the_main_job_reports_its_verdict_and_shows_two_episodes_side_by_side(tmp_path):
+    import imageio.v2 as imageio
+
+    from clutter_gym.training.report import main_job, prepare_run
+
+    settings = {"n_envs": 1, "checkpoint_every": 128, "validate_every": 128, "validate_episodes": 1,
+                "env_kwargs": {"max_episode_steps": 25}, "ppo": {"n_steps": 64, "batch_size": 32, "n_epochs": 1}}
+    run = prepare_run("ClutterNav-v0", tmp_path, timesteps=128, seed=0, settings=settings)
+    report = main_job(run, tmp_path, timesteps=128, episodes=2, progress=False).read_text()
+    assert "**Map-based agent.**" in report  # the shipped ClutterNav settings tell the policy the subgoal
+    assert "Target on clean sensors" in report and "**missed**" in report  # 128 steps of training cannot meet it
+    assert "Evaluated policy: `best`" in report
+    frames = imageio.mimread(tmp_path / "episode.gif")
+    height, width = frames[0].shape[:2]
+    assert height >= 480 and width >= 2 * 480  # two readable panels
+    assert (tmp_path / "learning_curve.png").is_file()
+
+
+def test_episode_pictures_draw_the_planner_path_and_every_step(tmp_path):
+    from clutter_gym.training.baselines import PotentialFieldNavigator
+    from clutter_gym.training.episode_view import draw_frame, record_episode
+
+    env = gym.make("ClutterNav-v0", subgoal_lookahead=0.5, max_episode_steps=30)
+    navigator = PotentialFieldNavigator.for_env(env, goal_key="subgoal")
+    trace = record_episode(env, lambda obs, state: (navigator(obs), None), seed=3, title="scripted")
+    env.close()
+    assert len(trace.poses) == len(trace.captions) == len(trace.ranges) == 31  # the reset and 30 steps
+    assert trace.path[0] == pytest.approx(trace.poses[0][:2]) and trace.path[-1] == pytest.approx(trace.scene.goal)
+    assert "step 30" in trace.captions[-1] and "progress" in trace.captions[-1]
+    first, last = draw_frame([trace], 0), draw_frame([trace], 30)
+    assert first.shape == last.shape and first.shape[0] >= 480 and not np.array_equal(first, last)

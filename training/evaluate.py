@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 
 from clutter_gym.noise.profiles import PROFILE_NAMES
@@ -43,24 +45,9 @@ def evaluate(
     agent = load(run_dir)
     overrides = dict(env_overrides or {})
     noise_spec = {"profile": noise, **overrides.pop("noise", {})}
-    env = EpisodeStats(agent.make_env(noise=noise_spec, render_mode="rgb_array" if video else None, **overrides))
-    rows, frames = [], []
+    env = agent.make_env(noise=noise_spec, render_mode="rgb_array" if video else None, **overrides)
     try:
-        for i in range(episodes):
-            obs, _ = env.reset(seed=seed + i)
-            state, record = None, video is not None and i == 0
-            if record:
-                frames.append(env.render())
-            while True:
-                action, state = agent.predict(obs, state)
-                obs, _, terminated, truncated, info = env.step(action)
-                if record:
-                    frames.append(env.render())
-                if terminated or truncated:
-                    rows.append(info["episode_stats"])
-                    break
-        if video is not None:
-            write_video(video, frames, fps=env.metadata["render_fps"])
+        rows = rollouts(env, agent.predict, episodes, seed, video)
     finally:
         env.close()
     return {
@@ -77,6 +64,33 @@ def evaluate(
         "video": None if video is None else str(video),
         "per_episode": rows,
     }
+
+
+def rollouts(env: gym.Env, policy: Callable[[Any, Any], tuple[np.ndarray, Any]], episodes: int, seed: int,
+             video: str | Path | None = None) -> list[dict[str, float]]:
+    """``info["episode_stats"]`` of ``episodes`` episodes of ``policy`` in ``env`` (episode ``i`` reset with seed
+    ``seed + i``); the first one is written to ``video`` if given (the env must render ``rgb_array``).
+
+    ``policy(obs, state) -> (action, state)`` as :meth:`Agent.predict`; ``state`` is None at each episode start.
+    """
+    env = EpisodeStats(env)
+    rows, frames = [], []
+    for i in range(episodes):
+        obs, _ = env.reset(seed=seed + i)
+        state, record = None, video is not None and i == 0
+        if record:
+            frames.append(env.render())
+        while True:
+            action, state = policy(obs, state)
+            obs, _, terminated, truncated, info = env.step(action)
+            if record:
+                frames.append(env.render())
+            if terminated or truncated:
+                rows.append(info["episode_stats"])
+                break
+    if video is not None:
+        write_video(video, frames, fps=env.metadata["render_fps"])
+    return rows
 
 
 def summarize(rows: list[dict[str, float]]) -> dict[str, dict[str, Any]]:

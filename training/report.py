@@ -1,7 +1,8 @@
 """The main job: train PPO with the defaults, evaluate clean and under the nominal profile, write a short report.
 
 ``OUT/report.md`` (metrics with 95% intervals, the config, timings), ``OUT/learning_curve.png`` (success and
-collision rate over training), ``OUT/episode.gif`` (one evaluation episode, clean sensors), ``OUT/eval-<p>.json``
+collision rate over training, and the validations), ``OUT/episode.gif`` (for ClutterNav a successful and a failed
+evaluation episode side by side, top-down; the env's own render for other envs), ``OUT/eval-<p>.json``
 and the run folder ``OUT/run``. Rerunning resumes an unfinished run and reuses a finished one.
 """
 
@@ -67,16 +68,40 @@ def main_job(run: RunDir, out: Path, timesteps: int | None, episodes: int, progr
     train_s = time.perf_counter() - t0
     summaries = {}
     t0 = time.perf_counter()
+    navigation = run.read_config().env_id == "ClutterNav-v0"
     for profile in PROFILES:
-        video = out / "episode.gif" if profile == "none" else None
+        video = out / "episode.gif" if profile == "none" and not navigation else None
         summary = evaluate(run.root, noise=profile, episodes=episodes, seed=EVAL_SEED, video=video)
         write_text_atomically(out / f"eval-{profile}.json", json.dumps(summary, indent=2))
         summaries[profile] = summary
     eval_s = time.perf_counter() - t0
+    if navigation:
+        write_episode_pair(run, summaries["none"], out / "episode.gif")
     curve = plot_learning_curve(run, out / "learning_curve.png")
     report = out / "report.md"
     write_text_atomically(report, render_report(run, summaries, curve, train_s, eval_s))
     return report
+
+
+def write_episode_pair(run: RunDir, summary: dict, path: Path) -> Path:
+    """The first successful and the first failed episode of an evaluation, replayed side by side (top-down, with
+    trail, LIDAR beams, planner path and reward terms); two successes or two failures if there is no other kind."""
+    from clutter_gym.training.agent import load
+    from clutter_gym.training.episode_view import record_episode, write_episodes_video
+
+    rows = summary["per_episode"]
+    wins = [i for i, r in enumerate(rows) if r["success"]]
+    losses = [i for i, r in enumerate(rows) if not r["success"]]
+    picks = (wins[:1] + losses[:1]) if wins and losses else (wins or losses)[:2]
+    agent = load(run.root)
+    env = agent.make_env(noise=summary["eval_noise"])
+    try:
+        traces = [record_episode(env, agent.predict, summary["seed"] + i,
+                                 f"{'success' if rows[i]['success'] else 'failure'}, seed {summary['seed'] + i}")
+                  for i in picks]
+    finally:
+        env.close()
+    return write_episodes_video(path, traces, fps=env.metadata["render_fps"])
 
 
 def rolling_rate(values: np.ndarray, window: int = WINDOW) -> np.ndarray:
@@ -94,8 +119,12 @@ def plot_learning_curve(run: RunDir, path: Path) -> Path | None:
 
     steps = np.array([r["timestep"] for r in rows])
     fig, ax = plt.subplots(figsize=(6.4, 3.6))
+    validations = run.read_validations()
     for key, label in (("success", "success rate"), ("collision", "collision rate")):
-        ax.plot(steps, rolling_rate(np.array([r[key] for r in rows])), label=label)
+        line, = ax.plot(steps, rolling_rate(np.array([r[key] for r in rows])), label=f"{label}, training")
+        if validations:
+            ax.plot([v["step"] for v in validations], [v[key] for v in validations], "o", color=line.get_color(),
+                    label=f"{label}, validation")
     ax.set_xlabel("env steps")
     ax.set_ylabel(f"rate over the last {WINDOW} episodes")
     ax.set_ylim(0, 1)
@@ -106,6 +135,29 @@ def plot_learning_curve(run: RunDir, path: Path) -> Path | None:
     return save_figure(fig, path)
 
 
+#: The main job's target on clean sensors: success rate at least, collision rate at most, wall time at most.
+TARGET = {"success_rate": 0.90, "collision_rate": 0.05, "minutes": 15.0}
+
+
+def _verdict(metrics: dict, seconds: float) -> str:
+    success, collision = metrics["success_rate"]["value"], metrics["collision_rate"]["value"]
+    met = success >= TARGET["success_rate"] and collision <= TARGET["collision_rate"]
+    timed = seconds / 60 <= TARGET["minutes"]
+    return (f"Target on clean sensors, at least {TARGET['success_rate']:.0%} success and at most "
+            f"{TARGET['collision_rate']:.0%} collision episodes within {TARGET['minutes']:.0f} minutes: "
+            f"**{'met' if met and timed else 'missed'}** ({success:.0%} success, {collision:.0%} collisions, "
+            f"{seconds / 60:.1f} min of training and evaluation).")
+
+
+def _observation_line(config) -> str:
+    lookahead = config.env_kwargs.get("subgoal_lookahead", 0.0)
+    if lookahead:
+        return (f"**Map-based agent.** Besides the LIDAR and the goal, the policy is told the subgoal: the point "
+                f"{lookahead} m ahead on the path a costmap planner finds over the known layout. It does not solve "
+                "the mapless task; train without `subgoal_lookahead` for that.")
+    return "**Mapless agent.** The policy sees its sensors and the goal's relative position, no map."
+
+
 def render_report(run: RunDir, summaries: dict, curve: Path | None, train_s: float, eval_s: float) -> str:
     config = run.read_config()
     lines = [
@@ -114,6 +166,8 @@ def render_report(run: RunDir, summaries: dict, curve: Path | None, train_s: flo
         f"PPO, {config.timesteps:,} env steps with {config.n_envs} envs, seed {config.seed}, training noise profile "
         f"{config.noise!r}; this invocation spent {train_s / 60:.1f} min training (0 when it reused a finished run) "
         f"and {eval_s / 60:.1f} min evaluating. Config: `{run.config_file}`.",
+        "",
+        _observation_line(config),
         "",
         "| metric | " + " | ".join(f"eval `{p}`" for p in summaries) + " |",
         "|---|" + "---|" * len(summaries),
@@ -130,10 +184,13 @@ def render_report(run: RunDir, summaries: dict, curve: Path | None, train_s: flo
         "",
         f"{first['episodes']} episodes per profile, seeds {first['seed']}.., the same layouts under each profile; "
         "brackets are 95% intervals (Wilson for rates, Student t for means). A collision episode is one with any "
-        "contact.",
+        f"contact. Evaluated policy: `{first['model']}` of the run, trained for {first['model_step']:,} steps"
+        + (" (the best of the validations during training)." if first["model"] == "best" else "."),
         "",
     ]
+    if "none" in summaries:
+        lines += [_verdict(summaries["none"]["metrics"], run.training_time()["seconds"] + eval_s), ""]
     if curve is not None:
         lines += [f"![learning curve]({curve.name})", ""]
-    lines += ["![an evaluation episode, clean sensors](episode.gif)", ""]
+    lines += ["![evaluation episodes, clean sensors](episode.gif)", ""]
     return "\n".join(lines)

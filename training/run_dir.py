@@ -9,6 +9,7 @@ RUN/
   model/                 the final model.zip + vecnormalize.pkl
   best/                  the policy that did best in the validations during training (when they are on)
   validation.csv         one row per validation: step, success and collision rates, whether it became best/
+  training.json          wall time spent in training (summed over resumes) and the steps reached
   eval.json              the evaluation after training
 ```
 
@@ -19,6 +20,7 @@ complete; a run killed mid-write leaves only a hidden temporary folder, which th
 from __future__ import annotations
 
 import csv
+import json
 import platform
 import re
 import shutil
@@ -67,6 +69,7 @@ class RunDir:
         self.best_dir = self.root / "best"
         self.validation_file = self.root / "validation.csv"
         self.eval_file = self.root / "eval.json"
+        self.training_file = self.root / "training.json"
 
     # -- config ---------------------------------------------------------------------------------------------
     def write_config(self, config: TrainConfig) -> None:
@@ -154,6 +157,16 @@ class RunDir:
 
     def is_finished(self) -> bool:
         return (self.model_dir / MODEL_FILE).is_file()
+
+    def training_time(self) -> dict[str, float]:
+        """``{"seconds": wall time in training, "steps": steps reached}`` (zeros before any training)."""
+        if not self.training_file.is_file():
+            return {"seconds": 0.0, "steps": 0.0}
+        return json.loads(self.training_file.read_text())
+
+    def add_training_time(self, seconds: float, steps: int) -> None:
+        total = self.training_time()["seconds"] + seconds
+        write_text_atomically(self.training_file, json.dumps({"seconds": total, "steps": float(steps)}))
 
     # -- validation log -------------------------------------------------------------------------------------
     def read_validations(self) -> list[dict[str, float]]:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import time
 from pathlib import Path
 from typing import Any
 
@@ -89,7 +90,9 @@ def train(run: RunDir, progress: bool = True, timesteps: int | None = None) -> d
         if config.validate_every:
             callbacks.append(BestPolicyKeeper(run, config))
         if remaining > 0:
+            t0 = time.perf_counter()
             model.learn(remaining, callback=CallbackList(callbacks), reset_num_timesteps=latest is None)
+            run.add_training_time(time.perf_counter() - t0, model.num_timesteps)
         run.save_model(model, model.get_vec_normalize_env(), run.model_dir)
     finally:
         venv.close()
