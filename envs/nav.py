@@ -44,12 +44,13 @@ class ClutterNavEnv(ClutterEnv):
     | ``camera_depth`` | (h, w) | depth along the optical axis, 0 = no data | m | [0, camera_far] |
     | ``camera_segmentation`` | (h, w) uint8 | class per pixel: nothing, ground, obstacle, robot, goal | - | [0, 4] |
     | ``goal`` | (3,) | distance, sin(bearing), cos(bearing) | m, -, -; robot frame | [0, arena diagonal], [-1, 1] |
-    | ``subgoal`` | (3,) | distance, sin(bearing), cos(bearing) of the waypoint ``subgoal_lookahead`` ahead on the shortest path | m, -, -; robot frame | [0, subgoal_lookahead], [-1, 1] |
+    | ``subgoal`` | (3,) | distance, sin(bearing), cos(bearing) of the waypoint ``subgoal_lookahead`` ahead on the planned path | m, -, -; robot frame | [0, subgoal_lookahead], [-1, 1] |
     | ``velocity`` | (2,) | forward speed, yaw rate | m/s, rad/s; base frame | +-2x the commanded maxima |
 
     Sensor entries are present only when listed in ``sensors`` (camera entries only for its ``camera_modes``;
-    ``(w, h) = camera_size``); ``subgoal`` only when ``subgoal_lookahead > 0``. The IMU reads +9.81 m/s^2 on z at rest. With a noise profile the entries carry
-    that profile's noise, update rate (held between updates) and latency; a LIDAR beam without a return reads 1.
+    ``(w, h) = camera_size``); ``subgoal`` only when ``subgoal_lookahead > 0``. The IMU reads +9.81 m/s^2 on z
+    at rest. With a noise profile the entries carry that profile's noise, update rate (held between updates) and
+    latency; a LIDAR beam without a return reads 1.
 
     ## Rewards
 
@@ -100,9 +101,9 @@ class ClutterNavEnv(ClutterEnv):
     ``success_radius`` m; ``clearance_margin`` m; ``terminate_on_collision``; ``contact_tolerance`` m;
     ``*_weight`` reward weights; ``subgoal_lookahead`` m (0: off).
 
-    ``subgoal_lookahead > 0`` makes the env map-based: the ``subgoal`` entry comes from the shortest path on the
-    known layout (the grid search that also shapes the progress reward), as a global planner on a map hands
-    waypoints to a local controller. The default env is mapless: it knows only the goal's relative position.
+    ``subgoal_lookahead > 0`` makes the env map-based: the ``subgoal`` entry comes from a path planned on the
+    known layout (shortest on a costmap that charges passing within 0.25 m of touching; see
+    ``worlds/path_distance.py``), as a global planner on a map hands waypoints to a local controller. The default env is mapless: it knows only the goal's relative position.
 
     Defaults are in the signature.
 

@@ -127,23 +127,21 @@ class BestPolicyKeeper(BaseCallback):
 
     def validate(self) -> dict[str, float]:
         """One validation of the current policy; saves it to ``best/`` if it beats the best so far."""
+        import gymnasium as gym
+
         from clutter_gym.training.config import VALIDATION_SEED
-        from clutter_gym.training.vec_env import make_env
+        from clutter_gym.training.evaluate import rollouts
 
         if self._env is None:
-            self._env = make_env(self.config.env_id, self.config.make_kwargs())
+            self._env = gym.make(self.config.env_id, **self.config.make_kwargs())
         normalizer = self.model.get_vec_normalize_env()
-        rows = []
-        for i in range(self.config.validate_episodes):
-            obs, _ = self._env.reset(seed=VALIDATION_SEED + i)
-            while True:
-                if normalizer is not None:
-                    obs = normalizer.normalize_obs(obs)
-                action, _ = self.model.predict(obs, deterministic=True)
-                obs, _, terminated, truncated, info = self._env.step(action)
-                if terminated or truncated:
-                    rows.append(info["episode_stats"])
-                    break
+
+        def policy(obs, state):
+            if normalizer is not None:
+                obs = normalizer.normalize_obs(obs)
+            return self.model.predict(obs, deterministic=True)[0], state
+
+        rows = rollouts(self._env, policy, self.config.validate_episodes, VALIDATION_SEED)
         success = float(np.mean([r["success"] for r in rows]))
         collision = float(np.mean([r["collision"] for r in rows]))
         best = success - collision > self.best_score

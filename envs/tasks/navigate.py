@@ -79,7 +79,7 @@ class NavigateTask:
         max_goal_distance: upper bound of the distance observation (the arena diagonal), metres.
         spec: the arena's layout parameters (size and grid of the path-distance field).
         robot_radius: footprint radius for the path-distance field, metres.
-        subgoal_lookahead: metres along the shortest path on the known layout to the ``subgoal`` observation
+        subgoal_lookahead: metres along the planned path on the known layout to the ``subgoal`` observation
             entry, in [0, max_goal_distance]; 0 leaves the entry out (the mapless default).
     """
 
@@ -141,7 +141,7 @@ class NavigateTask:
     def observe(self, state: RobotState, report: CollisionReport) -> dict[str, np.ndarray]:
         """``goal``: (distance m, sin bearing, cos bearing); bearing is the goal direction in the robot frame, CCW
         from +x. ``subgoal`` (when enabled): the same for the point ``subgoal_lookahead`` metres ahead on the
-        shortest path (the goal itself when nearer)."""
+        planned path (the goal itself when nearer)."""
         x, y = float(state.position[0]), float(state.position[1])
         obs = {"goal": _polar(self._goal, x, y, state.yaw, self._max_goal_distance)}
         if self.subgoal_lookahead > 0.0:

@@ -6,9 +6,10 @@ above its radius), computed once per episode by Dijkstra from the goal cell. Cel
 in (the robot touching an obstacle) take the value of the nearest reachable cell plus the distance to it, so
 the field is finite everywhere and a robot pushed against an obstacle still has a well-defined progress.
 
-The same search gives the path itself (each cell's next cell towards the goal), which the optional ``subgoal``
-observation reads: the point a fixed length ahead on that path, as a global planner on a known map would hand
-it to a local controller.
+For the optional ``subgoal`` observation a second search plans the path a global planner on a known map would
+hand a local controller: shortest on a costmap whose cost per metre rises from 1 to ``1 + INFLATION_COST`` as the
+footprint's clearance drops from ``plan_margin`` to 0 (a navigation stack's inflation layer), so the path keeps
+off obstacles where there is room to. The subgoal is the point a fixed length ahead on that path.
 """
 
 from __future__ import annotations
