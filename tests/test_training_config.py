@@ -41,6 +41,7 @@ def test_env_block_and_overrides_merge_key_by_key():
         ({"ppo": {"net_arch": [0]}}, "ppo.net_arch"),
         ({"ppo": {"n_epochs": 2.5}}, "ppo.n_epochs"),
         ({"n_envs": 0}, "n_envs"),
+        ({"n_envs": 2, "env_workers": 3}, "env_workers"),
         ({"timesteps": float("nan")}, "timesteps"),
         ({"noise": "loud"}, "noise"),
         ({"ppo": {"batch_size": 10**6}}, "ppo.batch_size"),

@@ -146,8 +146,8 @@ def test_episode_stats_sum_the_step_infos():
     assert math.isclose(sum(stats[f"term_{k}"] for k in terms), total, rel_tol=1e-9, abs_tol=1e-9)
 
 
-def test_subprocess_vector_env_trains_with_two_workers(tmp_path):
-    run = tiny_run(tmp_path, n_envs=2, timesteps=128, final_eval_episodes=0)
+def test_worker_vector_env_trains_with_two_workers(tmp_path):
+    run = tiny_run(tmp_path, n_envs=3, env_workers=2, timesteps=192, final_eval_episodes=0)
     train(run, progress=False)
     assert RunDir(run.root).is_finished()
 

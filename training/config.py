@@ -98,7 +98,9 @@ class TrainConfig:
         seed: seeds PPO and the envs (env i of the vector gets ``seed + i``).
         noise: noise profile name the agent trains under.
         timesteps: total environment steps.
-        n_envs: parallel envs (``SubprocVecEnv`` above 1, ``DummyVecEnv`` for 1).
+        n_envs: parallel envs.
+        env_workers: processes that step the ``n_envs`` envs, each a contiguous block of them (0: one per CPU
+            core, at most ``n_envs``; 1: the training process itself). Only speed depends on it, never results.
         checkpoint_every: env steps between checkpoints.
         keep_checkpoints: how many of the newest checkpoints to keep.
         final_eval_episodes: episodes of the evaluation written to ``eval.json`` after training (0: none).
@@ -106,6 +108,8 @@ class TrainConfig:
             ``validate_episodes`` deterministic episodes on held-out layouts; the best policy so far is kept in
             ``best/`` and is the one ``load()``, evaluation and the report use.
         validate_episodes: episodes per validation.
+        frame_stack: the policy sees its episode's last ``frame_stack`` observations (every entry concatenated,
+            oldest first; see :mod:`clutter_gym.training.memory`). 1: the current observation only.
         env_kwargs: extra ``gym.make`` keyword arguments. Its ``noise`` entry, if any, holds noise-section
             overrides (``{"lidar": {"range_sigma": 0.02}}``) applied on top of whichever profile the env is
             made under, for training and evaluation alike.
@@ -117,11 +121,13 @@ class TrainConfig:
     noise: str = "none"
     timesteps: int = 500_000
     n_envs: int = 4
+    env_workers: int = 0
     checkpoint_every: int = 50_000
     keep_checkpoints: int = 3
     final_eval_episodes: int = 20
     validate_every: int = 0
     validate_episodes: int = 20
+    frame_stack: int = 1
     env_kwargs: dict[str, Any] = field(default_factory=dict)
     ppo: PPOHyperparams = field(default_factory=PPOHyperparams)
 
@@ -136,11 +142,13 @@ class TrainConfig:
         _check_range("seed", self.seed, 0, 2**31 - 1)
         _check_range("timesteps", self.timesteps, 1, 10**10)
         _check_range("n_envs", self.n_envs, 1, 256)
+        _check_range("env_workers", self.env_workers, 0, self.n_envs)
         _check_range("checkpoint_every", self.checkpoint_every, 1, 10**10)
         _check_range("keep_checkpoints", self.keep_checkpoints, 1, 1000)
         _check_range("final_eval_episodes", self.final_eval_episodes, 0, 100_000)
         _check_range("validate_every", self.validate_every, 0, 10**10)
         _check_range("validate_episodes", self.validate_episodes, 1, 100_000)
+        _check_range("frame_stack", self.frame_stack, 1, 32)
         check_env_kwargs(self.env_id, self.noise, self.env_kwargs)
         if self.ppo.batch_size > self.ppo.n_steps * self.n_envs:
             raise ValueError(f"ppo.batch_size must be in [2, n_steps * n_envs = {self.ppo.n_steps * self.n_envs}], "

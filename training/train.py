@@ -12,14 +12,14 @@ import torch
 from stable_baselines3 import PPO
 from stable_baselines3.common.callbacks import CallbackList
 from stable_baselines3.common.logger import configure
-from stable_baselines3.common.vec_env import VecNormalize
+from stable_baselines3.common.vec_env import VecEnv
 
 from clutter_gym.atomic import write_text_atomically
 from clutter_gym.training.callbacks import BestPolicyKeeper, RunMonitor
 from clutter_gym.training.config import EVAL_SEED, TrainConfig
 from clutter_gym.training.evaluate import evaluate
 from clutter_gym.training.run_dir import NORMALIZER_FILE, RunDir
-from clutter_gym.training.vec_env import build_vec_env, normalize, policy_name
+from clutter_gym.training.vec_env import policy_name, training_env
 
 
 def check_env_builds(config: TrainConfig) -> None:
@@ -51,6 +51,12 @@ def start(config: TrainConfig, out: str | Path) -> RunDir:
     return run
 
 
+def build_model(config: TrainConfig, venv: VecEnv) -> PPO:
+    """A fresh PPO on ``venv`` with the config's hyperparameters and seed (on the CPU)."""
+    return PPO(policy_name(venv.observation_space), venv, seed=config.seed, device="cpu", verbose=0,
+               **config.ppo.sb3_kwargs())
+
+
 def train(run: RunDir, progress: bool = True, timesteps: int | None = None) -> dict[str, Any] | None:
     """Train (or continue) the run in ``run`` up to its configured timesteps, then save and evaluate.
 
@@ -72,15 +78,13 @@ def train(run: RunDir, progress: bool = True, timesteps: int | None = None) -> d
     torch.set_num_threads(1)  # small MLPs: threads only fight the env workers for the cores
     latest = run.latest_checkpoint()
     done = latest[0] if latest else 0
-    venv = normalize(build_vec_env(config, seed=config.seed + done), config)
+    normalizer_file = latest[1] / NORMALIZER_FILE if latest else None
+    venv = training_env(config, seed=config.seed + done, normalizer_file=normalizer_file)
     try:
         if latest is None:
-            model = PPO(policy_name(venv.observation_space), venv, seed=config.seed, device="cpu", verbose=0,
-                        **config.ppo.sb3_kwargs())
+            model = build_model(config, venv)
         else:
             step, folder = latest
-            if isinstance(venv, VecNormalize):
-                venv = VecNormalize.load(str(folder / NORMALIZER_FILE), venv.venv)
             model = PPO.load(folder / "model.zip", env=venv, device="cpu")
             model.set_random_seed(config.seed + step)
             run.truncate_episodes(step)

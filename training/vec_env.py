@@ -3,32 +3,43 @@
 from __future__ import annotations
 
 import functools
+import os
+from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 from stable_baselines3.common.monitor import Monitor
-from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecEnv, VecNormalize
+from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv, VecNormalize
 
 from clutter_gym.training.config import TrainConfig
 from clutter_gym.training.episode_stats import EpisodeStats
+from clutter_gym.training.memory import stack_frames
+from clutter_gym.training.worker_vec_env import WorkerVecEnv
 
 
 def make_env(env_id: str, make_kwargs: dict[str, Any], render_mode: str | None = None) -> gym.Env:
     """One env with SB3's Monitor and the EpisodeStats wrapper (importable in a fresh worker process)."""
-    import clutter_gym  # noqa: F401  (registers the ids in SubprocVecEnv workers)
+    import clutter_gym  # noqa: F401  (registers the ids in worker processes)
 
     return EpisodeStats(Monitor(gym.make(env_id, render_mode=render_mode, **make_kwargs)))
 
 
 def build_vec_env(config: TrainConfig, seed: int) -> VecEnv:
-    """``config.n_envs`` envs (worker processes above 1), seeded ``seed, seed + 1, ...`` at their first reset."""
+    """``config.n_envs`` envs over ``env_workers(config)`` processes, seeded ``seed, seed + 1, ...`` at their first
+    reset."""
     factory = functools.partial(make_env, config.env_id, config.make_kwargs())
     fns = [factory] * config.n_envs
-    venv: VecEnv = DummyVecEnv(fns) if config.n_envs == 1 else SubprocVecEnv(fns)
+    workers = env_workers(config)
+    venv: VecEnv = DummyVecEnv(fns) if workers == 1 else WorkerVecEnv(fns, workers)
     venv.seed(seed)
     return venv
+
+
+def env_workers(config: TrainConfig) -> int:
+    """The number of env processes: the configured one, or one per CPU core (at most one per env)."""
+    return config.env_workers or min(config.n_envs, os.cpu_count() or 1)
 
 
 def float_keys(space: spaces.Space) -> list[str] | None:
@@ -45,6 +56,17 @@ def normalize(venv: VecEnv, config: TrainConfig) -> VecEnv:
         return venv
     return VecNormalize(venv, norm_obs=ppo.normalize_obs, norm_reward=ppo.normalize_reward, gamma=ppo.gamma,
                         norm_obs_keys=float_keys(venv.observation_space))
+
+
+def training_env(config: TrainConfig, seed: int, normalizer_file: Path | None = None) -> VecEnv:
+    """The vector env PPO trains on: the envs, their normalisation (fresh, or the statistics saved in
+    ``normalizer_file`` when continuing a run) and the frame stack, in that order."""
+    venv = build_vec_env(config, seed)
+    if normalizer_file is not None and normalizer_file.is_file():
+        venv = VecNormalize.load(str(normalizer_file), venv)
+    else:
+        venv = normalize(venv, config)
+    return stack_frames(venv, config.frame_stack)
 
 
 def policy_name(space: spaces.Space) -> str:

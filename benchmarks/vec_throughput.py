@@ -1,0 +1,144 @@
+"""Samples per second of the main job's ClutterNav-v0 envs: one env alone against vector envs over worker processes.
+
+Target (issue 12): two worker processes step at least 1.8x one env alone on a 2-core machine. Every configuration
+steps the main job's env settings (subgoal, terminate on collision) with random-walk actions, so that episodes end
+and reset as often as early in training. Two free-running processes, one env each, show what two cores can give
+at most; the vector envs step in lockstep (every vector step waits for every worker). Configurations run in alternating rounds (machine noise hits them
+alike); figures are medians over rounds. The last line is the training loop itself: PPO with the main job's
+settings (rollouts, updates, observation normalisation), in samples per second of wall time.
+
+    python benchmarks/vec_throughput.py [--rounds 3] [--steps 2000] [--ppo-steps 16384] [--bare]
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import functools
+import multiprocessing as mp
+import os
+import statistics
+import time
+
+import numpy as np
+import torch
+from stable_baselines3.common.vec_env import SubprocVecEnv, VecEnv
+
+from clutter_gym.training.config import config_for
+from clutter_gym.training.train import build_model
+from clutter_gym.training.vec_env import build_vec_env, make_env, normalize
+from clutter_gym.training.worker_vec_env import WorkerVecEnv
+
+
+class RandomWalk:
+    """Per-env clipped random walks in action space: the robot drives around and often into things."""
+
+    def __init__(self, n: int, seed: int) -> None:
+        self.rng, self.a = np.random.default_rng(seed), np.tile([0.5, 0.0], (n, 1))
+
+    def __call__(self) -> np.ndarray:
+        self.a = np.clip(self.a + self.rng.normal(0.0, 0.25, size=self.a.shape), -1.0, 1.0)
+        return self.a.astype(np.float32)
+
+
+def one_env(factory, steps: int, seed: int) -> float:
+    env, walk = factory(), RandomWalk(1, seed)
+    env.reset(seed=seed)
+    t0 = time.perf_counter()
+    for _ in range(steps):
+        _, _, terminated, truncated, _ = env.step(walk()[0])
+        if terminated or truncated:
+            env.reset()
+    rate = steps / (time.perf_counter() - t0)
+    env.close()
+    return rate
+
+
+def _one_env_into(queue, factory, steps: int, seed: int) -> None:
+    queue.put(one_env(factory, steps, seed))
+
+
+def free_running(factory, steps: int, seed: int) -> float:
+    """Two processes, one env each, never waiting for each other: the most two cores can give."""
+    ctx = mp.get_context("forkserver")
+    queue = ctx.Queue()
+    processes = [ctx.Process(target=_one_env_into, args=(queue, factory, steps // 2, seed + k)) for k in range(2)]
+    for p in processes:
+        p.start()
+    rates = [queue.get() for _ in processes]
+    for p in processes:
+        p.join()
+    return sum(rates)
+
+
+def vector(venv: VecEnv, steps: int, seed: int) -> float:
+    """Samples/s of ``venv`` over about ``steps`` samples (the vector's start-up and first reset untimed)."""
+    walk = RandomWalk(venv.num_envs, seed)
+    venv.seed(seed)
+    venv.reset()
+    vector_steps = max(1, steps // venv.num_envs)
+    t0 = time.perf_counter()
+    for _ in range(vector_steps):
+        venv.step(walk())
+    rate = vector_steps * venv.num_envs / (time.perf_counter() - t0)
+    venv.close()
+    return rate
+
+
+def training_loop(samples: int, seed: int) -> tuple[float, int, int]:
+    """Samples/s of PPO.learn with the main job's settings; returns (rate, n_envs, env workers)."""
+    torch.set_num_threads(1)  # as train() does
+    config = config_for("ClutterNav-v0", {"seed": seed})
+    venv = normalize(build_vec_env(config, seed=seed), config)
+    model = build_model(config, venv)
+    t0 = time.perf_counter()
+    model.learn(total_timesteps=samples)
+    rate = model.num_timesteps / (time.perf_counter() - t0)
+    workers = len(venv.venv.blocks) if hasattr(venv.venv, "blocks") else 1
+    venv.close()
+    return rate, config.n_envs, workers
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--steps", type=int, default=2000, help="samples per configuration per round")
+    parser.add_argument("--ppo-steps", type=int, default=16384, help="samples of the training-loop measurement")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--bare", action="store_true", help="step ClutterNav-v0's defaults, not the main job's")
+    args = parser.parse_args()
+
+    config = config_for("ClutterNav-v0", {})
+    factory = functools.partial(make_env, config.env_id, {} if args.bare else config.make_kwargs())
+    configurations = {
+        "one env, one process": lambda: one_env(factory, args.steps, args.seed),
+        "two processes, one env each, free-running (the ceiling)": lambda: free_running(factory, args.steps,
+                                                                                      args.seed),
+        "SB3 SubprocVecEnv, 2 envs (a process each)": lambda: vector(SubprocVecEnv([factory] * 2), args.steps,
+                                                                    args.seed),
+        "SB3 SubprocVecEnv, 8 envs (a process each)": lambda: vector(SubprocVecEnv([factory] * 8), args.steps,
+                                                                    args.seed),
+    }
+    for per_worker in (1, 4, 8, 16):
+        configurations[f"WorkerVecEnv, 2 workers x {per_worker} envs"] = functools.partial(
+            lambda k: vector(WorkerVecEnv([factory] * (2 * k), workers=2), args.steps, args.seed), per_worker)
+    rates: dict[str, list[float]] = {name: [] for name in configurations}
+    for _ in range(args.rounds):
+        for name, measure in configurations.items():
+            rates[name].append(measure())
+    base = statistics.median(rates["one env, one process"])
+
+    settings = "its default settings" if args.bare else "the main job's env settings"
+    print(f"ClutterNav-v0 with {settings}, {os.cpu_count()} cores, random-walk actions, "
+          f"{args.steps} samples per configuration, median of {args.rounds} alternating rounds\n")
+    print("| configuration | samples/s | vs one env |\n|---|---|---|")
+    for name, values in rates.items():
+        median = statistics.median(values)
+        print(f"| {name} | {median:,.0f} | {median / base:.2f}x |", flush=True)
+    rate, n_envs, workers = training_loop(args.ppo_steps, args.seed)
+    print(f"| training loop: PPO, main job settings ({n_envs} envs over {workers} workers), "
+          f"{args.ppo_steps:,} samples | {rate:,.0f} | {rate / base:.2f}x |")
+
+
+if __name__ == "__main__":
+    main()
