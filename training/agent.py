@@ -14,7 +14,8 @@ while not done:
 ```
 
 The run folder's ``config.yaml`` is the recipe: env id, env arguments, noise profile and the PPO settings, which
-say which observation processing the policy was trained behind. The model folder holds SB3's ``model.zip`` and,
+say which observation processing the policy was trained behind (normalisation, and a frame stack whose frames
+the agent keeps in ``state``). The model folder holds SB3's ``model.zip`` and,
 when observations were normalised, the ``VecNormalize`` statistics.
 """
 
@@ -29,6 +30,7 @@ import numpy as np
 from gymnasium import spaces
 
 from clutter_gym.training.config import TrainConfig, deep_merge
+from clutter_gym.training.memory import frame_space, push_frame
 from clutter_gym.training.run_dir import MODEL_FILE, NORMALIZER_FILE, IncompatibleRunError, RunDir
 
 if TYPE_CHECKING:
@@ -42,13 +44,17 @@ class Agent:
         run: the run folder.
         config: the run's settings (env id, env arguments, training noise profile, PPO settings).
         model: the stable-baselines3 PPO model.
-        folder: the model folder that was loaded (``model/``, or a checkpoint's).
+        folder: the model folder that was loaded (``model/``, or a checkpoint's; None for a model in training).
         step: env steps the model was trained for.
+        observation_space: the space of one env observation (the policy's own is a stack of them with
+            ``config.frame_stack`` above 1).
     """
 
-    def __init__(self, run: RunDir, config: TrainConfig, model: PPO, normalizer: Any | None, folder: Path) -> None:
+    def __init__(self, run: RunDir, config: TrainConfig, model: PPO, normalizer: Any | None,
+                 folder: Path | None) -> None:
         self.run, self.config, self.model, self.folder = run, config, model, folder
         self.step = int(model.num_timesteps)
+        self.observation_space = frame_space(model.observation_space, config.frame_stack)
         self._normalizer = normalizer if normalizer is not None and normalizer.norm_obs else None
 
     def predict(self, obs: dict[str, np.ndarray] | np.ndarray, state: Any = None,
@@ -58,15 +64,21 @@ class Agent:
         Args:
             obs: an observation as the env returns it.
             state: the agent's memory; None at the start of an episode, then what the previous call returned.
-                (Policies trained today are memoryless and return None; pass it back all the same.)
+                It holds the frame stack of a run trained with ``frame_stack`` above 1 (for a batch, one per
+                row; the rows start their episodes together) and is None for a memoryless policy.
             deterministic: the mean action (True) or a sample from the policy's distribution.
 
         Returns:
             ``(action, state)``, as SB3's ``predict``.
         """
-        self._check_obs(obs)
+        single = self._check_obs(obs)
         if self._normalizer is not None:
             obs = self._normalizer.normalize_obs(obs)
+        if self.config.frame_stack > 1:
+            batch = _as_batch(obs) if single else obs
+            stacked, state = push_frame(batch, state, self.config.frame_stack, self.observation_space)
+            action, _ = self.model.predict(stacked, deterministic=deterministic)
+            return (action[0] if single else action), state
         action, _ = self.model.predict(obs, deterministic=deterministic)
         return action, state
 
@@ -92,7 +104,7 @@ class Agent:
         config = TrainConfig.from_dict(data)
         env = gym.make(config.env_id, render_mode=render_mode, **config.make_kwargs())
         try:
-            for what, trained, built in (("observation", self.model.observation_space, env.observation_space),
+            for what, trained, built in (("observation", self.observation_space, env.observation_space),
                                          ("action", self.model.action_space, env.action_space)):
                 if _shapes(trained) != _shapes(built):
                     raise ValueError(f"these settings give {what}s of shape {_shapes(built)}; the policy of "
@@ -102,16 +114,27 @@ class Agent:
             raise
         return env
 
-    def _check_obs(self, obs: Any) -> None:
-        expected = self.model.observation_space
+    def _check_obs(self, obs: Any) -> bool:
+        """Raises a named error for an observation the policy cannot take; True for one observation, False for a
+        batch."""
+        expected = self.observation_space
         if isinstance(expected, spaces.Dict):
             if not isinstance(obs, dict) or set(obs) != set(expected.spaces):
                 keys = sorted(obs) if isinstance(obs, dict) else type(obs).__name__
                 raise ValueError(f"obs must be a dict with keys {sorted(expected.spaces)}, got {keys}")
-            for key, space in expected.spaces.items():
-                _check_shape(f"obs[{key!r}]", np.shape(obs[key]), space.shape)
-        else:
-            _check_shape("obs", np.shape(obs), expected.shape)
+            singles = [_check_shape(f"obs[{key!r}]", np.shape(obs[key]), space.shape)
+                       for key, space in expected.spaces.items()]
+            if len(set(singles)) > 1:
+                raise ValueError("obs entries must all be single observations or all batches of the same size")
+            return singles[0]
+        return _check_shape("obs", np.shape(obs), expected.shape)
+
+
+def _as_batch(obs: dict[str, np.ndarray] | np.ndarray) -> dict[str, np.ndarray] | np.ndarray:
+    """One observation as a batch of one."""
+    if isinstance(obs, dict):
+        return {key: np.asarray(value)[None] for key, value in obs.items()}
+    return np.asarray(obs)[None]
 
 
 def _shapes(space: spaces.Space) -> Any:
@@ -120,10 +143,14 @@ def _shapes(space: spaces.Space) -> Any:
     return space.shape
 
 
-def _check_shape(name: str, shape: tuple[int, ...], expected: tuple[int, ...]) -> None:
-    if shape != expected and shape[1:] != expected:
+def _check_shape(name: str, shape: tuple[int, ...], expected: tuple[int, ...]) -> bool:
+    """True for one observation of the expected shape, False for a batch of them; else a named error."""
+    if shape == expected:
+        return True
+    if shape[1:] != expected:
         raise ValueError(f"{name} must have shape {expected} (or (n, {', '.join(map(str, expected))}) for a "
                          f"batch), got {shape}")
+    return False
 
 
 def load(run_dir: str | Path, step: int | None = None) -> Agent:

@@ -129,19 +129,15 @@ class BestPolicyKeeper(BaseCallback):
         """One validation of the current policy; saves it to ``best/`` if it beats the best so far."""
         import gymnasium as gym
 
+        from clutter_gym.training.agent import Agent
         from clutter_gym.training.config import VALIDATION_SEED
         from clutter_gym.training.evaluate import rollouts
 
         if self._env is None:
             self._env = gym.make(self.config.env_id, **self.config.make_kwargs())
         normalizer = self.model.get_vec_normalize_env()
-
-        def policy(obs, state):
-            if normalizer is not None:
-                obs = normalizer.normalize_obs(obs)
-            return self.model.predict(obs, deterministic=True)[0], state
-
-        rows = rollouts(self._env, policy, self.config.validate_episodes, VALIDATION_SEED)
+        agent = Agent(self.run, self.config, self.model, normalizer, folder=None)  # the policy as load() will see it
+        rows = rollouts(self._env, agent.predict, self.config.validate_episodes, VALIDATION_SEED)
         success = float(np.mean([r["success"] for r in rows]))
         collision = float(np.mean([r["collision"] for r in rows]))
         best = success - collision > self.best_score

@@ -17,7 +17,7 @@ from clutter_gym.training.config import TrainConfig, config_for
 
 def zoo_block(config: TrainConfig) -> dict[str, Any]:
     """One env's rl-zoo3 block: PPO arguments plus the zoo's ``n_timesteps``, ``n_envs``, ``policy``,
-    ``normalize`` and ``env_kwargs`` keys."""
+    ``normalize``, ``frame_stack`` and ``env_kwargs`` keys."""
     ppo = config.ppo
     block: dict[str, Any] = {
         "n_timesteps": config.timesteps,
@@ -26,6 +26,8 @@ def zoo_block(config: TrainConfig) -> dict[str, Any]:
         **ppo.sb3_kwargs(),
         "env_kwargs": config.make_kwargs(),
     }
+    if config.frame_stack > 1:
+        block["frame_stack"] = config.frame_stack
     if ppo.normalize_obs or ppo.normalize_reward:
         block["normalize"] = {"norm_obs": ppo.normalize_obs, "norm_reward": ppo.normalize_reward}
     return block
