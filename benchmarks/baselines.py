@@ -1,12 +1,16 @@
-"""Baseline table for ClutterNav-v0: scripted and learned policies, success and collision rates with 95% intervals
-at several obstacle densities and noise profiles, on the same held-out layouts for every row.
+"""Baseline tables for ClutterNav-v0 and ClutterReach-v0: scripted and learned policies, success and collision
+rates with 95% intervals at three clutter levels and several noise profiles, on the same held-out layouts for
+every row.
 
-Rows: the mapless potential field; the map-based planner reference (the same field steering for the ``subgoal``
-waypoint of the costmap planner, an upper bound of what the map allows a simple controller); and one row per
-trained run given with ``--run NAME=RUN_DIR`` (its own env settings, densities and profiles changed per cell).
-Episode ``i`` of every cell is reset with seed ``EVAL_SEED + i``, so rows are compared on identical layouts.
+ClutterNav-v0 rows: the mapless potential field; the map-based planner reference (the same field steering for the
+``subgoal`` waypoint of the costmap planner, an upper bound of what the map allows a simple controller).
+ClutterReach-v0 rows: scripted IK, the end effector heading straight for the target (``control="ee_position"``).
+Then one row per trained run given with ``--run NAME=RUN_DIR`` (its own env settings; the clutter level and the
+profile changed per cell). Episode ``i`` of every cell is reset with seed ``EVAL_SEED + i``, so rows are compared
+on identical layouts.
 
     python benchmarks/baselines.py --run "PPO subgoal=out/learning/seed0/run" [--episodes 50] [--out docs/baselines]
+    python benchmarks/baselines.py --env ClutterReach-v0 --run "PPO=runs/ClutterReach-v0/none-seed0"
 """
 
 from __future__ import annotations
@@ -22,27 +26,44 @@ import gymnasium as gym
 import clutter_gym  # noqa: F401  (registers the envs)
 from clutter_gym.atomic import write_text_atomically
 from clutter_gym.training import load
-from clutter_gym.training.baselines import PotentialFieldNavigator
+from clutter_gym.training.baselines import PotentialFieldNavigator, StraightLineReacher
 from clutter_gym.training.config import EVAL_SEED
 from clutter_gym.training.evaluate import rollouts, summarize
 
 #: The subgoal lookahead the planner reference runs with, metres.
 PLANNER_LOOKAHEAD = 0.5
 
+#: Per env: the gym.make argument that sets the clutter, its default levels, and the scripted rows as
+#: (name, extra gym.make arguments, policy factory from the env).
+TABLES: dict[str, dict[str, Any]] = {
+    "ClutterNav-v0": {
+        "knob": "obstacle_density", "levels": [0.05, 0.12, 0.2],
+        "scripted": [
+            ("potential field (mapless, scripted)", {}, PotentialFieldNavigator.for_env),
+            ("planner reference (map-based: potential field on the subgoal)",
+             {"subgoal_lookahead": PLANNER_LOOKAHEAD}, lambda env: PotentialFieldNavigator.for_env(env, "subgoal")),
+        ],
+    },
+    "ClutterReach-v0": {
+        "knob": "n_obstacles", "levels": [3, 6, 10],
+        "scripted": [("straight line (scripted IK)", {"control": "ee_position"}, StraightLineReacher.for_env)],
+    },
+}
 
-def scripted_cell(goal_key: str, density: float, profile: str, episodes: int) -> list[dict[str, float]]:
-    extra = {"subgoal_lookahead": PLANNER_LOOKAHEAD} if goal_key == "subgoal" else {}
-    env = gym.make("ClutterNav-v0", noise=profile, obstacle_density=density, **extra)
+
+def scripted_cell(env_id: str, extra: dict[str, Any], make_policy, clutter: dict[str, Any], profile: str,
+                  episodes: int) -> list[dict[str, float]]:
+    env = gym.make(env_id, noise=profile, **extra, **clutter)
     try:
-        navigator = PotentialFieldNavigator.for_env(env, goal_key=goal_key)
-        return rollouts(env, lambda obs, state: (navigator(obs), None), episodes, EVAL_SEED)
+        policy = make_policy(env)
+        return rollouts(env, lambda obs, state: (policy(obs), None), episodes, EVAL_SEED)
     finally:
         env.close()
 
 
-def agent_cell(run_dir: str, density: float, profile: str, episodes: int) -> list[dict[str, float]]:
+def agent_cell(run_dir: str, clutter: dict[str, Any], profile: str, episodes: int) -> list[dict[str, float]]:
     agent = load(run_dir)
-    env = agent.make_env(noise=profile, obstacle_density=density)
+    env = agent.make_env(noise=profile, **clutter)
     try:
         return rollouts(env, agent.predict, episodes, EVAL_SEED)
     finally:
@@ -58,40 +79,45 @@ def cell_text(rows: list[dict[str, float]]) -> str:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--env", choices=sorted(TABLES), default="ClutterNav-v0")
     parser.add_argument("--run", action="append", default=[], metavar="NAME=RUN_DIR",
                         help="a trained run to add as a row (repeatable)")
     parser.add_argument("--episodes", type=int, default=50)
-    parser.add_argument("--densities", type=float, nargs="+", default=[0.05, 0.12, 0.2])
+    parser.add_argument("--levels", type=float, nargs="+", default=None,
+                        help="clutter levels (obstacle_density for ClutterNav, n_obstacles for ClutterReach)")
     parser.add_argument("--profiles", nargs="+", default=["none", "nominal", "harsh"])
-    parser.add_argument("--out", default="out/baselines")
+    parser.add_argument("--out", default=None, help="folder for baselines.md and .json (default out/baselines/ENV)")
     args = parser.parse_args()
+    table = TABLES[args.env]
+    knob, levels = table["knob"], args.levels or table["levels"]
+    if knob == "n_obstacles":
+        levels = [int(level) for level in levels]
     rows: list[tuple[str, str, Any]] = [
-        ("potential field (mapless, scripted)", "-", lambda d, p: scripted_cell("goal", d, p, args.episodes)),
-        ("planner reference (map-based: potential field on the subgoal)", "-",
-         lambda d, p: scripted_cell("subgoal", d, p, args.episodes)),
+        (name, "-", lambda c, p, extra=extra, make=make: scripted_cell(args.env, extra, make, c, p, args.episodes))
+        for name, extra, make in table["scripted"]
     ]
     for spec in args.run:
         name, _, run_dir = spec.partition("=")
         timing = load(run_dir).run.training_time()
         trained = f"{int(timing['steps']):,} steps, {timing['seconds'] / 60:.1f} min"
-        rows.append((name, trained, lambda d, p, r=run_dir: agent_cell(r, d, p, args.episodes)))
-    cells = [(d, p) for d in args.densities for p in args.profiles]
-    header = "| policy | training | " + " | ".join(f"density {d}, `{p}`" for d, p in cells) + " |"
+        rows.append((name, trained, lambda c, p, r=run_dir: agent_cell(r, c, p, args.episodes)))
+    cells = [(level, p) for level in levels for p in args.profiles]
+    header = "| policy | training | " + " | ".join(f"{knob} {level}, `{p}`" for level, p in cells) + " |"
     lines = [header, "|---|---|" + "---|" * len(cells)]
     results: dict[str, dict[str, Any]] = {}
     for name, trained, run_cell in rows:
         texts, results[name] = [], {}
-        for density, profile in cells:
+        for level, profile in cells:
             t0 = time.perf_counter()
-            episode_rows = run_cell(density, profile)
-            results[name][f"{density}/{profile}"] = summarize(episode_rows)
+            episode_rows = run_cell({knob: level}, profile)
+            results[name][f"{level}/{profile}"] = summarize(episode_rows)
             texts.append(cell_text(episode_rows))
-            print(f"{name} | density {density} | {profile}: {texts[-1]} ({time.perf_counter() - t0:.0f} s)",
+            print(f"{name} | {knob} {level} | {profile}: {texts[-1]} ({time.perf_counter() - t0:.0f} s)",
                   flush=True)
         lines.append(f"| {name} | {trained} | " + " | ".join(texts) + " |")
-    note = (f"\nSuccess / collision episodes, {args.episodes} episodes per cell (seeds {EVAL_SEED}..), 95% Wilson "
-            "intervals in brackets. A collision episode is one with any contact.\n")
-    out = Path(args.out)
+    note = (f"\n{args.env}. Success / collision episodes, {args.episodes} episodes per cell (seeds {EVAL_SEED}..), "
+            "95% Wilson intervals in brackets. A collision episode is one with any contact.\n")
+    out = Path(args.out or f"out/baselines/{args.env}")
     write_text_atomically(out / "baselines.md", "\n".join(lines) + "\n" + note)
     write_text_atomically(out / "baselines.json", json.dumps(results, indent=2))
     print("\n".join(lines) + note)

@@ -5,9 +5,11 @@ from __future__ import annotations
 
 import math
 
+import gymnasium as gym
 import numpy as np
 import pytest
 
+from clutter_gym.training.baselines import StraightLineReacher
 from clutter_gym.worlds.scene import Obstacle
 from clutter_gym.worlds.tabletop import TABLE, TableSpec, point_clearance, sample_reach_scene
 
@@ -171,3 +173,22 @@ def test_obstacle_distance3d_closed_forms():
     assert box.distance3d(corner) == pytest.approx(0.05)
     cylinder = Obstacle("cylinder", (0.2, 0.2, 0.5), (0.0, 0.0))
     assert cylinder.distance3d(np.array([0.4, 0.0, 0.8])) == pytest.approx(math.hypot(0.3, 0.3))
+
+
+def test_straight_line_reacher_reaches_every_target_on_an_empty_table():
+    env = gym.make("ClutterReach-v0", control="ee_position", n_obstacles=0, shelf=False)
+    reacher = StraightLineReacher.for_env(env)
+    for seed in range(5):
+        obs, _ = env.reset(seed=seed)
+        for _ in range(30):
+            obs, _, terminated, _, info = env.step(reacher(obs))
+            assert info["cost"] == 0.0
+            if terminated:
+                break
+        assert info["is_success"], f"seed {seed}: the straight line to the target missed"
+    env.close()
+
+
+def test_straight_line_reacher_refuses_joint_velocity_control():
+    with pytest.raises(ValueError, match="control='ee_position'"):
+        StraightLineReacher.for_env(gym.make("ClutterReach-v0"))

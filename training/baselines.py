@@ -77,3 +77,31 @@ class PotentialFieldNavigator:
         angular = float(np.clip(self.turn_gain * error, -1.0, 1.0))
         linear = float(np.clip(math.cos(error), 0.0, 1.0)) * max(ahead, 0.15)
         return np.array([linear, angular], dtype=np.float32)
+
+
+class StraightLineReacher:
+    """Scripted IK for ClutterReach: the end effector heads straight for the target, as fast as allowed.
+
+    With ``control="ee_position"`` each action is the displacement towards the target, in units of
+    ``max_ee_step`` and clipped to [-1, 1]; pybullet's IK turns it into joint targets. It ignores the clutter
+    entirely, so it measures how often the straight line is free: a learned policy should beat it on contacts.
+    """
+
+    def __init__(self, max_ee_step: float) -> None:
+        self.max_ee_step = max_ee_step
+
+    @classmethod
+    def for_env(cls, env: gym.Env) -> StraightLineReacher:
+        """Configured from a ClutterReach env made with ``control="ee_position"``.
+
+        Raises:
+            ValueError: the env has another action space (joint-velocity control).
+        """
+        config = getattr(env.unwrapped.robot, "config", None)
+        if getattr(config, "control", None) != "ee_position":
+            raise ValueError("StraightLineReacher needs a ClutterReach env made with control='ee_position'")
+        return cls(config.max_ee_step)
+
+    def __call__(self, obs: Mapping[str, np.ndarray]) -> np.ndarray:
+        offset = np.asarray(obs["target"], dtype=float) - np.asarray(obs["ee_position"], dtype=float)
+        return np.clip(offset / self.max_ee_step, -1.0, 1.0).astype(np.float32)

@@ -171,7 +171,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser("eval", help="evaluate a run under a noise profile: rates and means with 95%% intervals",
                        description="Evaluate a trained run: success and collision rates, cost, return, length and "
-                                   "clearance, each with its 95%% interval.")
+                                   "clearance, each with its 95% interval.")
     p.add_argument("run", help="run folder (written by train, or out/main/run by report)")
     p.add_argument("--noise", choices=PROFILE_NAMES, default="none",
                    help="noise profile to evaluate under (the run's noise overrides apply on top)")
