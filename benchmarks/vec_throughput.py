@@ -1,11 +1,12 @@
 """Samples per second of the main job's ClutterNav-v0 envs: one env alone against vector envs over worker processes.
 
 Target (issue 12): two worker processes step at least 1.8x one env alone on a 2-core machine. Every configuration
-steps the main job's env settings (subgoal, terminate on collision) with random-walk actions, so that episodes end
-and reset as often as early in training. Two free-running processes, one env each, show what two cores can give
-at most; the vector envs step in lockstep (every vector step waits for every worker). Configurations run in alternating rounds (machine noise hits them
-alike); figures are medians over rounds. The last line is the training loop itself: PPO with the main job's
-settings (rollouts, updates, observation normalisation), in samples per second of wall time.
+steps the main job's env settings (subgoal, terminate on collision; ``--bare``: the env's defaults) with random-walk
+actions, so that episodes end and reset as often as early in training. Two free-running processes, one env each,
+show what two cores can give at most; the vector envs step in lockstep (every vector step waits for every worker).
+Configurations run in alternating rounds (machine noise hits them alike); figures are medians over rounds. The
+last line is the training loop itself: PPO with the main job's settings (rollouts, updates, observation
+normalisation), in samples per second of wall time.
 
     python benchmarks/vec_throughput.py [--rounds 3] [--steps 2000] [--ppo-steps 16384] [--bare]
 """

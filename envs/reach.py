@@ -48,6 +48,7 @@ class ClutterReachEnv(ClutterEnv):
     | ``target`` | (3,) | target position | m, world | +-1.5 |
     | ``clearance`` | (10,) | signed FCL distance of each moving link (panda_link1..7, hand, fingers) to the nearest obstacle | m | +-clearance_range |
     | ``clearance_direction`` | (10, 3) | unit vector from each link's witness point to its obstacle's (only with ``observe_directions=True``; zero beyond range or in contact) | world | [-1, 1] |
+    | ``target_offset`` | (3,) | target minus end effector (only with ``observe_target_offset=True``) | m, world | +-3 |
 
     ## Rewards
 
@@ -87,8 +88,8 @@ class ClutterReachEnv(ClutterEnv):
     ``collision_padding`` m; ``self_collision``; ``n_obstacles`` [0, 20]; ``shelf``; ``noise`` (profile name
     or overrides; only action noise, timing and dynamics apply: the arm has no exteroceptive sensors);
     ``physics_hz``; ``control_hz``; ``solver_iterations``; ``success_radius`` m; ``clearance_margin`` m;
-    ``clearance_range`` m; ``observe_directions``; ``terminate_on_collision``; ``contact_tolerance`` m;
-    ``swept_speed`` m/s (``inf`` turns swept checks off); ``*_weight`` reward weights.
+    ``clearance_range`` m; ``observe_directions``; ``observe_target_offset``; ``terminate_on_collision``;
+    ``contact_tolerance`` m; ``swept_speed`` m/s (``inf`` turns swept checks off); ``*_weight`` reward weights.
 
     ## Version history
 
@@ -114,6 +115,7 @@ class ClutterReachEnv(ClutterEnv):
         clearance_margin: float = 0.05,
         clearance_range: float = 0.3,
         observe_directions: bool = False,
+        observe_target_offset: bool = False,
         terminate_on_collision: bool = False,
         contact_tolerance: float = 1e-3,
         swept_speed: float = 0.2,
@@ -152,6 +154,7 @@ class ClutterReachEnv(ClutterEnv):
             clearance_range=clearance_range,
             terminate_on_collision=terminate_on_collision,
             observe_directions=observe_directions,
+            observe_offset=observe_target_offset,
         )
         super().__init__(
             sim=Sim(physics_hz=physics_hz, solver_iterations=solver_iterations, gui=render_mode == "human"),

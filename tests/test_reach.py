@@ -192,3 +192,14 @@ def test_straight_line_reacher_reaches_every_target_on_an_empty_table():
 def test_straight_line_reacher_refuses_joint_velocity_control():
     with pytest.raises(ValueError, match="control='ee_position'"):
         StraightLineReacher.for_env(gym.make("ClutterReach-v0"))
+
+
+def test_target_offset_is_opt_in_and_equals_target_minus_end_effector():
+    assert "target_offset" not in gym.make("ClutterReach-v0").observation_space.spaces
+    env = gym.make("ClutterReach-v0", control="ee_position", observe_target_offset=True)
+    obs, _ = env.reset(seed=3)
+    for _ in range(3):
+        assert env.observation_space.contains(obs)
+        np.testing.assert_allclose(obs["target_offset"], obs["target"] - obs["ee_position"], atol=1e-6)
+        obs, *_ = env.step(np.array([0.5, -0.5, 0.2], dtype=np.float32))
+    env.close()

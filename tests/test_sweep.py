@@ -10,8 +10,9 @@ from clutter_gym.training.run_dir import RunDir
 from clutter_gym.training.sweep import SweepSpec, cell_dir, run_sweep
 
 SPEC = SweepSpec(env_id="ClutterNav-v0", train_noise=("none", "nominal"), eval_noise=("none", "harsh"), seeds=1,
-                 timesteps=64, episodes=1,
-                 settings={"env_kwargs": {"obstacle_density": 0.05, "noise": {"lidar": {"range_sigma": 0.03}}}})
+                 timesteps=64, episodes=1, n_envs=1,
+                 settings={"env_kwargs": {"obstacle_density": 0.05, "noise": {"lidar": {"range_sigma": 0.03}}},
+                           "ppo": {"n_steps": 64, "batch_size": 32}})
 
 
 @pytest.fixture(scope="module")
@@ -57,6 +58,6 @@ def test_a_sweep_folder_refuses_another_spec(swept):
 def test_the_ray_path_runs_the_same_cells(tmp_path):
     pytest.importorskip("ray")
     spec = SweepSpec(env_id="ClutterNav-v0", train_noise=("none",), eval_noise=("none", "nominal"), seeds=1,
-                     timesteps=64, episodes=1)
+                     timesteps=64, episodes=1, n_envs=1, settings={"ppo": {"n_steps": 64, "batch_size": 32}})
     result = run_sweep(spec, tmp_path, ray_address="local")
     assert result["cells_run"] == 1 and len(result["rows"]) == 2

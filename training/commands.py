@@ -197,7 +197,9 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--episodes", type=positive_int, default=50, help="evaluation episodes per (run, eval profile)")
     p.add_argument("--out", default="runs/sweep", help="sweep folder (cells, sweep.csv, heatmap.png)")
     p.add_argument("--workers", type=positive_int, default=None, help="cells run at once (default: CPU cores)")
-    p.add_argument("--n-envs", type=positive_int, default=1, help="envs per training cell")
+    p.add_argument("--n-envs", type=positive_int, default=None,
+                   help="envs per training cell (default from the files; each cell steps them over one worker "
+                        "process per core, so --workers 1 gives a cell every core)")
     p.add_argument("--ray-address", default=None,
                    help="run cells as Ray tasks on this cluster ('auto', 'ray://host:10001', or 'local' for a local Ray)")
     add_settings_options(p)

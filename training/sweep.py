@@ -44,7 +44,7 @@ class SweepSpec:
         seeds: training seeds 0..seeds-1 per train profile.
         timesteps: env steps per training run (None: the env's ppo.yml value).
         episodes: evaluation episodes per (run, eval profile); episode i uses seed 1,000,000 + i.
-        n_envs: envs per training run.
+        n_envs: envs per training run (None: the env's ppo.yml value).
         settings: config overrides for every run (a user's hyperparameter file and ``--env-kwargs``), resolved
             into plain data so that they travel to Ray workers.
     """
@@ -55,16 +55,17 @@ class SweepSpec:
     seeds: int
     timesteps: int | None
     episodes: int
-    n_envs: int = 1
+    n_envs: int | None = None
     settings: dict[str, Any] = field(default_factory=dict)
 
     def cells(self) -> list[tuple[str, int]]:
         return [(noise, seed) for noise in self.train_noise for seed in range(self.seeds)]
 
     def cell_config(self, train_noise: str, seed: int) -> TrainConfig:
-        overrides = {"seed": seed, "noise": train_noise, "n_envs": self.n_envs, "final_eval_episodes": 0}
-        if self.timesteps is not None:
-            overrides["timesteps"] = self.timesteps
+        overrides: dict[str, Any] = {"seed": seed, "noise": train_noise, "final_eval_episodes": 0}
+        for key in ("timesteps", "n_envs"):
+            if getattr(self, key) is not None:
+                overrides[key] = getattr(self, key)
         return config_for(self.env_id, deep_merge(self.settings, overrides))
 
     def to_dict(self) -> dict[str, Any]:
@@ -160,7 +161,9 @@ def _run_on_ray(spec: SweepSpec, out: Path, todo: list[tuple[str, int]], address
     if started_here:
         ray.init(address=None if address == "local" else address, include_dashboard=False, log_to_driver=False)
     try:
-        task = ray.remote(num_cpus=spec.n_envs)(run_cell)
+        from clutter_gym.training.vec_env import env_workers
+
+        task = ray.remote(num_cpus=env_workers(spec.cell_config(*todo[0])))(run_cell)
         pending = [task.remote(spec.to_dict(), str(out.resolve()), noise, seed) for noise, seed in todo]
         while pending:
             finished, pending = ray.wait(pending)

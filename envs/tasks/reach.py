@@ -54,6 +54,7 @@ class ReachTask:
         clearance_range: clearances are observed up to this distance, metres.
         terminate_on_collision: end the episode (terminated) on the first environment or self contact.
         observe_directions: add the per-link unit vectors towards the nearest obstacle to the observation.
+        observe_offset: add ``target_offset``, the target minus the end-effector position, to the observation.
     """
 
     def __init__(
@@ -66,6 +67,7 @@ class ReachTask:
         clearance_range: float,
         terminate_on_collision: bool,
         observe_directions: bool,
+        observe_offset: bool = False,
     ) -> None:
         if not (math.isfinite(success_radius) and 0.0 < success_radius <= 0.5):
             raise ValueError(f"success_radius must be in (0, 0.5] metres, got {success_radius!r}")
@@ -77,6 +79,7 @@ class ReachTask:
         self.clearance_margin = clearance_margin
         self.terminate_on_collision = bool(terminate_on_collision)
         self.observe_directions = bool(observe_directions)
+        self.observe_offset = bool(observe_offset)
         self._ee_row = ee_row
         self._range = clearance_range
         n = len(links)
@@ -86,6 +89,8 @@ class ReachTask:
         }
         if self.observe_directions:
             self.spaces["clearance_direction"] = spaces.Box(-1.0, 1.0, shape=(n, 3), dtype=np.float32)
+        if self.observe_offset:
+            self.spaces["target_offset"] = spaces.Box(-3.0, 3.0, shape=(3,), dtype=np.float32)
         self._target = np.zeros(3)
         self._previous = 0.0
 
@@ -101,13 +106,15 @@ class ReachTask:
         return float(np.linalg.norm(state.links.position[self._ee_row] - self._target))
 
     def observe(self, state: RobotState, report: CollisionReport) -> dict[str, np.ndarray]:
-        """Target (world frame, m) and per-link clearance (m, clipped to +-clearance_range)."""
+        """Target (world frame, m), per-link clearance (m, clipped to +-clearance_range) and the optional entries."""
         obs = {
             "target": self._target.astype(np.float32),
             "clearance": np.clip(report.link_clearance, -self._range, self._range).astype(np.float32),
         }
         if self.observe_directions:
             obs["clearance_direction"] = report.directions.astype(np.float32)
+        if self.observe_offset:
+            obs["target_offset"] = (self._target - state.links.position[self._ee_row]).astype(np.float32)
         return obs
 
     def evaluate(self, state: RobotState, report: CollisionReport, action: np.ndarray) -> StepOutcome:
