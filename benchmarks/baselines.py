@@ -89,9 +89,8 @@ def main() -> None:
     parser.add_argument("--out", default=None, help="folder for baselines.md and .json (default out/baselines/ENV)")
     args = parser.parse_args()
     table = TABLES[args.env]
-    knob, levels = table["knob"], args.levels or table["levels"]
-    if knob == "n_obstacles":
-        levels = [int(level) for level in levels]
+    knob, kind = table["knob"], type(table["levels"][0])  # n_obstacles takes ints
+    levels = [kind(level) for level in args.levels] if args.levels else table["levels"]
     rows: list[tuple[str, str, Any]] = [
         (name, "-", lambda c, p, extra=extra, make=make: scripted_cell(args.env, extra, make, c, p, args.episodes))
         for name, extra, make in table["scripted"]

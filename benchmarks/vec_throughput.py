@@ -14,7 +14,6 @@ normalisation), in samples per second of wall time.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import functools
 import multiprocessing as mp
 import os
@@ -27,27 +26,17 @@ from stable_baselines3.common.vec_env import SubprocVecEnv, VecEnv
 
 from clutter_gym.training.config import config_for
 from clutter_gym.training.train import build_model
-from clutter_gym.training.vec_env import build_vec_env, make_env, normalize
+from clutter_gym.training.vec_env import env_workers, make_env, training_env
 from clutter_gym.training.worker_vec_env import WorkerVecEnv
-
-
-class RandomWalk:
-    """Per-env clipped random walks in action space: the robot drives around and often into things."""
-
-    def __init__(self, n: int, seed: int) -> None:
-        self.rng, self.a = np.random.default_rng(seed), np.tile([0.5, 0.0], (n, 1))
-
-    def __call__(self) -> np.ndarray:
-        self.a = np.clip(self.a + self.rng.normal(0.0, 0.25, size=self.a.shape), -1.0, 1.0)
-        return self.a.astype(np.float32)
+from throughput import smooth_actions  # the random walk every throughput benchmark drives with
 
 
 def one_env(factory, steps: int, seed: int) -> float:
-    env, walk = factory(), RandomWalk(1, seed)
+    env, walk = factory(), smooth_actions(np.random.default_rng(seed), steps)
     env.reset(seed=seed)
     t0 = time.perf_counter()
-    for _ in range(steps):
-        _, _, terminated, truncated, _ = env.step(walk()[0])
+    for action in walk:
+        _, _, terminated, truncated, _ = env.step(action)
         if terminated or truncated:
             env.reset()
     rate = steps / (time.perf_counter() - t0)
@@ -74,13 +63,14 @@ def free_running(factory, steps: int, seed: int) -> float:
 
 def vector(venv: VecEnv, steps: int, seed: int) -> float:
     """Samples/s of ``venv`` over about ``steps`` samples (the vector's start-up and first reset untimed)."""
-    walk = RandomWalk(venv.num_envs, seed)
+    vector_steps = max(1, steps // venv.num_envs)
+    rng = np.random.default_rng(seed)
+    walks = np.stack([smooth_actions(rng, vector_steps) for _ in range(venv.num_envs)], axis=1)
     venv.seed(seed)
     venv.reset()
-    vector_steps = max(1, steps // venv.num_envs)
     t0 = time.perf_counter()
-    for _ in range(vector_steps):
-        venv.step(walk())
+    for actions in walks:
+        venv.step(actions)
     rate = vector_steps * venv.num_envs / (time.perf_counter() - t0)
     venv.close()
     return rate
@@ -90,14 +80,13 @@ def training_loop(samples: int, seed: int) -> tuple[float, int, int]:
     """Samples/s of PPO.learn with the main job's settings; returns (rate, n_envs, env workers)."""
     torch.set_num_threads(1)  # as train() does
     config = config_for("ClutterNav-v0", {"seed": seed})
-    venv = normalize(build_vec_env(config, seed=seed), config)
+    venv = training_env(config, seed=seed)
     model = build_model(config, venv)
     t0 = time.perf_counter()
     model.learn(total_timesteps=samples)
     rate = model.num_timesteps / (time.perf_counter() - t0)
-    workers = len(venv.venv.blocks) if hasattr(venv.venv, "blocks") else 1
     venv.close()
-    return rate, config.n_envs, workers
+    return rate, config.n_envs, env_workers(config)
 
 
 def main() -> None:

@@ -82,6 +82,11 @@ def _gather(remotes: Sequence[Any]) -> list[Any]:
     return replies
 
 
+def _flat(blocks: Sequence[Sequence[Any]]) -> list[Any]:
+    """Per-worker lists, in env order."""
+    return [item for block in blocks for item in block]
+
+
 def _concat(parts: Sequence[VecEnvObs], space: spaces.Space) -> VecEnvObs:
     if isinstance(space, spaces.Dict):
         return {key: np.concatenate([p[key] for p in parts]) for key in space.spaces}  # type: ignore[index]
@@ -122,9 +127,8 @@ class WorkerVecEnv(VecEnv):
         self.waiting = False
         results = _gather(self.remotes)
         obs, rewards, dones, infos, reset_infos = zip(*results)
-        self.reset_infos = [info for block in reset_infos for info in block]
-        return (_concat(obs, self.observation_space), np.concatenate(rewards), np.concatenate(dones),
-                [info for block in infos for info in block])
+        self.reset_infos = _flat(reset_infos)
+        return _concat(obs, self.observation_space), np.concatenate(rewards), np.concatenate(dones), _flat(infos)
 
     def reset(self) -> VecEnvObs:
         for remote, (start, stop) in zip(self.remotes, self.blocks):
@@ -132,7 +136,7 @@ class WorkerVecEnv(VecEnv):
             remote.send(("reset", (self._seeds[start], self._options[start:stop])))
         results = _gather(self.remotes)
         obs, reset_infos = zip(*results)
-        self.reset_infos = [info for block in reset_infos for info in block]
+        self.reset_infos = _flat(reset_infos)
         self._reset_seeds()
         self._reset_options()
         return _concat(obs, self.observation_space)
@@ -182,4 +186,4 @@ class WorkerVecEnv(VecEnv):
     def get_images(self) -> Sequence[np.ndarray | None]:
         for remote in self.remotes:
             remote.send(("get_images", None))
-        return [image for block in _gather(self.remotes) for image in block]
+        return _flat(_gather(self.remotes))
