@@ -55,7 +55,7 @@ def test_predict_takes_a_batch_and_checks_its_input(run):
     single, _ = agent.predict(obs)
     assert actions.shape == (2, 2)
     np.testing.assert_allclose(actions[0], single, atol=1e-6)
-    with pytest.raises(ValueError, match=r"keys \['goal', 'imu', 'lidar', 'subgoal', 'velocity'\]"):
+    with pytest.raises(ValueError, match=r"keys \['goal', 'lidar', 'subgoal', 'velocity'\]"):
         agent.predict({"lidar": obs["lidar"]})
     with pytest.raises(ValueError, match=r"obs\['lidar'\] must have shape \(32,\)"):
         agent.predict({**obs, "lidar": np.zeros(64, np.float32)})
