@@ -22,6 +22,7 @@ from clutter_gym.noise.dynamics import sample_dynamics
 from clutter_gym.noise.profiles import NoiseProfile
 from clutter_gym.noise.timing import SampleHoldDelay
 from clutter_gym.robots import DiffDriveRobot, PandaArm, RobotState
+from clutter_gym.robots.safety import SafetyFilter
 from clutter_gym.sensors import Sensor
 from clutter_gym.sim import Sim
 from clutter_gym.tasks import NavigateTask, ReachTask
@@ -45,6 +46,8 @@ class ClutterEnv(gym.Env):
         noise: sensor timing, actuation noise and dynamics randomisation (the sensors carry their own noise).
         render_mode: None, "rgb_array" or "human".
         render_size: (width, height) of rgb_array frames in pixels.
+        safety: slows each action's linear command by what the latest ``lidar_ranges`` reading allows, before
+            actuation noise and latency (None: actions pass unchanged).
     """
 
     metadata = {"render_modes": list(RENDER_MODES), "render_fps": 20}
@@ -61,8 +64,11 @@ class ClutterEnv(gym.Env):
         noise: NoiseProfile,
         render_mode: str | None = None,
         render_size: tuple[int, int] = (320, 240),
+        safety: SafetyFilter | None = None,
     ) -> None:
         self.sim, self.robot, self.arena, self.checker, self.task = sim, robot, arena, checker, task
+        self.safety = safety
+        self._scan: np.ndarray | None = None  # the latest lidar_ranges delivered, for the safety filter
         self.sensors = tuple(sensors)
         self.noise = noise
         self._clocks = tuple(SampleHoldDelay(noise.timing[s.name], 1.0 / control_hz) for s in self.sensors)
@@ -126,8 +132,9 @@ class ClutterEnv(gym.Env):
         if self.scene is None:
             raise RuntimeError("call reset() before step()")
         a = self._checked_action(action)
-        command = self._action_channel.send(a, self._noise_rng)
-        if command is not a:
+        applied, speed_scale = self.safety.filter(a, self._scan) if self.safety else (a, 1.0)
+        command = self._action_channel.send(applied, self._noise_rng)
+        if command is not applied:
             command = np.minimum(np.maximum(command, self._action_low), self._action_high)
         self.robot.apply_action(command)
         self.sim.step(self.substeps)
@@ -149,6 +156,8 @@ class ClutterEnv(gym.Env):
             pybullet_contacts=report.pybullet_contacts,
             contact_disagreement=report.disagreement,
         )
+        if self.safety:
+            info["safety_scale"] = speed_scale
         if not math.isfinite(outcome.reward):
             raise FloatingPointError(f"non-finite reward {outcome.reward} from terms {outcome.terms}")
         if self.render_mode == "human":
@@ -184,6 +193,7 @@ class ClutterEnv(gym.Env):
                 delivered = tuple({k: np.copy(v) for k, v in part.items()} for part in delivered)
             obs.update(delivered[0])
             info.update(delivered[1])
+        self._scan = info.get("lidar_ranges")
         obs.update(self.task.observe(state, report))
         obs.update(self.robot.observe(state))
         floats = [v for v in obs.values() if v.dtype.kind == "f"]  # integer images cannot hold NaN/Inf

@@ -6,10 +6,14 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+import numpy as np
+
 from clutter_gym.collision import CollisionChecker, RobotCollisionModel, check_fidelity
+from clutter_gym.collision.kinematics import UrdfKinematics
 from clutter_gym.core import ClutterEnv, check_render_mode
 from clutter_gym.robots import DiffDriveConfig, DiffDriveRobot
 from clutter_gym.robots.diffdrive import TRACKED_LINKS
+from clutter_gym.robots.safety import SafetyConfig, SafetyFilter
 from clutter_gym.noise.profiles import NoiseProfile, resolve_noise
 from clutter_gym.sensors import CameraConfig, ImuConfig, LidarConfig, build_sensors
 from clutter_gym.sim import Sim
@@ -31,6 +35,11 @@ class ClutterNavEnv(ClutterEnv):
     ``Box(-1, 1, (2,), float32)``: (linear, angular) velocity command, normalised by ``max_linear_speed`` (m/s)
     and ``max_angular_speed`` (rad/s, counter-clockwise positive). Finite values outside [-1, 1] are clipped;
     NaN/Inf or a wrong shape raise ``ValueError``. Wheel motors track the command under a 1.5 N m torque limit.
+
+    With ``safety_horizon > 0`` a collision monitor (:mod:`clutter_gym.robots.safety`) sits between the action and
+    the motors: it drives the command's arc ``safety_horizon`` seconds ahead against the latest LIDAR scan and
+    scales the linear speed down (to 3/4, 1/2, 1/4 or 0) until the footprint keeps ``safety_margin`` from every
+    return; the yaw rate passes unchanged. Rewards see the policy's action.
 
     ## Observation space
 
@@ -78,7 +87,8 @@ class ClutterNavEnv(ClutterEnv):
     ``n_contacts`` (FCL link/obstacle pairs within ``contact_tolerance``), ``pybullet_contacts`` (pybullet
     contact points within the same tolerance), ``contact_disagreement`` (exactly one engine sees contact),
     ``lidar_ranges`` (m, as the sensor reports them: noisy, and ``inf`` for no return if the profile says so),
-    ``noise_profile`` (at reset).
+    ``noise_profile`` (at reset), ``safety_scale`` (the fraction of the linear command the collision monitor let
+    through, when it is on).
 
     ## Noise
 
@@ -99,7 +109,8 @@ class ClutterNavEnv(ClutterEnv):
     ("tiny" or "egl"); ``physics_hz`` (a multiple of
     ``control_hz``); ``control_hz``; ``solver_iterations``; ``max_linear_speed`` m/s; ``max_angular_speed`` rad/s;
     ``success_radius`` m; ``clearance_margin`` m; ``terminate_on_collision``; ``contact_tolerance`` m;
-    ``*_weight`` reward weights; ``subgoal_lookahead`` m (0: off).
+    ``*_weight`` reward weights; ``subgoal_lookahead`` m (0: off); ``safety_horizon`` s [0, 2] (0: off) and
+    ``safety_margin`` m [0, 0.5] (needs a 2D ``lidar`` in ``sensors``).
 
     ``subgoal_lookahead > 0`` makes the env map-based: the ``subgoal`` entry comes from a path planned on the
     known layout (shortest on a costmap that charges passing within 0.25 m of touching; see
@@ -151,6 +162,8 @@ class ClutterNavEnv(ClutterEnv):
         time_weight: float = 0.01,
         subgoal_lookahead: float = 0.0,
         reverse_weight: float = 0.0,
+        safety_horizon: float = 0.0,
+        safety_margin: float = 0.02,
     ) -> None:
         check_render_mode(render_mode)
         check_rates(physics_hz, control_hz, solver_iterations)
@@ -181,6 +194,7 @@ class ClutterNavEnv(ClutterEnv):
             model, base_link="base_link", contact_tolerance=contact_tolerance,
             clearance_range=math.sqrt(2.0) * arena_size, dt=1.0 / control_hz,
         )
+        safety = _safety_filter(safety_horizon, safety_margin, sensors, lidar, robot) if safety_horizon != 0.0 else None
         super().__init__(
             sim=Sim(physics_hz=physics_hz, solver_iterations=solver_iterations, gui=render_mode == "human"),
             robot=robot,
@@ -191,6 +205,7 @@ class ClutterNavEnv(ClutterEnv):
             control_hz=control_hz,
             noise=profile,
             render_mode=render_mode,
+            safety=safety,
         )
 
 
@@ -206,6 +221,21 @@ def check_rates(physics_hz: float, control_hz: float, solver_iterations: int) ->
         )
     if isinstance(solver_iterations, bool) or not isinstance(solver_iterations, int) or not 1 <= solver_iterations <= 1000:
         raise ValueError(f"solver_iterations must be an integer in [1, 1000], got {solver_iterations!r}")
+
+
+def _safety_filter(horizon: float, margin: float, sensors: Sequence[str], lidar: LidarConfig,
+                   robot: DiffDriveRobot) -> SafetyFilter:
+    """The collision monitor over the LIDAR's returns, in the base frame."""
+    if not (math.isfinite(horizon) and 0.0 <= horizon <= 2.0):
+        raise ValueError(f"safety_horizon must be in [0, 2] seconds (0: off), got {horizon!r}")
+    if "lidar" not in sensors or lidar.n_channels != 1:
+        raise ValueError(f"safety_horizon > 0 needs a 2D LIDAR: 'lidar' in sensors and lidar_channels 1, got "
+                         f"sensors {list(sensors)} and lidar_channels {lidar.n_channels}")
+    mount = UrdfKinematics(robot.urdf_path).forward(np.zeros((1, 2)))[lidar.link][0]
+    yaw = math.atan2(mount[1, 0], mount[0, 0])
+    c = robot.config
+    return SafetyFilter(SafetyConfig(horizon, margin), c.footprint_radius, c.max_linear_speed, c.max_angular_speed,
+                        lidar.angles + yaw, (float(mount[0, 3]), float(mount[1, 3])), lidar.max_range)
 
 
 def _camera_config(size: Any, modes: Any, fov: float, far: float, renderer: str) -> CameraConfig:

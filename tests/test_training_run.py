@@ -210,6 +210,7 @@ def test_the_main_job_reports_its_verdict_and_shows_two_episodes_side_by_side(tm
     run = prepare_run("ClutterNav-v0", tmp_path, timesteps=128, seed=0, settings=settings)
     report = main_job(run, tmp_path, timesteps=128, episodes=2, progress=False).read_text()
     assert "**Map-based agent.**" in report  # the shipped ClutterNav settings tell the policy the subgoal
+    assert "**Behind a collision monitor**" in report and "next 0.3 s of driving" in report
     assert "Target on clean sensors" in report and "**missed**" in report  # 128 steps of training cannot meet it
     assert "Evaluated policy: `best`" in report
     frames = imageio.mimread(tmp_path / "episode.gif")

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from clutter_gym.atomic import write_text_atomically
+from clutter_gym.robots.safety import SafetyConfig
 from clutter_gym.training.config import EVAL_SEED, config_for, deep_merge
 from clutter_gym.training.evaluate import evaluate
 from clutter_gym.training.run_dir import RunDir
@@ -152,10 +153,18 @@ def _verdict(metrics: dict, seconds: float) -> str:
 def _observation_line(config) -> str:
     lookahead = config.env_kwargs.get("subgoal_lookahead", 0.0)
     if lookahead:
-        return (f"**Map-based agent.** Besides the LIDAR and the goal, the policy is told the subgoal: the point "
+        line = (f"**Map-based agent.** Besides the LIDAR and the goal, the policy is told the subgoal: the point "
                 f"{lookahead} m ahead on the path a costmap planner finds over the known layout. It does not solve "
                 "the mapless task; train without `subgoal_lookahead` for that.")
-    return "**Mapless agent.** The policy sees its sensors and the goal's relative position, no map."
+    else:
+        line = "**Mapless agent.** The policy sees its sensors and the goal's relative position, no map."
+    horizon = config.env_kwargs.get("safety_horizon", 0.0)
+    if horizon:
+        margin = config.env_kwargs.get("safety_margin", SafetyConfig.margin)
+        line += (f" **Behind a collision monitor** (`safety_horizon`): the base slows down whenever the LIDAR "
+                 f"sees its next {horizon} s of driving come within {margin} m of an obstacle; the figures below "
+                 "are the policy and the monitor together.")
+    return line
 
 
 def render_report(run: RunDir, summaries: dict, curve: Path | None, train_s: float, eval_s: float) -> str:

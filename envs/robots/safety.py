@@ -1,0 +1,116 @@
+"""A collision monitor for the differential-drive base: slows the forward command when the LIDAR sees the arc
+the robot is about to drive crossing an obstacle.
+
+It plays the part of the safety layer a real mobile base runs between its planner and its motors (a "slowdown
+zone" collision monitor, or the admissible-velocity check of the dynamic window approach): it predicts the
+footprint's path under the command for a short horizon and lowers the linear speed until that path keeps its
+distance from every LIDAR return. The yaw rate is left alone: the footprint is a circle about the base origin,
+so turning in place never brings it closer to anything.
+
+It reads the scan the policy reads (noisy, delayed and held under a noise profile), so it is only as good as
+the sensor, as on a robot.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+#: Forward-speed fractions tried, largest first; the last (0: turn in place) never moves the footprint.
+SPEED_SCALES = (1.0, 0.75, 0.5, 0.25, 0.0)
+#: Footprint positions checked along the predicted arc.
+ARC_SAMPLES = 8
+
+
+@dataclass(frozen=True)
+class SafetyConfig:
+    """Attributes:
+        horizon: seconds of driving predicted, (0, 2].
+        margin: clearance in metres the predicted footprint must keep from every LIDAR return, [0, 0.5]. When
+            the robot is already closer than that, the arc must not bring it closer than it is.
+    """
+
+    horizon: float = 0.3
+    margin: float = 0.02
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.horizon) and 0.0 < self.horizon <= 2.0):
+            raise ValueError(f"safety_horizon must be in (0, 2] seconds, got {self.horizon!r}")
+        if not (math.isfinite(self.margin) and 0.0 <= self.margin <= 0.5):
+            raise ValueError(f"safety_margin must be in [0, 0.5] metres, got {self.margin!r}")
+
+
+class SafetyFilter:
+    """Scales the linear part of a normalised (linear, angular) command by the largest of :data:`SPEED_SCALES`
+    whose predicted arc is clear.
+
+    Args:
+        config: horizon and margin.
+        footprint_radius: radius of the robot's footprint circle about the base origin, metres.
+        max_linear_speed, max_angular_speed: what a command of 1 means, m/s and rad/s.
+        beam_angles: LIDAR beam azimuths, radians, in the base frame (a 2D scanner mounted level).
+        mount_xy: the scan origin in the base frame, metres.
+        max_range: a range at or beyond it is no return.
+    """
+
+    def __init__(
+        self,
+        config: SafetyConfig,
+        footprint_radius: float,
+        max_linear_speed: float,
+        max_angular_speed: float,
+        beam_angles: np.ndarray,
+        mount_xy: tuple[float, float],
+        max_range: float,
+    ) -> None:
+        self.config = config
+        self.reach = footprint_radius + config.margin
+        self._speeds = (max_linear_speed, max_angular_speed)
+        self._cos, self._sin = np.cos(beam_angles), np.sin(beam_angles)
+        self._mount = mount_xy
+        self._max_range = max_range
+        self._times = config.horizon * np.arange(1, ARC_SAMPLES + 1) / ARC_SAMPLES
+
+    def points(self, ranges: np.ndarray) -> np.ndarray:
+        """LIDAR returns as (n, 2) points in the base frame; beams without a return (>= max_range, inf) dropped."""
+        hit = np.isfinite(ranges) & (ranges < self._max_range)
+        r = ranges[hit]
+        return np.stack([self._mount[0] + r * self._cos[hit], self._mount[1] + r * self._sin[hit]], axis=1)
+
+    def scale(self, command: np.ndarray, ranges: np.ndarray) -> float:
+        """The fraction of ``command``'s linear speed that is safe to drive, given the latest scan ``ranges``."""
+        if command[0] == 0.0:
+            return 1.0
+        pts = self.points(ranges)
+        if len(pts) == 0:
+            return 1.0
+        now = float(np.sqrt(np.min(pts[:, 0] ** 2 + pts[:, 1] ** 2)))
+        keep = min(self.reach, now)  # never demand more room than there is: only forbid getting closer
+        w = float(command[1]) * self._speeds[1]
+        for s in SPEED_SCALES[:-1]:
+            v = s * float(command[0]) * self._speeds[0]
+            path = arc(v, w, self._times)
+            d2 = (pts[None, :, 0] - path[:, None, 0]) ** 2 + (pts[None, :, 1] - path[:, None, 1]) ** 2
+            if math.sqrt(float(d2.min())) >= keep - 1e-9:
+                return s
+        return SPEED_SCALES[-1]
+
+    def filter(self, command: np.ndarray, ranges: np.ndarray) -> tuple[np.ndarray, float]:
+        """``command`` with its linear part scaled, and the scale used."""
+        s = self.scale(command, ranges)
+        if s == 1.0:
+            return command, s
+        out = command.copy()
+        out[0] *= s
+        return out, s
+
+
+def arc(v: float, w: float, times: np.ndarray) -> np.ndarray:
+    """Base-origin positions (len(times), 2) of a unicycle starting at the origin heading +x, driving at ``v``
+    m/s and ``w`` rad/s for each of ``times`` seconds."""
+    if abs(w) < 1e-6:
+        return np.stack([v * times, np.zeros_like(times)], axis=1)
+    rho = v / w
+    return np.stack([rho * np.sin(w * times), rho * (1.0 - np.cos(w * times))], axis=1)
