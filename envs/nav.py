@@ -122,7 +122,8 @@ class ClutterNavEnv(ClutterEnv):
 
     * v0: initial release; camera sensor, noise profiles, sensor timing, action noise and dynamics randomisation
       added without changing the clean defaults. The progress term follows the path distance around the
-      clutter instead of the straight-line distance (PPO stalled behind obstacles with the latter).
+      clutter instead of the straight-line distance (PPO stalled behind obstacles with the latter). The collision
+      monitor (``safety_horizon``) added, off by default.
     """
 
     def __init__(

@@ -26,7 +26,9 @@ ARC_SAMPLES = 8
 
 @dataclass(frozen=True)
 class SafetyConfig:
-    """Attributes:
+    """How far ahead the monitor looks and how much room it keeps.
+
+    Attributes:
         horizon: seconds of driving predicted, (0, 2].
         margin: clearance in metres the predicted footprint must keep from every LIDAR return, [0, 0.5]. When
             the robot is already closer than that, the arc must not bring it closer than it is.
