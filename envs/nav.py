@@ -195,7 +195,7 @@ class ClutterNavEnv(ClutterEnv):
             model, base_link="base_link", contact_tolerance=contact_tolerance,
             clearance_range=math.sqrt(2.0) * arena_size, dt=1.0 / control_hz,
         )
-        safety = _safety_filter(safety_horizon, safety_margin, sensors, lidar, robot) if safety_horizon != 0.0 else None
+        safety = _safety_filter(SafetyConfig(safety_horizon, safety_margin), sensors, lidar, robot)
         super().__init__(
             sim=Sim(physics_hz=physics_hz, solver_iterations=solver_iterations, gui=render_mode == "human"),
             robot=robot,
@@ -224,18 +224,18 @@ def check_rates(physics_hz: float, control_hz: float, solver_iterations: int) ->
         raise ValueError(f"solver_iterations must be an integer in [1, 1000], got {solver_iterations!r}")
 
 
-def _safety_filter(horizon: float, margin: float, sensors: Sequence[str], lidar: LidarConfig,
-                   robot: DiffDriveRobot) -> SafetyFilter:
-    """The collision monitor over the LIDAR's returns, in the base frame."""
-    if not (math.isfinite(horizon) and 0.0 <= horizon <= 2.0):
-        raise ValueError(f"safety_horizon must be in [0, 2] seconds (0: off), got {horizon!r}")
+def _safety_filter(config: SafetyConfig, sensors: Sequence[str], lidar: LidarConfig,
+                   robot: DiffDriveRobot) -> SafetyFilter | None:
+    """The collision monitor over the LIDAR's returns, in the base frame (None when its horizon is 0)."""
+    if config.horizon == 0.0:
+        return None
     if "lidar" not in sensors or lidar.n_channels != 1:
         raise ValueError(f"safety_horizon > 0 needs a 2D LIDAR: 'lidar' in sensors and lidar_channels 1, got "
                          f"sensors {list(sensors)} and lidar_channels {lidar.n_channels}")
     mount = UrdfKinematics(robot.urdf_path).forward(np.zeros((1, 2)))[lidar.link][0]
     yaw = math.atan2(mount[1, 0], mount[0, 0])
     c = robot.config
-    return SafetyFilter(SafetyConfig(horizon, margin), c.footprint_radius, c.max_linear_speed, c.max_angular_speed,
+    return SafetyFilter(config, c.footprint_radius, c.max_linear_speed, c.max_angular_speed,
                         lidar.angles + yaw, (float(mount[0, 3]), float(mount[1, 3])), lidar.max_range)
 
 

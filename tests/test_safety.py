@@ -84,7 +84,7 @@ def test_no_return_and_turning_in_place_pass_unchanged():
     np.testing.assert_array_equal(out, [0.0, -0.3])
 
 
-@pytest.mark.parametrize("field, value", [("horizon", 0.0), ("horizon", 2.5), ("margin", -0.01), ("margin", np.nan)])
+@pytest.mark.parametrize("field, value", [("horizon", -0.1), ("horizon", 2.5), ("margin", -0.01), ("margin", np.nan)])
 def test_config_names_the_field_and_range(field, value):
     with pytest.raises(ValueError, match=f"safety_{field} must be in"):
         SafetyConfig(**{field: value})
@@ -108,6 +108,8 @@ def test_env_stops_short_of_a_wall_that_it_would_otherwise_hit(make_env):
 def test_env_rejects_a_monitor_without_a_2d_lidar(make_env):
     with pytest.raises(ValueError, match=r"safety_horizon must be in \[0, 2\] seconds"):
         make_env(safety_horizon=-0.1)
+    with pytest.raises(ValueError, match=r"safety_margin must be in \[0, 0.5\] metres"):
+        make_env(safety_margin=-1.0)  # checked even with the monitor off
     with pytest.raises(ValueError, match="safety_horizon > 0 needs a 2D LIDAR"):
         make_env(sensors=["imu"], safety_horizon=0.3)
     with pytest.raises(ValueError, match="safety_horizon > 0 needs a 2D LIDAR"):

@@ -29,7 +29,7 @@ class SafetyConfig:
     """How far ahead the monitor looks and how much room it keeps.
 
     Attributes:
-        horizon: seconds of driving predicted, (0, 2].
+        horizon: seconds of driving predicted, [0, 2]; 0 turns the monitor off.
         margin: clearance in metres the predicted footprint must keep from every LIDAR return, [0, 0.5]. When
             the robot is already closer than that, the arc must not bring it closer than it is.
     """
@@ -38,8 +38,8 @@ class SafetyConfig:
     margin: float = 0.02
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.horizon) and 0.0 < self.horizon <= 2.0):
-            raise ValueError(f"safety_horizon must be in (0, 2] seconds, got {self.horizon!r}")
+        if not (math.isfinite(self.horizon) and 0.0 <= self.horizon <= 2.0):
+            raise ValueError(f"safety_horizon must be in [0, 2] seconds (0: off), got {self.horizon!r}")
         if not (math.isfinite(self.margin) and 0.0 <= self.margin <= 0.5):
             raise ValueError(f"safety_margin must be in [0, 0.5] metres, got {self.margin!r}")
 
