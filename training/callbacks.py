@@ -104,7 +104,9 @@ class BestPolicyKeeper(BaseCallback):
 
     A validation is ``validate_episodes`` deterministic episodes, reset with seeds ``VALIDATION_SEED + i``: the
     same layouts every time, so validations compare policies, never scenes. Score: success rate minus collision
-    rate (a policy that reaches the goal by crashing less wins); a later policy must beat the best strictly.
+    rate (a policy that reaches the goal by crashing less wins). A later policy that ties the best replaces it: a
+    few dozen episodes saturate once the agent is good, and of two policies with the same validation score the
+    one trained longer is the better bet.
     Each validation is a row of ``validation.csv`` and TensorBoard scalars under ``validation/``.
     """
 
@@ -126,7 +128,7 @@ class BestPolicyKeeper(BaseCallback):
         return True
 
     def validate(self) -> dict[str, float]:
-        """One validation of the current policy; saves it to ``best/`` if it beats the best so far."""
+        """One validation of the current policy; saves it to ``best/`` if it scores at least the best so far."""
         import gymnasium as gym
 
         from clutter_gym.training.agent import Agent
@@ -140,7 +142,7 @@ class BestPolicyKeeper(BaseCallback):
         rows = rollouts(self._env, agent.predict, self.config.validate_episodes, VALIDATION_SEED)
         success = float(np.mean([r["success"] for r in rows]))
         collision = float(np.mean([r["collision"] for r in rows]))
-        best = success - collision > self.best_score
+        best = success - collision >= self.best_score
         if best:
             self.best_score = success - collision
             self.run.save_model(self.model, normalizer, self.run.best_dir)
