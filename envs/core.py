@@ -46,8 +46,8 @@ class ClutterEnv(gym.Env):
         noise: sensor timing, actuation noise and dynamics randomisation (the sensors carry their own noise).
         render_mode: None, "rgb_array" or "human".
         render_size: (width, height) of rgb_array frames in pixels.
-        safety: slows each action's linear command by what the latest ``lidar_ranges`` reading allows, before
-            actuation noise and latency (None: actions pass unchanged).
+        safety: slows each action's linear command by what the latest ``lidar_ranges`` reading allows, and spins
+            the base free when it stays pinned, before actuation noise and latency (None: actions pass unchanged).
     """
 
     metadata = {"render_modes": list(RENDER_MODES), "render_fps": 20}
@@ -110,6 +110,8 @@ class ClutterEnv(gym.Env):
             sensor.reset(self.sim, state, rng)
             clock.reset(rng)
         self._action_channel.reset()
+        if self.safety:
+            self.safety.reset()
         self.task.reset(scene, state)
         report = self.checker.check(state, self.sim.contact_distances(self.robot.body))
         self._check_start(report, options)
@@ -158,6 +160,7 @@ class ClutterEnv(gym.Env):
         )
         if self.safety:
             info["safety_scale"] = speed_scale
+            info["safety_recovery"] = self.safety.recovering
         if not math.isfinite(outcome.reward):
             raise FloatingPointError(f"non-finite reward {outcome.reward} from terms {outcome.terms}")
         if self.render_mode == "human":

@@ -39,7 +39,9 @@ class ClutterNavEnv(ClutterEnv):
     With ``safety_horizon > 0`` a collision monitor (:mod:`clutter_gym.robots.safety`) sits between the action and
     the motors: it drives the command's arc ``safety_horizon`` seconds ahead against the latest LIDAR scan and
     scales the linear speed down (to 3/4, 1/2, 1/4 or 0) until the footprint keeps ``safety_margin`` from every
-    return; the yaw rate passes unchanged. Rewards see the policy's action.
+    return; the yaw rate passes unchanged. With ``safety_recovery > 0`` it also turns the base in place, away from
+    the nearest return, once the whole forward command has been held back for ``safety_recovery`` seconds (a
+    navigation stack's "spin" recovery; see the module). Rewards see the policy's action.
 
     ## Observation space
 
@@ -88,7 +90,8 @@ class ClutterNavEnv(ClutterEnv):
     contact points within the same tolerance), ``contact_disagreement`` (exactly one engine sees contact),
     ``lidar_ranges`` (m, as the sensor reports them: noisy, and ``inf`` for no return if the profile says so),
     ``noise_profile`` (at reset), ``safety_scale`` (the fraction of the linear command the collision monitor let
-    through, when it is on).
+    through, when it is on) and ``safety_recovery`` (True on the steps of a recovery spin, when the monitor drove
+    instead of the policy).
 
     ## Noise
 
@@ -109,8 +112,9 @@ class ClutterNavEnv(ClutterEnv):
     ("tiny" or "egl"); ``physics_hz`` (a multiple of
     ``control_hz``); ``control_hz``; ``solver_iterations``; ``max_linear_speed`` m/s; ``max_angular_speed`` rad/s;
     ``success_radius`` m; ``clearance_margin`` m; ``terminate_on_collision``; ``contact_tolerance`` m;
-    ``*_weight`` reward weights; ``subgoal_lookahead`` m (0: off); ``safety_horizon`` s [0, 2] (0: off) and
-    ``safety_margin`` m [0, 0.5] (needs a 2D ``lidar`` in ``sensors``).
+    ``*_weight`` reward weights; ``subgoal_lookahead`` m (0: off); ``safety_horizon`` s [0, 2] (0: off),
+    ``safety_margin`` m [0, 0.5] and ``safety_recovery`` s [0, 10] (0: never) (need a 2D ``lidar`` in
+    ``sensors``).
 
     ``subgoal_lookahead > 0`` makes the env map-based: the ``subgoal`` entry comes from a path planned on the
     known layout (shortest on a costmap that charges passing within 0.25 m of touching; see
@@ -123,7 +127,7 @@ class ClutterNavEnv(ClutterEnv):
     * v0: initial release; camera sensor, noise profiles, sensor timing, action noise and dynamics randomisation
       added without changing the clean defaults. The progress term follows the path distance around the
       clutter instead of the straight-line distance (PPO stalled behind obstacles with the latter). The collision
-      monitor (``safety_horizon``) added, off by default.
+      monitor (``safety_horizon``) and its recovery spin (``safety_recovery``) added, off by default.
     """
 
     def __init__(
@@ -165,6 +169,7 @@ class ClutterNavEnv(ClutterEnv):
         reverse_weight: float = 0.0,
         safety_horizon: float = 0.0,
         safety_margin: float = 0.02,
+        safety_recovery: float = 0.0,
     ) -> None:
         check_render_mode(render_mode)
         check_rates(physics_hz, control_hz, solver_iterations)
@@ -195,7 +200,8 @@ class ClutterNavEnv(ClutterEnv):
             model, base_link="base_link", contact_tolerance=contact_tolerance,
             clearance_range=math.sqrt(2.0) * arena_size, dt=1.0 / control_hz,
         )
-        safety = _safety_filter(SafetyConfig(safety_horizon, safety_margin), sensors, lidar, robot)
+        safety = _safety_filter(SafetyConfig(safety_horizon, safety_margin, safety_recovery), sensors, lidar, robot,
+                                control_hz)
         super().__init__(
             sim=Sim(physics_hz=physics_hz, solver_iterations=solver_iterations, gui=render_mode == "human"),
             robot=robot,
@@ -225,7 +231,7 @@ def check_rates(physics_hz: float, control_hz: float, solver_iterations: int) ->
 
 
 def _safety_filter(config: SafetyConfig, sensors: Sequence[str], lidar: LidarConfig,
-                   robot: DiffDriveRobot) -> SafetyFilter | None:
+                   robot: DiffDriveRobot, control_hz: float) -> SafetyFilter | None:
     """The collision monitor over the LIDAR's returns, in the base frame (None when its horizon is 0)."""
     if config.horizon == 0.0:
         return None
@@ -236,7 +242,7 @@ def _safety_filter(config: SafetyConfig, sensors: Sequence[str], lidar: LidarCon
     yaw = math.atan2(mount[1, 0], mount[0, 0])
     c = robot.config
     return SafetyFilter(config, c.footprint_radius, c.max_linear_speed, c.max_angular_speed,
-                        lidar.angles + yaw, (float(mount[0, 3]), float(mount[1, 3])), lidar.max_range)
+                        lidar.angles + yaw, (float(mount[0, 3]), float(mount[1, 3])), lidar.max_range, 1.0 / control_hz)
 
 
 def _camera_config(size: Any, modes: Any, fov: float, far: float, renderer: str) -> CameraConfig:

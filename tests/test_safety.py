@@ -14,8 +14,12 @@ RADIUS, V_MAX, W_MAX = 0.17, 0.5, 2.0
 ANGLES = -math.pi + 2 * math.pi * np.arange(360) / 360  # 1-degree beams, beam 180 points along +x
 
 
-def monitor(horizon=0.3, margin=0.02) -> SafetyFilter:
-    return SafetyFilter(SafetyConfig(horizon, margin), RADIUS, V_MAX, W_MAX, ANGLES, (0.0, 0.0), max_range=3.5)
+DT = 0.05  # 20 Hz commands
+
+
+def monitor(horizon=0.3, margin=0.02, recovery=0.0) -> SafetyFilter:
+    return SafetyFilter(SafetyConfig(horizon, margin, recovery), RADIUS, V_MAX, W_MAX, ANGLES, (0.0, 0.0),
+                        max_range=3.5, control_dt=DT)
 
 
 def scan(hits: dict[int, float]) -> np.ndarray:
@@ -84,7 +88,47 @@ def test_no_return_and_turning_in_place_pass_unchanged():
     np.testing.assert_array_equal(out, [0.0, -0.3])
 
 
-@pytest.mark.parametrize("field, value", [("horizon", -0.1), ("horizon", 2.5), ("margin", -0.01), ("margin", np.nan)])
+def drive(m: SafetyFilter, command, ranges, steps: int) -> list[tuple[np.ndarray, float, bool]]:
+    """``steps`` calls of ``m.filter`` with the same command and scan: (driven command, scale, recovering)."""
+    out = []
+    for _ in range(steps):
+        driven, s = m.filter(np.array(command, dtype=float), ranges)
+        out.append((driven, s, m.recovering))
+    return out
+
+
+@pytest.mark.parametrize("side, spin", [(10, -1.0), (-10, 1.0)])
+def test_a_pinned_robot_spins_away_from_the_nearest_return_then_gets_control_back(side, spin):
+    # 0.5 s of holding at 20 Hz = 10 steps; the spin turns RECOVERY_TURN = 0.8 rad at 2 rad/s: ceil(8.0) = 8 steps
+    m = monitor(recovery=0.5)
+    blocked = scan({side: 0.2, side + 40: 0.6})  # nearest return 10 degrees to one side, 0.2 m away
+    steps = drive(m, [1.0, 0.3], blocked, 10 + 8 + 1)
+    for driven, s, recovering in steps[:10]:  # held: no forward speed, the policy's yaw rate
+        assert s == 0.0 and not recovering
+        np.testing.assert_array_equal(driven, [0.0, 0.3])
+    for driven, s, recovering in steps[10:18]:  # the spin ignores the command and turns away from the return
+        assert s == 0.0 and recovering
+        np.testing.assert_array_equal(driven, [0.0, spin])
+    driven, s, recovering = steps[18]
+    assert not recovering and s == 0.0 and driven[1] == 0.3  # the policy again, held again from a count of 0
+
+
+def test_only_a_whole_held_command_counts_towards_the_recovery():
+    m = monitor(recovery=0.5)
+    assert all(not r for _, s, r in drive(m, [1.0, 0.0], scan({0: 0.25}), 50) if s == 0.25)  # slowed, never spun
+    pinned = scan({0: 0.2})
+    drive(m, [1.0, 0.0], pinned, 9)
+    drive(m, [0.0, 1.0], pinned, 1)  # a command without forward speed is not held: the count restarts
+    assert not any(r for _, _, r in drive(m, [1.0, 0.0], pinned, 10))
+    assert drive(m, [1.0, 0.0], pinned, 1)[0][2]
+    m.reset()  # a new episode drops the spin under way
+    assert not drive(m, [1.0, 0.0], pinned, 1)[0][2]
+    never = monitor(recovery=0.0)
+    assert not any(r for _, _, r in drive(never, [1.0, 0.0], pinned, 200))
+
+
+@pytest.mark.parametrize("field, value", [("horizon", -0.1), ("horizon", 2.5), ("margin", -0.01), ("margin", np.nan),
+                                          ("recovery", -0.5), ("recovery", 11.0), ("recovery", np.inf)])
 def test_config_names_the_field_and_range(field, value):
     with pytest.raises(ValueError, match=f"safety_{field} must be in"):
         SafetyConfig(**{field: value})
@@ -105,11 +149,27 @@ def test_env_stops_short_of_a_wall_that_it_would_otherwise_hit(make_env):
     assert 0.0 < clearance < 0.02 + 0.25 * V_MAX * 0.3 + 0.01
 
 
+def test_env_recovery_turns_a_pinned_robot_away_without_contact(make_env):
+    wall = {"shape": "box", "size": [0.2, 2.0, 0.5], "position": [0.8, 0.3], "yaw": 0.4}  # leaning, nearest on the left
+    env = make_env(sensors=["lidar"], safety_horizon=0.3, safety_recovery=0.5)
+    env.reset(options={"scene": empty_scene(obstacles=[wall], goal=(-2.0, 2.0))})
+    infos = [env.step(np.array([1.0, 0.0]))[4] for _ in range(60)]
+    spinning = [i["safety_recovery"] for i in infos]
+    assert max(i["cost"] for i in infos) == 0.0
+    assert 8 <= sum(spinning) <= 24  # at least one spin of 8 steps; held for 10 steps before each
+    first = spinning.index(True)
+    assert first >= 10 and all(spinning[first:first + 8])
+    yaw = env.unwrapped.robot.state().yaw
+    assert yaw < -0.3  # turned right, away from the wall's near end on the left
+
+
 def test_env_rejects_a_monitor_without_a_2d_lidar(make_env):
     with pytest.raises(ValueError, match=r"safety_horizon must be in \[0, 2\] seconds"):
         make_env(safety_horizon=-0.1)
     with pytest.raises(ValueError, match=r"safety_margin must be in \[0, 0.5\] metres"):
         make_env(safety_margin=-1.0)  # checked even with the monitor off
+    with pytest.raises(ValueError, match=r"safety_recovery must be in \[0, 10\] seconds"):
+        make_env(safety_recovery=-1.0)
     with pytest.raises(ValueError, match="safety_horizon > 0 needs a 2D LIDAR"):
         make_env(sensors=["imu"], safety_horizon=0.3)
     with pytest.raises(ValueError, match="safety_horizon > 0 needs a 2D LIDAR"):

@@ -211,6 +211,7 @@ def test_the_main_job_reports_its_verdict_and_shows_two_episodes_side_by_side(tm
     report = main_job(run, tmp_path, timesteps=128, episodes=2, progress=False).read_text()
     assert "**Map-based agent.**" in report  # the shipped ClutterNav settings tell the policy the subgoal
     assert "**Behind a collision monitor**" in report and "next 0.3 s of driving" in report
+    assert "after 0.5 s held still it turns the base" in report
     assert "Target on clean sensors" in report and "**missed**" in report  # 128 steps of training cannot meet it
     assert "Evaluated policy: `best`" in report
     frames = imageio.mimread(tmp_path / "episode.gif")
@@ -232,3 +233,12 @@ def test_episode_pictures_draw_the_planner_path_and_every_step(tmp_path):
     assert "step 30" in trace.captions[-1] and "progress" in trace.captions[-1]
     first, last = draw_frame([trace], 0), draw_frame([trace], 30)
     assert first.shape == last.shape and first.shape[0] >= 480 and not np.array_equal(first, last)
+
+
+def test_episode_captions_say_what_the_collision_monitor_did():
+    from clutter_gym.training.episode_view import _monitor_text
+
+    assert _monitor_text({"safety_scale": 1.0, "safety_recovery": False}) == ""
+    assert _monitor_text({}) == ""  # no monitor
+    assert _monitor_text({"safety_scale": 0.25, "safety_recovery": False}) == " | monitor: speed x0.25"
+    assert _monitor_text({"safety_scale": 0.0, "safety_recovery": True}) == " | monitor: recovery spin"

@@ -57,10 +57,18 @@ def record_episode(env: Any, policy: Callable[[Any, Any], tuple[np.ndarray, Any]
         terms = " ".join(f"{k} {v:+.2f}" for k, v in info["reward_terms"].items() if v)
         end = " | SUCCESS" if info["is_success"] else (" | CONTACT" if info["cost"] else "")
         caption = (f"{title}: step {step}, return {total:.1f}, clearance {info['min_clearance'] * 100:.0f} cm{end}\n"
-                   f"{terms}")
+                   f"{terms}{_monitor_text(info)}")
         _append(trace, base, info, caption, info["cost"] > 0)
         if terminated or truncated:
             return trace
+
+
+def _monitor_text(info: dict) -> str:
+    """What the collision monitor did this step, when there is one and it did anything."""
+    if info.get("safety_recovery"):
+        return " | monitor: recovery spin"
+    scale = info.get("safety_scale", 1.0)
+    return f" | monitor: speed x{scale:g}" if scale < 1.0 else ""
 
 
 def _pose(base: Any) -> tuple[float, float, float]:

@@ -161,9 +161,13 @@ def _observation_line(config) -> str:
     horizon = config.env_kwargs.get("safety_horizon", 0.0)
     if horizon:
         margin = config.env_kwargs.get("safety_margin", SafetyConfig.margin)
+        recovery = config.env_kwargs.get("safety_recovery", SafetyConfig.recovery)
         line += (f" **Behind a collision monitor** (`safety_horizon`): the base slows down whenever the LIDAR "
-                 f"sees its next {horizon} s of driving come within {margin} m of an obstacle; the figures below "
-                 "are the policy and the monitor together.")
+                 f"sees its next {horizon} s of driving come within {margin} m of an obstacle")
+        if recovery:
+            line += (f", and after {recovery} s held still it turns the base in place away from the nearest "
+                     "obstacle (`safety_recovery`)")
+        line += "; the figures below are the policy and the monitor together."
     return line
 
 
