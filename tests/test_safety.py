@@ -170,6 +170,8 @@ def test_env_rejects_a_monitor_without_a_2d_lidar(make_env):
         make_env(safety_margin=-1.0)  # checked even with the monitor off
     with pytest.raises(ValueError, match=r"safety_recovery must be in \[0, 10\] seconds"):
         make_env(safety_recovery=-1.0)
+    with pytest.raises(ValueError, match="safety_recovery > 0 needs the collision monitor on"):
+        make_env(safety_recovery=0.5)  # a recovery without a monitor would never run
     with pytest.raises(ValueError, match="safety_horizon > 0 needs a 2D LIDAR"):
         make_env(sensors=["imu"], safety_horizon=0.3)
     with pytest.raises(ValueError, match="safety_horizon > 0 needs a 2D LIDAR"):

@@ -93,7 +93,7 @@ class SafetyFilter:
         self._times = config.horizon * np.arange(1, ARC_SAMPLES + 1) / ARC_SAMPLES
         # recovery: steps held before the spin (0: never), and the spin's length in steps
         self._patience = max(1, round(config.recovery / control_dt)) if config.recovery > 0.0 else 0
-        self._spin_steps = max(1, math.ceil(RECOVERY_TURN / (max_angular_speed * control_dt)))
+        self._spin_steps = max(1, math.ceil(RECOVERY_TURN / (max_angular_speed * control_dt) - 1e-9))
         self.reset()
 
     def reset(self) -> None:
