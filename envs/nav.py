@@ -234,9 +234,6 @@ def _safety_filter(config: SafetyConfig, sensors: Sequence[str], lidar: LidarCon
                    robot: DiffDriveRobot, control_hz: float) -> SafetyFilter | None:
     """The collision monitor over the LIDAR's returns, in the base frame (None when its horizon is 0)."""
     if config.horizon == 0.0:
-        if config.recovery > 0.0:
-            raise ValueError(f"safety_recovery > 0 needs the collision monitor on (safety_horizon in (0, 2] "
-                             f"seconds), got safety_horizon 0 and safety_recovery {config.recovery}")
         return None
     if "lidar" not in sensors or lidar.n_channels != 1:
         raise ValueError(f"safety_horizon > 0 needs a 2D LIDAR: 'lidar' in sensors and lidar_channels 1, got "

@@ -55,6 +55,9 @@ class SafetyConfig:
             raise ValueError(f"safety_margin must be in [0, 0.5] metres, got {self.margin!r}")
         if not (math.isfinite(self.recovery) and 0.0 <= self.recovery <= 10.0):
             raise ValueError(f"safety_recovery must be in [0, 10] seconds (0: never), got {self.recovery!r}")
+        if self.recovery > 0.0 and self.horizon == 0.0:
+            raise ValueError(f"safety_recovery > 0 needs the collision monitor on (safety_horizon in (0, 2] "
+                             f"seconds), got safety_horizon 0 and safety_recovery {self.recovery}")
 
 
 class SafetyFilter:
