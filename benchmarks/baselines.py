@@ -4,7 +4,8 @@ every row.
 
 ClutterNav-v0 rows: the mapless potential field; the map-based planner reference (the same field steering for the
 ``subgoal`` waypoint of the costmap planner, an upper bound of what the map allows a simple controller).
-ClutterReach-v0 rows: scripted IK, the end effector heading straight for the target (``control="ee_position"``).
+ClutterReach-v0 rows: scripted IK, the end effector heading straight for the target (``control="ee_position"``);
+the joint-space planner reference (RRT-Connect on the known layout, then path tracking in joint velocities).
 Then one row per trained run given with ``--run NAME=RUN_DIR`` (its own env settings; the clutter level and the
 profile changed per cell). Episode ``i`` of every cell is reset with seed ``EVAL_SEED + i``, so rows are compared
 on identical layouts.
@@ -28,6 +29,7 @@ from clutter_gym.atomic import write_text_atomically
 from clutter_gym.training import load
 from clutter_gym.training.baselines import PotentialFieldNavigator, StraightLineReacher
 from clutter_gym.training.config import EVAL_SEED
+from clutter_gym.training.joint_planner import JointPlannerReacher
 from clutter_gym.training.evaluate import rollouts, summarize
 
 #: The subgoal lookahead the planner reference runs with, metres.
@@ -46,7 +48,10 @@ TABLES: dict[str, dict[str, Any]] = {
     },
     "ClutterReach-v0": {
         "knob": "n_obstacles", "levels": [3, 6, 10],
-        "scripted": [("straight line (scripted IK)", {"control": "ee_position"}, StraightLineReacher.for_env)],
+        "scripted": [
+            ("straight line (scripted IK)", {"control": "ee_position"}, StraightLineReacher.for_env),
+            ("planner reference (map-based: RRT-Connect in joint space)", {}, JointPlannerReacher),
+        ],
     },
 }
 
