@@ -1,7 +1,7 @@
 """ClutterEnv: a Gymnasium env composed of a Sim, a robot, an arena, sensors, a collision checker and a task.
 
-It only wires the parts together (DESIGN.md, "One env.step, end to end"); every decision about physics, layout,
-sensing, collision or reward lives in the part that owns it.
+It only wires the parts together (docs/architecture.md, "One step"); every decision about physics, layout,
+sensing, collision or reward lives in the part that owns it, behind the contracts of :mod:`clutter_gym.interfaces`.
 """
 
 from __future__ import annotations
@@ -21,13 +21,11 @@ from clutter_gym.noise.action import ActionChannel
 from clutter_gym.noise.dynamics import sample_dynamics
 from clutter_gym.noise.profiles import NoiseProfile
 from clutter_gym.noise.timing import SampleHoldDelay
-from clutter_gym.robots import DiffDriveRobot, PandaArm, RobotState
+from clutter_gym.interfaces import Arena, Layout, Robot, Sensor, Task
 from clutter_gym.robots.safety import SafetyFilter
-from clutter_gym.sensors import Sensor
+from clutter_gym.robots.state import RobotState
 from clutter_gym.sim import Sim
-from clutter_gym.tasks import NavigateTask, ReachTask
 from clutter_gym.transforms import yaw_quat
-from clutter_gym.worlds import ClutterArena, ReachScene, Scene, TabletopArena
 
 RENDER_MODES = ("human", "rgb_array")
 
@@ -55,11 +53,11 @@ class ClutterEnv(gym.Env):
     def __init__(
         self,
         sim: Sim,
-        robot: DiffDriveRobot | PandaArm,
-        arena: ClutterArena | TabletopArena,
+        robot: Robot,
+        arena: Arena,
         sensors: Sequence[Sensor],
         checker: CollisionChecker,
-        task: NavigateTask | ReachTask,
+        task: Task,
         control_hz: float,
         noise: NoiseProfile,
         render_mode: str | None = None,
@@ -87,13 +85,13 @@ class ClutterEnv(gym.Env):
         self.observation_space = spaces.Dict(
             {**{key: space for s in self.sensors for key, space in s.spaces.items()}, **task.spaces, **robot.spaces}
         )
-        self.scene: Scene | ReachScene | None = None
+        self.scene: Layout | None = None
 
     # ------------------------------------------------------------------------------------------ episode
     def reset(
         self, *, seed: int | None = None, options: Mapping[str, Any] | None = None
     ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
-        """Start an episode on a new seeded layout, or on ``options["scene"]`` (see README, "Scene format")."""
+        """Start an episode on a new seeded layout, or on ``options["scene"]`` (format: docs/envs.md, "Scene format")."""
         super().reset(seed=seed)
         scene = self.arena.choose_scene(self.np_random, options)
         # Noise draws come from a generator seeded by one draw of np_random, taken whatever the profile: the

@@ -97,7 +97,7 @@ class ClutterNavEnv(ClutterEnv):
 
     ``noise`` names a profile (``"none"``, ``"nominal"``, ``"low-cost"``, ``"harsh"``) or overrides one per
     parameter, e.g. ``{"profile": "nominal", "lidar": {"range_sigma": 0.02}}`` (see :mod:`clutter_gym.noise` and
-    the README). It sets sensor noise, sensor rates and latencies, action latency and noise, and per-episode
+    docs/noise.md). It sets sensor noise, sensor rates and latencies, action latency and noise, and per-episode
     dynamics randomisation. Noise is drawn from a generator seeded from ``np_random`` at each reset, so a seed
     gives the same layouts under every profile. Rewards and termination always use ground truth.
 
@@ -194,10 +194,10 @@ class ClutterNavEnv(ClutterEnv):
             subgoal_lookahead=subgoal_lookahead,
         )
         model = RobotCollisionModel.from_urdf(
-            robot.urdf_path, check_fidelity(collision_fidelity), ("base_link", *TRACKED_LINKS), collision_padding
+            robot.urdf_path, check_fidelity(collision_fidelity), (robot.base_link, *TRACKED_LINKS), collision_padding
         )
         checker = CollisionChecker(
-            model, base_link="base_link", contact_tolerance=contact_tolerance,
+            model, base_link=robot.base_link, contact_tolerance=contact_tolerance,
             clearance_range=math.sqrt(2.0) * arena_size, dt=1.0 / control_hz,
         )
         safety = _safety_filter(SafetyConfig(safety_horizon, safety_margin, safety_recovery), sensors, lidar, robot,

@@ -1,4 +1,4 @@
-"""The one gateway to pybullet (DESIGN.md rule 5): a physics client, bodies by name, batched reads.
+"""The one gateway to pybullet (docs/architecture.md, "Rules"): a physics client, bodies by name, batched reads.
 
 Every pybullet call in clutter-gym goes through :class:`Sim`. It talks to pybullet directly with its own
 ``physicsClientId`` rather than through ``pybullet_utils.BulletClient``, whose ``__getattr__`` builds a

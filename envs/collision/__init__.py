@@ -1,4 +1,4 @@
-"""The FCL side (DESIGN.md rule 5: python-fcl is imported only in this package).
+"""The FCL side: python-fcl is imported only in this package (docs/architecture.md, "Rules").
 
 URDF collision elements (:mod:`.urdf_geometry`) become FCL shapes at a fidelity level (:mod:`.fidelity`), placed
 at link poses by a :class:`RobotCollisionModel` that also answers self-collision queries for the pairs an

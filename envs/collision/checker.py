@@ -94,9 +94,9 @@ def obstacle_shape(o: Obstacle) -> fcl.CollisionGeometry:
 
 def obstacle_object(o: Obstacle, shape: fcl.CollisionGeometry | None = None) -> fcl.CollisionObject:
     """FCL object for an obstacle (its bottom face at height ``o.z``), optionally with a given shape."""
-    half = 0.5 * o.yaw
-    q_wxyz = np.array([np.cos(half), 0.0, 0.0, np.sin(half)])
-    return fcl.CollisionObject(shape or obstacle_shape(o), fcl.Transform(q_wxyz, list(o.centre)))
+    c, s = np.cos(o.yaw), np.sin(o.yaw)  # a rotation matrix: FCL's quaternions are (w, x, y, z), ours (x, y, z, w)
+    rotation = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    return fcl.CollisionObject(shape or obstacle_shape(o), fcl.Transform(rotation, list(o.centre)))
 
 
 def _half_extents(o: Obstacle) -> tuple[float, float, float]:

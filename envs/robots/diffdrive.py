@@ -56,6 +56,7 @@ class DiffDriveRobot:
     """
 
     name = "diffbot"
+    base_link = "base_link"
     urdf = "robots/diffbot.urdf"
 
     def __init__(self, config: DiffDriveConfig | None = None) -> None:

@@ -1,6 +1,6 @@
 """Sensors: clean reads of the world (LIDAR, IMU, camera), each followed by its noise chain."""
 
-from clutter_gym.sensors.base import Sensor
+from clutter_gym.interfaces import Sensor
 from clutter_gym.sensors.camera import SEGMENTATION_CLASSES, Camera, CameraConfig
 from clutter_gym.sensors.imu import Imu, ImuConfig
 from clutter_gym.sensors.lidar import Lidar, LidarConfig

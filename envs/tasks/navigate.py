@@ -13,6 +13,7 @@ import numpy as np
 from gymnasium import spaces
 
 from clutter_gym.collision import CollisionReport
+from clutter_gym.interfaces import StepOutcome
 from clutter_gym.robots.state import RobotState
 from clutter_gym.worlds.clutter import ClutterSpec
 from clutter_gym.worlds.path_distance import PathDistance
@@ -51,17 +52,6 @@ class NavRewardWeights:
         for name, value in asdict(self).items():
             if not (math.isfinite(value) and 0.0 <= value <= 1e4):
                 raise ValueError(f"reward weight {name} must be in [0, 1e4], got {value!r}")
-
-
-@dataclass(frozen=True, slots=True)
-class StepOutcome:
-    """Reward, its signed terms, and the episode-ending flags of one step."""
-
-    reward: float
-    terms: dict[str, float]
-    terminated: bool
-    is_success: bool
-    cost: float
 
 
 class NavigateTask:

@@ -10,7 +10,7 @@ from gymnasium import spaces
 
 from clutter_gym.collision import CollisionReport
 from clutter_gym.robots.state import RobotState
-from clutter_gym.tasks.navigate import StepOutcome
+from clutter_gym.interfaces import StepOutcome
 from clutter_gym.worlds.tabletop import ReachScene
 
 

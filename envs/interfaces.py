@@ -1,0 +1,158 @@
+"""The contracts between :class:`clutter_gym.core.ClutterEnv` and its parts: robot, arena, task and sensor.
+
+They are structural (``typing.Protocol``): a part never inherits from them, it only has the members. ``core.py``
+is typed against these and nothing else, so a new robot, world or task is a new module that has these members
+(docs/architecture.md walks through adding one). Frames: world z up, metres, radians; quaternions are
+(x, y, z, w) everywhere, as pybullet returns them.
+
+The scene is the one value the arena and the task of an env must agree on: the arena draws it (or parses the
+user's ``options["scene"]``), the robot starts at ``scene.start``, and the task reads its goal from it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+import numpy as np
+from gymnasium import spaces
+
+from clutter_gym.collision import CollisionReport
+from clutter_gym.noise.dynamics import DynamicsSample
+from clutter_gym.robots.state import RobotState
+from clutter_gym.sim import Sim
+from clutter_gym.worlds.scene import Obstacle
+
+
+class Layout(Protocol):
+    """One episode's scene (plain, frozen data): obstacles, the robot's start, and the task's goal fields.
+
+    ``start`` is whatever :meth:`Robot.reset_to` takes: (x, y, yaw) for a mobile base, joint positions for an
+    arm. ``to_dict()`` gives the ``options["scene"]`` form that reproduces the scene.
+    """
+
+    obstacles: tuple[Obstacle, ...]
+    start: tuple[float, ...]
+
+    def to_dict(self) -> dict[str, Any]: ...
+
+
+class Robot(Protocol):
+    """A URDF robot: loads itself once, maps normalised actions to motor commands, reads its state.
+
+    Attributes:
+        name: short name, used in asset and cache paths.
+        base_link: the URDF's root link (its pose is ``RobotState.position`` / ``rotation``).
+        action_space: the env's action space (``Box(-1, 1, ...)``).
+        spaces: the observation entries :meth:`observe` fills.
+        body: pybullet body id once loaded.
+    """
+
+    name: str
+    base_link: str
+    action_space: spaces.Box
+    spaces: dict[str, spaces.Space]
+
+    @property
+    def body(self) -> int: ...
+
+    def load(self, sim: Sim) -> int:
+        """Load the URDF into ``sim`` (once per env) and look up joints and links; returns the body id."""
+
+    def apply_dynamics(self, sample: DynamicsSample) -> None:
+        """This episode's randomised masses, friction, restitution and motor strength."""
+
+    def reset_to(self, start: tuple[float, ...]) -> None:
+        """Teleport to ``scene.start`` at rest."""
+
+    def apply_action(self, action: np.ndarray) -> None:
+        """Set motor targets for one control period from a clipped, normalised action."""
+
+    def state(self) -> RobotState:
+        """Ground truth after a step, from batched pybullet reads."""
+
+    def observe(self, state: RobotState) -> dict[str, np.ndarray]:
+        """Proprioceptive observation entries."""
+
+
+class Arena(Protocol):
+    """The world around the robot: fixed structure built once, clutter moved into place per episode."""
+
+    def load(self, sim: Sim) -> None:
+        """Build the fixed structure (walls, a table) once per env."""
+
+    def choose_scene(self, rng: np.random.Generator, options: Mapping[str, Any] | None) -> Layout:
+        """The user's ``options["scene"]`` (validated: errors name the field) or a layout drawn from ``rng``."""
+
+    def place(self, scene: Layout) -> tuple[tuple[Obstacle, ...], list[int]]:
+        """Move pooled bodies into ``scene``; returns every obstacle (fixed structure included) and its body ids,
+        in the same order, for the collision checker."""
+
+    def overview_camera(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+        """(eye, target) of the ``rgb_array`` view, world frame."""
+
+
+@dataclass(frozen=True, slots=True)
+class StepOutcome:
+    """Reward, its signed terms, and the episode-ending flags of one step."""
+
+    reward: float
+    terms: dict[str, float]
+    terminated: bool
+    is_success: bool
+    cost: float
+
+
+class Task(Protocol):
+    """Turns ground truth (never noisy observations) into named reward terms, a cost and termination.
+
+    Attributes:
+        success_radius: metres; the goal marker's size.
+        spaces: the observation entries :meth:`observe` fills (the goal, as the robot would know it).
+    """
+
+    success_radius: float
+    spaces: dict[str, spaces.Space]
+
+    def marker_position(self, scene: Layout) -> tuple[float, float, float]:
+        """Where the goal marker is drawn, world frame."""
+
+    def reset(self, scene: Layout, state: RobotState) -> None:
+        """Start an episode on ``scene`` with the robot in ``state``."""
+
+    def observe(self, state: RobotState, report: CollisionReport) -> dict[str, np.ndarray]:
+        """Goal and clearance observation entries."""
+
+    def evaluate(self, state: RobotState, report: CollisionReport, action: np.ndarray) -> StepOutcome:
+        """Reward terms, cost and termination of the step that led to ``state`` with the agent's ``action``."""
+
+
+class Sensor(Protocol):
+    """A noisy reading in physical units, and its observation form.
+
+    A sensor is a clean read of the world and a chain of pure noise functions (``clutter_gym.noise``); the env
+    runs each sensor's sample-and-hold and delay line (:class:`clutter_gym.noise.timing.SampleHoldDelay`).
+
+    Attributes:
+        name: the sensor's name in ``sensors=(...)`` and in the noise profile's timing.
+        spaces: observation keys this sensor fills, with their spaces.
+        read_every_step: the sensor must be read every control step even while its output is held (state that
+            integrates over time, like the IMU's finite difference).
+    """
+
+    name: str
+    spaces: dict[str, spaces.Space]
+    read_every_step: bool
+
+    def reset(self, sim: Sim, state: RobotState, rng: np.random.Generator) -> None:
+        """Start an episode: draw per-episode errors (biases, gains) from ``rng``."""
+
+    def read(self, sim: Sim, state: RobotState, rng: np.random.Generator) -> Any:
+        """Clean reading plus noise, in physical units. Never writes to the world."""
+
+    def observe(self, reading: Any) -> dict[str, np.ndarray]:
+        """Observation entries (normalised/clipped as documented by the env) from a reading."""
+
+    def info(self, reading: Any) -> dict[str, Any]:
+        """``info`` entries that carry the physical reading (may be empty)."""
