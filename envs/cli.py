@@ -91,7 +91,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", default="out/demo", help="folder for the GIF")
     p.add_argument("--noise", choices=PROFILE_NAMES, default="none", help="sensor/actuation noise profile")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
-    p = sub.add_parser("profiles", help="list the noise profiles; print one's parameters; print the README table",
+    p = sub.add_parser("profiles", help="list the noise profiles; print one's parameters; print the markdown table of docs/noise.md",
                        description="List the noise profiles and their parameters, or print one profile's resolved "
                                    "parameters as JSON.")
     p.add_argument("name", nargs="?", choices=PROFILE_NAMES, help="print this profile's resolved parameters as JSON")

@@ -62,8 +62,8 @@ class ClutterReachEnv(ClutterEnv):
 
     ## Starting state
 
-    A new layout per reset from the env's ``np_random`` (or exactly ``options["scene"]``, format in the
-    README): up to ``n_obstacles`` boxes and cylinders and, with ``shelf=True``, a shelf on the table; the arm at
+    A new layout per reset from the env's ``np_random`` (or exactly ``options["scene"]``, format in
+    docs/envs.md): up to ``n_obstacles`` boxes and cylinders and, with ``shelf=True``, a shelf on the table; the arm at
     rest in the ready pose plus uniform noise of +-0.1 rad per joint, clear of everything; the target at least
     0.06 m from every obstacle within the arm's reach, inside the shelf in 30% of layouts.
 

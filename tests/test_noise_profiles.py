@@ -16,7 +16,7 @@ from clutter_gym.noise.profiles import (
     resolve_noise,
 )
 
-README = Path(__file__).resolve().parents[1] / "README.md"
+NOISE_DOC = Path(__file__).resolve().parents[1] / "docs" / "noise.md"
 
 
 def test_the_four_profiles_exist_and_none_is_clean():
@@ -84,7 +84,7 @@ def test_bad_specs_name_what_is_wrong(spec, pattern):
         resolve_noise(spec)
 
 
-def test_readme_profile_table_is_the_generated_one():
-    assert profile_table_markdown() in README.read_text(encoding="utf-8"), (
-        "README's profile table is stale: regenerate it with `clutter-gym profiles`"
+def test_docs_profile_table_is_the_generated_one():
+    assert profile_table_markdown() in NOISE_DOC.read_text(encoding="utf-8"), (
+        "docs/noise.md's profile table is stale: regenerate it with `clutter-gym profiles`"
     )

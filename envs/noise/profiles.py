@@ -143,7 +143,7 @@ def _build(name: str, values: Mapping[str, Mapping[str, Any]]) -> NoiseProfile:
 
 
 def profile_table_markdown() -> str:
-    """The README's profile table: one row per parameter set by any profile, with value and source per profile."""
+    """The profile table of docs/noise.md: one row per parameter set by any profile, with value and source per profile."""
     names = [n for n in PROFILE_NAMES if n != "none"]
     rows: dict[tuple[str, str], dict[str, tuple[float, str]]] = {}
     for name in names:
