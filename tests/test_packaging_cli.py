@@ -47,6 +47,15 @@ def test_wheel_carries_the_assets(tmp_path):
     assert "clutter_gym/training/baselines.py" in names
     assert "clutter_gym/collision/checker.py" in names
     assert "clutter_gym/noise/profiles.yaml" in names
+    assert "clutter_gym/py.typed" in names  # type checkers read the package's hints
+    metadata = next(n for n in names if n.endswith(".dist-info/METADATA"))
+    assert "License: MIT" in zipfile.ZipFile(wheel).read(metadata).decode()
+
+
+def test_version_is_the_installed_distribution_version():
+    from importlib.metadata import version
+
+    assert clutter_gym.__version__ == version("clutter-gym") != "0+unknown"
 
 
 def test_demo_cli_writes_a_gif_and_a_clean_summary(tmp_path):
