@@ -25,6 +25,7 @@ import numpy as np
 from clutter_gym.collision.distance import signed_distance
 from clutter_gym.collision.robot_model import RobotCollisionModel
 from clutter_gym.robots.state import RobotState
+from clutter_gym.transforms import quat_to_matrix, yaw_quat
 from clutter_gym.worlds.scene import Obstacle
 
 #: Clearance reported when there is nothing to measure against (an empty scene without walls), metres.
@@ -94,8 +95,9 @@ def obstacle_shape(o: Obstacle) -> fcl.CollisionGeometry:
 
 def obstacle_object(o: Obstacle, shape: fcl.CollisionGeometry | None = None) -> fcl.CollisionObject:
     """FCL object for an obstacle (its bottom face at height ``o.z``), optionally with a given shape."""
-    c, s = np.cos(o.yaw), np.sin(o.yaw)  # a rotation matrix: FCL's quaternions are (w, x, y, z), ours (x, y, z, w)
-    rotation = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    # a rotation matrix, not a quaternion: FCL's are (w, x, y, z), ours (x, y, z, w); bit for bit the matrix FCL
+    # would build from the quaternion
+    rotation = quat_to_matrix(np.array(yaw_quat(o.yaw)))
     return fcl.CollisionObject(shape or obstacle_shape(o), fcl.Transform(rotation, list(o.centre)))
 
 
