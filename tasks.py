@@ -1,10 +1,10 @@
 #!/usr/bin/env python3
 """Project commands that need nothing but Python 3.10+ and pip: ``python3 tasks.py main|demo|test|bench``.
 
-Each command first makes ``.venv`` (once) and installs clutter-gym into it with its test, training, benchmark and Ray extras,
-with torch pinned through ``constraints.txt`` (an unpinned torch pulls several GB of CUDA wheels). The package
+Each command first makes ``.venv`` (once) and installs clutter-gym into it with its test, training, benchmark and Ray
+extras, with torch pinned through ``constraints.txt`` (an unpinned torch pulls several GB of CUDA wheels). The package
 itself is reinstalled (not in editable mode) whenever its sources change, so tests always import what a user's
-``pip install .`` would give them.
+``pip install .`` would give them. ``test`` runs ``ruff check .`` (settings in pyproject.toml) before pytest.
 """
 
 from __future__ import annotations
@@ -26,7 +26,8 @@ def _digest(paths: tuple[str, ...]) -> str:
     h = hashlib.sha256()
     for name in paths:
         path = ROOT / name
-        files = sorted(p for p in path.rglob("*") if p.is_file() and "__pycache__" not in p.parts) if path.is_dir() else [path]
+        files = (sorted(p for p in path.rglob("*") if p.is_file() and "__pycache__" not in p.parts)
+                 if path.is_dir() else [path])
         for f in files:
             h.update(str(f.relative_to(ROOT)).encode())
             h.update(f.read_bytes())
@@ -66,6 +67,9 @@ def main(argv: list[str]) -> int:
         print(f"usage: python3 tasks.py {{{'|'.join(commands)}}} [extra arguments]", file=sys.stderr)
         return 2
     ensure_installed()
+    if argv[0] == "test" and subprocess.run([str(PY), "-m", "ruff", "check", "."], cwd=ROOT).returncode != 0:
+        print("ruff: style errors above (ruff check --fix . fixes import order)", file=sys.stderr)
+        return 1
     return subprocess.run([*commands[argv[0]], *argv[1:]], cwd=ROOT).returncode
 
 

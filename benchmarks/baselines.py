@@ -29,8 +29,8 @@ from clutter_gym.atomic import write_text_atomically
 from clutter_gym.training import load
 from clutter_gym.training.baselines import PotentialFieldNavigator, StraightLineReacher
 from clutter_gym.training.config import EVAL_SEED
-from clutter_gym.training.joint_planner import JointPlannerReacher
 from clutter_gym.training.evaluate import rollouts, summarize
+from clutter_gym.training.joint_planner import JointPlannerReacher
 
 #: The subgoal lookahead the planner reference runs with, metres.
 PLANNER_LOOKAHEAD = 0.5

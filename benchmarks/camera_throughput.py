@@ -16,9 +16,9 @@ import time
 
 import gymnasium as gym
 import numpy as np
-from peer_drones import make_drone_camera_workload
 
 import clutter_gym  # noqa: F401  (registers the envs)
+from peer_drones import make_drone_camera_workload
 
 CAMERA = {"sensors": ("lidar", "imu", "camera"), "camera_modes": ("rgb", "depth")}
 VARIANTS = {

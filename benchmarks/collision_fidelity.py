@@ -33,10 +33,11 @@ import time
 from functools import partial
 from pathlib import Path
 
-import clutter_gym  # noqa: F401  (registers the envs)
 import fcl
 import gymnasium as gym
 import numpy as np
+
+import clutter_gym  # noqa: F401  (registers the envs)
 from clutter_gym.collision import (
     FIDELITY_LEVELS,
     CollisionChecker,
@@ -101,7 +102,8 @@ def near_configs(robot: Robot, scenes: list[tuple[Obstacle, ...]], per_scene: in
         while len(keep) < per_scene:
             q, base = draw(4 * per_scene)
             pos, rot = robot.poses(q, base)
-            keep += [(q[i], pos[i], rot[i]) for i in range(len(q)) if 0.0 < robot.clearance("mesh", pos[i], rot[i]) <= NEAR]
+            keep += [(q[i], pos[i], rot[i]) for i in range(len(q))
+                     if 0.0 < robot.clearance("mesh", pos[i], rot[i]) <= NEAR]
         keep = keep[:per_scene]
         out.append({"obstacles": obstacles, "q": np.array([k[0] for k in keep]),
                     "pos": np.array([k[1] for k in keep]), "rot": np.array([k[2] for k in keep])})
@@ -150,7 +152,8 @@ class BulletWorld:
         info = [pb.getJointInfo(self.robot, j, physicsClientId=self.cid) for j in
                 range(pb.getNumJoints(self.robot, physicsClientId=self.cid))]
         self.joint = {i[1].decode(): i[0] for i in info}
-        self.collision_links = [i[0] for i in info if pb.getCollisionShapeData(self.robot, i[0], physicsClientId=self.cid)]
+        self.collision_links = [i[0] for i in info
+                                if pb.getCollisionShapeData(self.robot, i[0], physicsClientId=self.cid)]
         self.bodies: list[int] = []
 
     def set_scene(self, obstacles: list[Obstacle]) -> None:
@@ -158,9 +161,11 @@ class BulletWorld:
             pb.removeBody(b, physicsClientId=self.cid)
         self.bodies = []
         for o in obstacles:
-            shape = (pb.createCollisionShape(pb.GEOM_CYLINDER, radius=o.radius, height=o.size[2], physicsClientId=self.cid)
+            shape = (pb.createCollisionShape(pb.GEOM_CYLINDER, radius=o.radius, height=o.size[2],
+                                             physicsClientId=self.cid)
                      if o.shape == "cylinder" else
-                     pb.createCollisionShape(pb.GEOM_BOX, halfExtents=[0.5 * s for s in o.size], physicsClientId=self.cid))
+                     pb.createCollisionShape(pb.GEOM_BOX, halfExtents=[0.5 * s for s in o.size],
+                                             physicsClientId=self.cid))
             quat = pb.getQuaternionFromEuler((0.0, 0.0, o.yaw))
             self.bodies.append(pb.createMultiBody(0.0, shape, basePosition=o.centre, baseOrientation=quat,
                                                   physicsClientId=self.cid))
@@ -193,7 +198,8 @@ def pybullet_table(panda: Robot, cases: list[dict], fcl_res: dict) -> dict[str, 
     world, names = BulletWorld(panda.urdf), [j.name for j in panda.kin.joints]
     res: dict[str, list[float]] = {k: [] for k in ("loop", "broad", "convex", "mesh", "d_loop", "d_broad")}
     methods = {"loop": lambda p, r: world.clearance(), "broad": lambda p, r: world.clearance_broadphase(),
-               "convex": lambda p, r: panda.clearance("convex", p, r), "mesh": lambda p, r: panda.clearance("mesh", p, r)}
+               "convex": lambda p, r: panda.clearance("convex", p, r),
+               "mesh": lambda p, r: panda.clearance("mesh", p, r)}
     for case in cases:
         world.set_scene(list(case["obstacles"]))
         for level in ("convex", "mesh"):
@@ -287,7 +293,8 @@ def scaling_table(panda: Robot, sizes: list[int], n_configs: int, budget_s: floa
     pb.disconnect(world.cid)
     if 100 in tree_us and 10000 in tree_us:
         ratio = tree_us[10000] / tree_us[100]
-        emit(f"\nFCL tree cost at 10,000 / at 100 obstacles: {ratio:.2f}x (target <= 3x: {'met' if ratio <= 3 else 'NOT met'})")
+        emit(f"\nFCL tree cost at 10,000 / at 100 obstacles: {ratio:.2f}x "
+             f"(target <= 3x: {'met' if ratio <= 3 else 'NOT met'})")
 
 
 def env_table(rounds: int, steps: int) -> None:

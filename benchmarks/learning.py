@@ -19,8 +19,8 @@ from pathlib import Path
 import numpy as np
 
 from clutter_gym.atomic import write_text_atomically
-from clutter_gym.training.figures import plt, save_figure
 from clutter_gym.training.commands import add_settings_options, settings
+from clutter_gym.training.figures import plt, save_figure
 from clutter_gym.training.report import WINDOW, main_job, prepare_run, rolling_rate
 
 
@@ -49,8 +49,10 @@ def main() -> None:
         axes[0].plot(steps, success, label=f"seed {seed}")
         axes[1].plot(steps, collision, label=f"seed {seed}")
         quarters = [int(np.searchsorted(steps, q * steps[-1])) for q in (0.25, 0.5, 0.75)] + [len(steps) - 1]
-        at = " / ".join(f"{success[min(i, len(steps) - 1)]:.0%}, {collision[min(i, len(steps) - 1)]:.0%}" for i in quarters)
-        ev = {p: json.loads((out / f"seed{seed}" / f"eval-{p}.json").read_text())["metrics"] for p in ("none", "nominal")}
+        at = " / ".join(f"{success[min(i, len(steps) - 1)]:.0%}, {collision[min(i, len(steps) - 1)]:.0%}"
+                        for i in quarters)
+        ev = {p: json.loads((out / f"seed{seed}" / f"eval-{p}.json").read_text())["metrics"]
+              for p in ("none", "nominal")}
         lines.append(f"| {seed} | {wall / 60:.1f} (incl. eval) | {int(steps[-1]):,} | {at} | "
                      f"{ev['none']['success_rate']['value']:.0%} | {ev['none']['collision_rate']['value']:.0%} | "
                      f"{ev['nominal']['success_rate']['value']:.0%} | {ev['nominal']['collision_rate']['value']:.0%} |")

@@ -22,13 +22,13 @@ import time
 
 import gymnasium as gym
 import numpy as np
-from throughput import EnvRunner, smooth_actions
 
 import clutter_gym  # noqa: F401  (registers the envs)
 import clutter_gym.sensors.imu
 import clutter_gym.sensors.lidar
 from clutter_gym.noise.profiles import PROFILE_NAMES
 from clutter_gym.noise.timing import SampleHoldDelay
+from throughput import EnvRunner, smooth_actions
 
 SENSOR_NOISE_ONLY = {
     "lidar": {"rate_hz": 0.0},

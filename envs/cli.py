@@ -1,4 +1,5 @@
-"""`clutter-gym` command line: ``demo``, ``profiles``, and the training commands ``train``, ``eval``, ``sweep``, ``report``."""
+"""`clutter-gym` command line: ``demo``, ``profiles``, and the training commands ``train``, ``eval``, ``sweep``,
+``report``."""
 
 from __future__ import annotations
 
@@ -15,8 +16,8 @@ import clutter_gym  # noqa: F401  (registers the envs)
 from clutter_gym import ENV_IDS
 from clutter_gym.noise.profiles import PROFILE_NAMES, profile_description, profile_table_markdown, resolve_noise
 from clutter_gym.training import commands as training_commands
-from clutter_gym.training.commands import UserError, positive_int
 from clutter_gym.training.baselines import PotentialFieldNavigator
+from clutter_gym.training.commands import UserError, positive_int
 from clutter_gym.video import write_video
 
 
@@ -91,7 +92,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", default="out/demo", help="folder for the GIF")
     p.add_argument("--noise", choices=PROFILE_NAMES, default="none", help="sensor/actuation noise profile")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
-    p = sub.add_parser("profiles", help="list the noise profiles; print one's parameters; print the markdown table of docs/noise.md",
+    p = sub.add_parser("profiles", help="list the noise profiles; print one's parameters; print the markdown table "
+                                        "of docs/noise.md",
                        description="List the noise profiles and their parameters, or print one profile's resolved "
                                    "parameters as JSON.")
     p.add_argument("name", nargs="?", choices=PROFILE_NAMES, help="print this profile's resolved parameters as JSON")

@@ -17,11 +17,11 @@ import numpy as np
 from gymnasium import spaces
 
 from clutter_gym.collision import CollisionChecker, CollisionReport
+from clutter_gym.interfaces import Arena, Layout, Robot, Sensor, Task
 from clutter_gym.noise.action import ActionChannel
 from clutter_gym.noise.dynamics import sample_dynamics
 from clutter_gym.noise.profiles import NoiseProfile
 from clutter_gym.noise.timing import SampleHoldDelay
-from clutter_gym.interfaces import Arena, Layout, Robot, Sensor, Task
 from clutter_gym.robots.safety import SafetyFilter
 from clutter_gym.robots.state import RobotState
 from clutter_gym.sim import Sim
@@ -91,7 +91,8 @@ class ClutterEnv(gym.Env):
     def reset(
         self, *, seed: int | None = None, options: Mapping[str, Any] | None = None
     ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
-        """Start an episode on a new seeded layout, or on ``options["scene"]`` (format: docs/envs.md, "Scene format")."""
+        """Start an episode on a new seeded layout, or on ``options["scene"]`` (format: docs/envs.md,
+        "Scene format")."""
         super().reset(seed=seed)
         scene = self.arena.choose_scene(self.np_random, options)
         # Noise draws come from a generator seeded by one draw of np_random, taken whatever the profile: the

@@ -25,5 +25,6 @@ def prism_mesh(radius: float, height: float, sides: int) -> tuple[list[list[floa
     i = np.arange(n)
     j = (i + 1) % n
     top = np.full(n, 2 * n)
-    faces = np.concatenate([np.stack([i, j, n + j], 1), np.stack([i, n + j, n + i], 1), np.stack([top, n + i, n + j], 1)])
+    faces = np.concatenate([np.stack([i, j, n + j], 1), np.stack([i, n + j, n + i], 1),
+                            np.stack([top, n + i, n + j], 1)])
     return vertices.tolist(), faces.ravel().tolist()

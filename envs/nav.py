@@ -11,10 +11,10 @@ import numpy as np
 from clutter_gym.collision import CollisionChecker, RobotCollisionModel, check_fidelity
 from clutter_gym.collision.kinematics import UrdfKinematics
 from clutter_gym.core import ClutterEnv, check_render_mode
+from clutter_gym.noise.profiles import NoiseProfile, resolve_noise
 from clutter_gym.robots import DiffDriveConfig, DiffDriveRobot
 from clutter_gym.robots.diffdrive import TRACKED_LINKS
 from clutter_gym.robots.safety import SafetyConfig, SafetyFilter
-from clutter_gym.noise.profiles import NoiseProfile, resolve_noise
 from clutter_gym.sensors import CameraConfig, ImuConfig, LidarConfig, build_sensors
 from clutter_gym.sim import Sim
 from clutter_gym.tasks import NavigateTask, NavRewardWeights
@@ -67,8 +67,9 @@ class ClutterNavEnv(ClutterEnv):
 
     Sum of signed terms, each in ``info["reward_terms"]``; weights are constructor arguments:
     ``progress`` (+progress_weight per metre the shortest path to the goal around the clutter shrinks),
-    ``success`` (+success_weight once), ``contact`` (-contact_weight per step in contact), ``clearance`` (-clearance_weight * (margin - clearance) /
-    margin per step when clearance < clearance_margin), ``control`` (-control_weight * |a|^2),
+    ``success`` (+success_weight once), ``contact`` (-contact_weight per step in contact),
+    ``clearance`` (-clearance_weight * (margin - clearance) / margin per step when clearance < clearance_margin),
+    ``control`` (-control_weight * |a|^2),
     ``time`` (-time_weight per step), and only when ``reverse_weight > 0`` ``reverse`` (-reverse_weight per m/s
     of backward speed, per step). ``info["cost"]`` is 1.0 in a step with contact, else 0.0.
 
@@ -118,7 +119,8 @@ class ClutterNavEnv(ClutterEnv):
 
     ``subgoal_lookahead > 0`` makes the env map-based: the ``subgoal`` entry comes from a path planned on the
     known layout (shortest on a costmap that charges passing within 0.25 m of touching; see
-    ``worlds/path_distance.py``), as a global planner on a map hands waypoints to a local controller. The default env is mapless: it knows only the goal's relative position.
+    ``worlds/path_distance.py``), as a global planner on a map hands waypoints to a local controller. The default
+    env is mapless: it knows only the goal's relative position.
 
     Defaults are in the signature.
 
@@ -226,7 +228,8 @@ def check_rates(physics_hz: float, control_hz: float, solver_iterations: int) ->
         raise ValueError(
             f"physics_hz must be an integer multiple of control_hz; {physics_hz} / {control_hz} = {ratio:.6g}"
         )
-    if isinstance(solver_iterations, bool) or not isinstance(solver_iterations, int) or not 1 <= solver_iterations <= 1000:
+    if (isinstance(solver_iterations, bool) or not isinstance(solver_iterations, int)
+            or not 1 <= solver_iterations <= 1000):
         raise ValueError(f"solver_iterations must be an integer in [1, 1000], got {solver_iterations!r}")
 
 

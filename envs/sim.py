@@ -525,7 +525,8 @@ class Sim:
 
     def body_ids(self) -> list[int]:
         """Ids of every body in the world."""
-        return [pb.getBodyUniqueId(i, physicsClientId=self._cid) for i in range(pb.getNumBodies(physicsClientId=self._cid))]
+        return [pb.getBodyUniqueId(i, physicsClientId=self._cid)
+                for i in range(pb.getNumBodies(physicsClientId=self._cid))]
 
     def body_names(self) -> dict[int, str]:
         """Body id -> name of every named body (see :meth:`load_urdf`, :meth:`add_ground`, :meth:`add_marker`)."""

@@ -13,7 +13,8 @@ VIDEO_SUFFIXES = (".gif", ".mp4")
 
 
 def write_video(path: str | Path, frames: list[np.ndarray], fps: float) -> Path:
-    """Write ``frames`` (H, W, 3 uint8) to ``path``; the format follows the suffix; the file appears whole or not at all.
+    """Write ``frames`` (H, W, 3 uint8) to ``path``; the format follows the suffix; the file appears whole or not
+    at all.
 
     Raises:
         ValueError: the suffix is not .gif or .mp4, or there are no frames.

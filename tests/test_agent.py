@@ -104,7 +104,8 @@ def test_runs_this_version_cannot_rebuild_give_a_clear_error(run, tmp_path):
     with pytest.raises(IncompatibleRunError, match=f"format {RUN_FORMAT + 1}.*use the version that wrote it"):
         load(copy)
     config.write_text(yaml.safe_dump({**data, "curriculum": {"stages": 3}}))
-    with pytest.raises(IncompatibleRunError, match=r"does not fit clutter-gym .*unknown config key\(s\) \['curriculum'\]"):
+    with pytest.raises(IncompatibleRunError,
+                       match=r"does not fit clutter-gym .*unknown config key\(s\) \['curriculum'\]"):
         load(copy)
     config.write_text(yaml.safe_dump(data))
     (copy / "model" / MODEL_FILE).write_bytes(b"PK\x03\x04 not a model")

@@ -89,7 +89,8 @@ def test_a_bad_hyperparameter_file_names_the_block_or_field(tmp_path):
 
 def test_env_kwargs_parse_yaml_values_and_dotted_keys():
     pairs = [env_kwarg(t) for t in ("obstacle_density=0.05", "sensors=[lidar, imu]", "terminate_on_collision=true",
-                                     "noise.lidar.range_sigma=0.02", "noise.lidar.rate_hz=10", "noise.imu.latency_steps=0")]
+                                     "noise.lidar.range_sigma=0.02", "noise.lidar.rate_hz=10",
+                                     "noise.imu.latency_steps=0")]
     assert nest(pairs) == {"obstacle_density": 0.05, "sensors": ["lidar", "imu"], "terminate_on_collision": True,
                            "noise": {"lidar": {"range_sigma": 0.02, "rate_hz": 10}, "imu": {"latency_steps": 0}}}
     assert nest([("a", 1), ("a", 2)]) == {"a": 2}  # the last one wins

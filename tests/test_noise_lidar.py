@@ -10,8 +10,8 @@ import pytest
 from clutter_gym.noise.lidar import (
     LidarEpisode,
     LidarNoise,
-    apply_lidar_noise,
     angle_offsets,
+    apply_lidar_noise,
     start_lidar_episode,
 )
 

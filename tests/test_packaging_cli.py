@@ -38,7 +38,8 @@ def test_missing_asset_names_the_path():
 
 def test_wheel_carries_the_assets(tmp_path):
     subprocess.run(
-        [sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q", "-w", str(tmp_path), str(REPO)],
+        [sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q", "-w", str(tmp_path),
+         str(REPO)],
         check=True,
     )
     (wheel,) = tmp_path.glob("clutter_gym-*.whl")

@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from clutter_gym.worlds.clutter import ClutterSpec, sample_scene
 from clutter_gym.tasks.navigate import SUBGOAL_PLAN_MARGIN
+from clutter_gym.worlds.clutter import ClutterSpec, sample_scene
 from clutter_gym.worlds.path_distance import PathDistance
 from clutter_gym.worlds.scene import Obstacle, Scene
 

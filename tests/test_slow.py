@@ -9,9 +9,8 @@ import gymnasium as gym
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
-from contact_agreement import measure  # noqa: E402
-
 from clutter_gym.training.baselines import PotentialFieldNavigator  # noqa: E402
+from contact_agreement import measure  # noqa: E402
 
 pytestmark = pytest.mark.slow
 

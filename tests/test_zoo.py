@@ -17,7 +17,8 @@ def test_the_zoo_blocks_carry_the_shipped_settings():
         assert block["policy"] == "MultiInputPolicy" and block["n_envs"] == config.n_envs
         assert block["n_timesteps"] == config.timesteps and block["env_kwargs"] == config.make_kwargs()
         assert block["learning_rate"] == config.ppo.learning_rate
-        assert block["policy_kwargs"] == {"net_arch": list(config.ppo.net_arch), "log_std_init": config.ppo.log_std_init}
+        assert block["policy_kwargs"] == {"net_arch": list(config.ppo.net_arch),
+                                          "log_std_init": config.ppo.log_std_init}
         assert block["normalize"] == {"norm_obs": config.ppo.normalize_obs, "norm_reward": config.ppo.normalize_reward}
 
 

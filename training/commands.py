@@ -201,7 +201,8 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
                    help="envs per training cell (default from the files; each cell steps them over one worker "
                         "process per core, so --workers 1 gives a cell every core)")
     p.add_argument("--ray-address", default=None,
-                   help="run cells as Ray tasks on this cluster ('auto', 'ray://host:10001', or 'local' for a local Ray)")
+                   help="run cells as Ray tasks on this cluster ('auto', 'ray://host:10001', or 'local' for a "
+                        "local Ray)")
     add_settings_options(p)
     p.set_defaults(handler=run_sweep)
 
@@ -210,7 +211,8 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
                                    "with clean sensors and under the nominal profile, and write report.md, a "
                                    "learning curve and an episode GIF.")
     p.add_argument("--env", choices=ENV_IDS, default="ClutterNav-v0", help="env id")
-    p.add_argument("--timesteps", type=positive_int, default=None, help="training budget in env steps (default from the files)")
+    p.add_argument("--timesteps", type=positive_int, default=None,
+                   help="training budget in env steps (default from the files)")
     p.add_argument("--seed", type=int, default=0, help="training seed")
     p.add_argument("--episodes", type=positive_int, default=100, help="evaluation episodes per profile")
     p.add_argument("--out", default="out/main", help="report folder (the run is OUT/run)")
@@ -268,7 +270,8 @@ def print_summary(summary: dict[str, Any]) -> None:
 
 
 def run_sweep(args: argparse.Namespace) -> int:
-    from clutter_gym.training.sweep import SweepSpec, check_spec, run_sweep as sweep
+    from clutter_gym.training.sweep import SweepSpec, check_spec
+    from clutter_gym.training.sweep import run_sweep as sweep
 
     with user_errors():
         spec = SweepSpec(env_id=args.env, train_noise=tuple(args.train_noise), eval_noise=tuple(args.eval_noise),

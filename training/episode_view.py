@@ -40,7 +40,8 @@ class EpisodeTrace:
     path: np.ndarray | None = None
 
 
-def record_episode(env: Any, policy: Callable[[Any, Any], tuple[np.ndarray, Any]], seed: int, title: str) -> EpisodeTrace:
+def record_episode(env: Any, policy: Callable[[Any, Any], tuple[np.ndarray, Any]], seed: int,
+                   title: str) -> EpisodeTrace:
     """Roll out one episode of ``policy`` (as :meth:`Agent.predict`) in a ClutterNav env, reset with ``seed``."""
     base = env.unwrapped
     lidar = next(s for s in base.sensors if s.name == "lidar")

@@ -265,7 +265,8 @@ class JointPlannerReacher:
             for _ in range(30):
                 q = _dls_step(self.checker, q, aim)
             reached = np.linalg.norm(self.checker.ee_positions(q) - aim, axis=1) <= 0.005
-            out.extend((q[i], i) for i in np.flatnonzero(reached) if _edge_free(self.checker, q[i], goals[i], RESOLUTION))
+            out.extend((q[i], i) for i in np.flatnonzero(reached)
+                       if _edge_free(self.checker, q[i], goals[i], RESOLUTION))
         return out
 
     def goals(self, start: np.ndarray, target: np.ndarray, rounds: int = 4, per_round: int = 64,

@@ -108,7 +108,8 @@ def write_episode_pair(run: RunDir, summary: dict, path: Path) -> Path:
 def rolling_rate(values: np.ndarray, window: int = WINDOW) -> np.ndarray:
     """Mean of each entry and the up to ``window - 1`` before it (the rate over the latest episodes)."""
     values = np.asarray(values, dtype=float)
-    return np.convolve(values, np.ones(window), "full")[: len(values)] / np.minimum(np.arange(1, len(values) + 1), window)
+    return (np.convolve(values, np.ones(window), "full")[: len(values)]
+            / np.minimum(np.arange(1, len(values) + 1), window))
 
 
 def plot_learning_curve(run: RunDir, path: Path) -> Path | None:

@@ -198,8 +198,9 @@ def write_csv(rows: list[dict[str, Any]], path: Path) -> Path:
 
 def write_heatmap(rows: list[dict[str, Any]], spec: SweepSpec, path: Path) -> Path:
     """Two panels (success rate, collision rate): rows = train profile, columns = eval profile, mean over seeds."""
-    from clutter_gym.training.figures import plt, save_figure
     import numpy as np
+
+    from clutter_gym.training.figures import plt, save_figure
 
     fig, axes = plt.subplots(1, 2, figsize=(4 + 1.6 * len(spec.eval_noise), 1.5 + 0.8 * len(spec.train_noise)))
     for ax, metric, cmap in zip(axes, ("success_rate", "collision_rate"), ("viridis", "magma_r")):

@@ -187,7 +187,8 @@ def _user_cache_dir() -> Path:
     return Path(base) / "clutter-gym" / "acm"
 
 
-def load_acm(urdf: str | Path, fidelity: str, samples: int = ACM_SAMPLES, seed: int = ACM_SEED) -> AllowedCollisionMatrix:
+def load_acm(urdf: str | Path, fidelity: str, samples: int = ACM_SAMPLES,
+             seed: int = ACM_SEED) -> AllowedCollisionMatrix:
     """The cached ACM of ``urdf`` at ``fidelity`` (shipped or user cache), generating and caching it if absent."""
     key = acm_key(urdf, fidelity, samples, seed)
     name = f"{Path(urdf).stem}-{key}.json"

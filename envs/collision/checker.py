@@ -294,7 +294,8 @@ class CollisionChecker:
 
     def _boxes_meeting(self, low: np.ndarray, high: np.ndarray) -> list[tuple[int, int]]:
         """(row, obstacle) pairs where the box [low, high] of a row (n, 3) overlaps the obstacle's world AABB."""
-        overlap = np.all((low[:, None] <= self._obstacle_high[None]) & (high[:, None] >= self._obstacle_low[None]), axis=2)
+        overlap = np.all((low[:, None] <= self._obstacle_high[None]) & (high[:, None] >= self._obstacle_low[None]),
+                         axis=2)
         return list(zip(*np.nonzero(overlap)))
 
     def _pair_distance(self, shape: int, obstacle: int) -> float:

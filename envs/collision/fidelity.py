@@ -69,7 +69,8 @@ def build_link_shapes(elements: Sequence[CollisionElement], fidelity: str) -> li
 def _element_shape(e: CollisionElement, fidelity: str) -> LinkShape:
     rotation = quat_to_matrix(e.quaternion)
     if e.kind != "mesh":
-        return LinkShape(e.link, _primitive(e.kind, e.size), e.position, rotation, e.kind, _primitive_radius(e.kind, e.size))
+        return LinkShape(e.link, _primitive(e.kind, e.size), e.position, rotation, e.kind,
+                         _primitive_radius(e.kind, e.size))
     vertices_radius = float(np.linalg.norm(e.mesh.vertices, axis=1).max())
     if fidelity == "mesh":
         return LinkShape(e.link, bvh_model(e.mesh), e.position, rotation, "mesh", vertices_radius, convex(e.mesh))
@@ -207,7 +208,8 @@ def _farthest_distance_fn(e: CollisionElement, r: np.ndarray):
             d = end - c
             axial = d @ axis
             perp = float(np.linalg.norm(d - axial * axis))
-            best = max(best, float(np.linalg.norm(d)) + radius if e.kind == "capsule" else np.hypot(axial, perp + radius))
+            best = max(best, float(np.linalg.norm(d)) + radius if e.kind == "capsule"
+                       else np.hypot(axial, perp + radius))
         return best
 
     return farthest

@@ -113,7 +113,9 @@ def resolve_noise(spec: str | Mapping[str, Any] | NoiseProfile | None) -> NoiseP
     if isinstance(spec, str):
         spec = {"profile": spec}
     if not isinstance(spec, Mapping):
-        raise ValueError(f"noise must be a profile name from {PROFILE_NAMES}, a mapping or a NoiseProfile, got {spec!r}")
+        raise ValueError(
+            f"noise must be a profile name from {PROFILE_NAMES}, a mapping or a NoiseProfile, got {spec!r}"
+        )
     name = spec.get("profile", "none")
     base = {section: {k: v for k, (v, _) in values.items()} for section, values in profile_sources(name).items()}
     overrides = {key: value for key, value in spec.items() if key != "profile"}
@@ -143,7 +145,8 @@ def _build(name: str, values: Mapping[str, Mapping[str, Any]]) -> NoiseProfile:
 
 
 def profile_table_markdown() -> str:
-    """The profile table of docs/noise.md: one row per parameter set by any profile, with value and source per profile."""
+    """The profile table of docs/noise.md: one row per parameter set by any profile, with value and source per
+    profile."""
     names = [n for n in PROFILE_NAMES if n != "none"]
     rows: dict[tuple[str, str], dict[str, tuple[float, str]]] = {}
     for name in names:

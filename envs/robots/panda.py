@@ -48,7 +48,9 @@ class PandaConfig:
         if self.control not in CONTROLS:
             raise ValueError(f"control must be one of {CONTROLS}, got {self.control!r}")
         if not (math.isfinite(self.max_joint_speed) and 0.0 < self.max_joint_speed <= 1.0):
-            raise ValueError(f"max_joint_speed must be in (0, 1] (fraction of the URDF limit), got {self.max_joint_speed!r}")
+            raise ValueError(
+                f"max_joint_speed must be in (0, 1] (fraction of the URDF limit), got {self.max_joint_speed!r}"
+            )
         if not (math.isfinite(self.max_ee_step) and 0.0 < self.max_ee_step <= 0.2):
             raise ValueError(f"max_ee_step must be in (0, 0.2] metres, got {self.max_ee_step!r}")
 

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from clutter_gym.noise.profiles import NoiseProfile
 from clutter_gym.interfaces import Sensor
+from clutter_gym.noise.profiles import NoiseProfile
 from clutter_gym.sensors.camera import Camera, CameraConfig
 from clutter_gym.sensors.imu import Imu, ImuConfig
 from clutter_gym.sensors.lidar import Lidar, LidarConfig

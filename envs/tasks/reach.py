@@ -9,8 +9,8 @@ import numpy as np
 from gymnasium import spaces
 
 from clutter_gym.collision import CollisionReport
-from clutter_gym.robots.state import RobotState
 from clutter_gym.interfaces import StepOutcome
+from clutter_gym.robots.state import RobotState
 from clutter_gym.worlds.tabletop import ReachScene
 
 

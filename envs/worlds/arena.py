@@ -13,7 +13,6 @@ from clutter_gym.worlds.pool import ObstaclePool, arena_walls
 from clutter_gym.worlds.scene import Obstacle, Scene, check_reset_options, parse_scene
 
 
-
 class ClutterArena:
     """Ground plane, four walls and the obstacle pool of one env.
 

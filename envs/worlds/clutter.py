@@ -71,10 +71,13 @@ class ClutterSpec:
                 f"obstacle_density must be in [0, {MAX_DENSITY}] (fraction of the floor covered), "
                 f"got {self.obstacle_density!r}"
             )
-        if isinstance(self.size_levels, bool) or not isinstance(self.size_levels, int) or not 1 <= self.size_levels <= 10:
+        if (isinstance(self.size_levels, bool) or not isinstance(self.size_levels, int)
+                or not 1 <= self.size_levels <= 10):
             raise ValueError(f"size_levels must be an integer in [1, 10], got {self.size_levels!r}")
         if not 0.0 < self.min_goal_distance < 1.0:
-            raise ValueError(f"min_goal_distance must be in (0, 1) (fraction of arena_size), got {self.min_goal_distance!r}")
+            raise ValueError(
+                f"min_goal_distance must be in (0, 1) (fraction of arena_size), got {self.min_goal_distance!r}"
+            )
 
     @cached_property
     def cell_centres(self) -> np.ndarray:

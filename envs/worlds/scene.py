@@ -156,7 +156,8 @@ def parse_obstacle(spec: Any, field: str, arena_size: float) -> Obstacle:
     if not isinstance(spec, Mapping):
         raise ValueError(f"{field} must be a dict with a 'shape' key, got {spec!r}")
     shape = spec.get("shape")
-    allowed = {"box": {"shape", "size", "position", "yaw", "z"}, "cylinder": {"shape", "radius", "height", "position", "z"}}
+    allowed = {"box": {"shape", "size", "position", "yaw", "z"},
+               "cylinder": {"shape", "radius", "height", "position", "z"}}
     if shape not in allowed:
         raise ValueError(f"{field}.shape must be one of {SHAPES}, got {shape!r}")
     unknown = set(spec) - allowed[shape]

@@ -45,7 +45,8 @@ class TableSpec:
     target_clearance: float = 0.06
 
     def __post_init__(self) -> None:
-        if isinstance(self.n_obstacles, bool) or not isinstance(self.n_obstacles, int) or not 0 <= self.n_obstacles <= 20:
+        if (isinstance(self.n_obstacles, bool) or not isinstance(self.n_obstacles, int)
+                or not 0 <= self.n_obstacles <= 20):
             raise ValueError(f"n_obstacles must be an integer in [0, 20], got {self.n_obstacles!r}")
         if not 0.0 <= self.shelf_target_probability <= 1.0:
             raise ValueError(f"shelf_target_probability must be in [0, 1], got {self.shelf_target_probability!r}")
@@ -172,7 +173,8 @@ def parse_reach_scene(spec: Any, n_joints: int, lower: np.ndarray, upper: np.nda
     if np.linalg.norm(np.array(target) - SHOULDER) > REACH_RADIUS + 0.1:
         raise ValueError(f"scene.target {target} is beyond the arm's reach: at most {REACH_RADIUS + 0.1} m from "
                          f"the shoulder {SHOULDER.tolist()}")
-    start = _numbers(spec.get("start", ()), n_joints, "scene.start", "joint positions in rad") if "start" in spec else None
+    start = (_numbers(spec.get("start", ()), n_joints, "scene.start", "joint positions in rad")
+             if "start" in spec else None)
     if start is not None:
         for i, (v, lo, hi) in enumerate(zip(start, lower, upper)):
             if not lo <= v <= hi:
