@@ -141,7 +141,7 @@ class ClutterNavEnv(ClutterEnv):
         obstacle_density: float = 0.12,
         n_rays: int = 64,
         lidar_fov: float = 2 * math.pi,
-        lidar_range: float = 3.5,
+        lidar_range: float = LidarConfig.max_range,
         lidar_mount_height: float = 0.0,
         lidar_channels: int = 1,
         lidar_vertical_fov: float = 0.0,

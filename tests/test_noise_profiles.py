@@ -15,6 +15,7 @@ from clutter_gym.noise.profiles import (
     profile_table_markdown,
     resolve_noise,
 )
+from clutter_gym.sensors.lidar import LidarConfig
 
 NOISE_DOC = Path(__file__).resolve().parents[1] / "docs" / "noise.md"
 
@@ -48,6 +49,12 @@ def test_profiles_grow_worse_in_order():
     for field in ("gyro_noise_density", "accel_noise_density", "gyro_turn_on_sigma", "scale_sigma"):
         assert getattr(nominal.imu, field) <= getattr(low.imu, field) <= getattr(harsh.imu, field)
     assert nominal.camera_depth.hole_prob <= low.camera_depth.hole_prob <= harsh.camera_depth.hole_prob
+
+
+def test_harsh_lidar_window_is_the_default_scan_window():
+    # one fact, the TurtleBot3 LDS-01's range window (L8): profiles.yaml cites it, LidarConfig defaults to it
+    harsh, default = resolve_noise("harsh").lidar, LidarConfig()
+    assert (harsh.min_range, harsh.max_range) == (default.min_range, default.max_range)
 
 
 def test_override_changes_one_parameter_and_keeps_the_rest():

@@ -30,8 +30,6 @@ import yaml
 from clutter_gym.atomic import atomic_path, write_text_atomically
 from clutter_gym.training.config import EVAL_SEED, TrainConfig, config_for, deep_merge
 
-CSV_METRICS = ("success_rate", "collision_rate", "mean_cost", "mean_return", "mean_length", "mean_min_clearance")
-
 
 @dataclass(frozen=True)
 class SweepSpec:
@@ -174,13 +172,17 @@ def _run_on_ray(spec: SweepSpec, out: Path, todo: list[tuple[str, int]], address
 
 
 def collect_rows(spec: SweepSpec, out: Path) -> list[dict[str, Any]]:
+    """One row per (train profile, seed, eval profile): the episode count, then each of evaluate's ``METRICS`` with
+    its 95% interval's ends, in that order (sweep.csv's columns)."""
+    from clutter_gym.training.evaluate import METRICS
+
     rows = []
     for train_noise, seed in spec.cells():
         for profile in spec.eval_noise:
             summary = json.loads((cell_dir(out, train_noise, seed) / f"eval-{profile}.json").read_text())
             row: dict[str, Any] = {"train_noise": train_noise, "seed": seed, "eval_noise": profile,
                                    "episodes": summary["episodes"]}
-            for name in CSV_METRICS:
+            for name in METRICS:
                 metric = summary["metrics"][name]
                 row[name] = metric["value"]
                 row[f"{name}_ci_low"], row[f"{name}_ci_high"] = metric["ci95"]

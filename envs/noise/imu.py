@@ -34,7 +34,12 @@ from scipy.signal import lfilter
 
 from clutter_gym.noise.params import NoiseParams, param
 
-__all__ = ["ImuEpisode", "ImuNoise", "apply_imu_noise", "start_imu_episode", "white_sigma"]
+__all__ = ["ACCEL_RANGE", "GYRO_RANGE", "ImuEpisode", "ImuNoise", "apply_imu_noise", "start_imu_episode", "white_sigma"]
+
+#: Full scale of the accelerometer, m/s^2 (16 g, a common MEMS setting), and of the gyro, rad/s (2000 deg/s): the
+#: clean sensor's (:class:`clutter_gym.sensors.imu.ImuConfig`) and the noise model's default.
+ACCEL_RANGE = 16 * 9.80665
+GYRO_RANGE = float(np.deg2rad(2000.0))
 
 
 @dataclass(frozen=True)
@@ -73,8 +78,8 @@ class ImuNoise(NoiseParams):
     misalignment_sigma: float = param(0.0, 0.0, 0.1, "rad", "std of the per-episode cross-axis coupling terms")
     accel_quantization: float = param(0.0, 0.0, 1.0, "m/s^2", "accelerometer LSB; 0 = none")
     gyro_quantization: float = param(0.0, 0.0, 0.1, "rad/s", "gyro LSB; 0 = none")
-    accel_range: float = param(16 * 9.80665, 1.0, 1000.0, "m/s^2", "accelerometer full scale (clipping)")
-    gyro_range: float = param(float(np.deg2rad(2000.0)), 0.1, 100.0, "rad/s", "gyro full scale (clipping)")
+    accel_range: float = param(ACCEL_RANGE, 1.0, 1000.0, "m/s^2", "accelerometer full scale (clipping)")
+    gyro_range: float = param(GYRO_RANGE, 0.1, 100.0, "rad/s", "gyro full scale (clipping)")
 
 
 @dataclass

@@ -10,6 +10,7 @@ from gymnasium import spaces
 
 from clutter_gym.assets import asset_path
 from clutter_gym.noise.dynamics import DynamicsSample
+from clutter_gym.robots.dynamics import scale_link_dynamics
 from clutter_gym.robots.state import RobotState
 from clutter_gym.sim import Sim
 from clutter_gym.transforms import quat_to_matrix, yaw_quat
@@ -110,15 +111,7 @@ class DiffDriveRobot:
         relative to the URDF's nominal values (a no-op when nothing changed)."""
         if sample == self._dynamics:
             return
-        for link, (mass, friction, inertia) in self._nominal.items():
-            self._sim.set_dynamics(
-                self._body,
-                link,
-                mass=mass * sample.mass_scale,
-                inertia=[sample.mass_scale * i for i in inertia],
-                lateral_friction=friction * sample.friction_scale,
-                restitution=sample.restitution,
-            )
+        scale_link_dynamics(self._sim, self._body, self._nominal, sample)
         self._torques = [self.config.max_wheel_torque * sample.motor_scale] * 2
         self._dynamics = sample
 

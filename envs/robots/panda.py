@@ -10,6 +10,7 @@ import numpy as np
 from gymnasium import spaces
 
 from clutter_gym.noise.dynamics import DynamicsSample
+from clutter_gym.robots.dynamics import scale_link_dynamics
 from clutter_gym.robots.state import RobotState
 from clutter_gym.sim import Sim, pybullet_data_file
 
@@ -118,10 +119,7 @@ class PandaArm:
         """This episode's link masses (inertias scale with them), friction, restitution and motor strength."""
         if sample == self._dynamics:
             return
-        for link, (mass, friction, inertia) in self._nominal.items():
-            self._sim.set_dynamics(self._body, link, mass=mass * sample.mass_scale,
-                                   inertia=[sample.mass_scale * i for i in inertia],
-                                   lateral_friction=friction * sample.friction_scale, restitution=sample.restitution)
+        scale_link_dynamics(self._sim, self._body, self._nominal, sample)
         self._forces = EFFORT_LIMIT * sample.motor_scale
         self._dynamics = sample
 

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 from gymnasium import spaces
 
-from clutter_gym.noise.imu import ImuEpisode, ImuNoise, apply_imu_noise, start_imu_episode
+from clutter_gym.noise.imu import ACCEL_RANGE, GYRO_RANGE, ImuEpisode, ImuNoise, apply_imu_noise, start_imu_episode
 from clutter_gym.robots.state import RobotState
 from clutter_gym.sim import Sim
 
@@ -33,8 +33,8 @@ class ImuConfig:
 
     dt: float
     gravity: float = 9.81
-    accel_range: float = 16 * 9.80665
-    gyro_range: float = np.deg2rad(2000.0)
+    accel_range: float = ACCEL_RANGE
+    gyro_range: float = GYRO_RANGE
     link: str = "imu_link"
 
 

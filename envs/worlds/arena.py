@@ -10,7 +10,7 @@ import numpy as np
 from clutter_gym.sim import Sim
 from clutter_gym.worlds.clutter import ClutterSpec, sample_scene
 from clutter_gym.worlds.pool import ObstaclePool, arena_walls
-from clutter_gym.worlds.scene import Obstacle, Scene, check_reset_options, parse_scene
+from clutter_gym.worlds.scene import Obstacle, Scene, parse_scene, scene_from_options
 
 
 class ClutterArena:
@@ -46,10 +46,11 @@ class ClutterArena:
         Raises:
             ValueError: unknown option keys or a malformed scene (the message names the field).
         """
-        options = check_reset_options(options)
-        if "scene" in options:
-            return parse_scene(options["scene"], self.spec.arena_size, self.robot_radius)
-        return sample_scene(rng, self.spec, self.robot_radius)
+        return scene_from_options(
+            options,
+            parse=lambda spec: parse_scene(spec, self.spec.arena_size, self.robot_radius),
+            sample=lambda: sample_scene(rng, self.spec, self.robot_radius),
+        )
 
     def overview_camera(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
         """(eye, target) of the rgb_array view."""

@@ -1,4 +1,5 @@
-"""Scenes as plain data: obstacles, start and goal; parsing and validation of user-given scenes.
+"""Scenes as plain data: obstacles, start and goal; parsing and validation of user-given scenes, with the
+helpers every world's parser and ``choose_scene`` share (``worlds/tabletop.py`` uses them too).
 
 Coordinates are metres in the world frame: the arena is the square [-L/2, L/2]^2 on the floor (z = 0), walled on
 all four sides. Obstacles are upright boxes and cylinders; ``position`` is the centre of the footprint, ``z`` the
@@ -8,14 +9,15 @@ height of the bottom face (0 = on the floor), sizes are full extents.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 
 SHAPES = ("box", "cylinder")
 MAX_OBSTACLE_HEIGHT = 5.0  # metres; anything taller only costs render time
+L = TypeVar("L")  # a layout: a Scene, or another world's scene type
 
 
 @dataclass(frozen=True)
@@ -122,7 +124,31 @@ def check_reset_options(options: Any) -> Mapping[str, Any]:
     return options
 
 
-def _numbers(value: Any, n: int, field: str, what: str) -> tuple[float, ...]:
+def scene_from_options(options: Any, parse: Callable[[Any], L], sample: Callable[[], L]) -> L:
+    """An arena's ``choose_scene``: ``parse(options["scene"])`` if the options hold a user scene, else
+    ``sample()``, the seeded random layout.
+
+    Raises:
+        ValueError: unknown option keys, or what ``parse`` raises for a malformed scene.
+    """
+    options = check_reset_options(options)
+    if "scene" in options:
+        return parse(options["scene"])
+    return sample()
+
+
+def check_scene_keys(spec: Any, keys: Sequence[str]) -> Mapping[str, Any]:
+    """A user scene as a mapping whose keys are among ``keys``; otherwise a ``ValueError`` naming the allowed keys."""
+    if not isinstance(spec, Mapping):
+        raise ValueError(f"scene must be a dict with keys {', '.join(map(repr, keys))}, got {type(spec).__name__}")
+    unknown = set(spec) - set(keys)
+    if unknown:
+        raise ValueError(f"scene has unknown keys {sorted(unknown)}; allowed: {sorted(keys)}")
+    return spec
+
+
+def parse_numbers(value: Any, n: int, field: str, what: str) -> tuple[float, ...]:
+    """``value`` as a tuple of ``n`` finite floats; errors name ``field`` and say ``what`` the numbers are."""
     if isinstance(value, (str, bytes)) or not isinstance(value, Sequence) or len(value) != n:
         raise ValueError(f"{field} must be a list of {n} numbers ({what}), got {value!r}")
     try:
@@ -166,13 +192,13 @@ def parse_obstacle(spec: Any, field: str, arena_size: float) -> Obstacle:
     missing = (allowed[shape] - {"yaw", "z"}) - set(spec)
     if missing:
         raise ValueError(f"{field} is missing {sorted(missing)}")
-    position = _numbers(spec["position"], 2, f"{field}.position", "x, y in metres")
+    position = parse_numbers(spec["position"], 2, f"{field}.position", "x, y in metres")
     _inside(position, f"{field}.position", 0.5 * arena_size)
     z = float(spec.get("z", 0.0)) if isinstance(spec.get("z", 0.0), (int, float)) else math.nan
     if not 0.0 <= z <= MAX_OBSTACLE_HEIGHT:
         raise ValueError(f"{field}.z (bottom height) must be in [0, {MAX_OBSTACLE_HEIGHT}] m, got {spec.get('z')!r}")
     if shape == "box":
-        size = _numbers(spec["size"], 3, f"{field}.size", "full extents sx, sy, sz in metres")
+        size = parse_numbers(spec["size"], 3, f"{field}.size", "full extents sx, sy, sz in metres")
         for axis, v in zip("xyz", size):
             limit = MAX_OBSTACLE_HEIGHT if axis == "z" else arena_size
             if not 0.0 < v <= limit:
@@ -184,6 +210,13 @@ def parse_obstacle(spec: Any, field: str, arena_size: float) -> Obstacle:
     return Obstacle("cylinder", (2 * radius, 2 * radius, height), position, 0.0, z)
 
 
+def parse_obstacles(raw: Any, arena_size: float) -> tuple[Obstacle, ...]:
+    """A scene's ``obstacles`` list (see :func:`parse_obstacle`); errors name ``scene.obstacles[i]``."""
+    if isinstance(raw, (str, bytes, Mapping)) or not isinstance(raw, Sequence):
+        raise ValueError(f"scene.obstacles must be a list of obstacle dicts, got {raw!r}")
+    return tuple(parse_obstacle(o, f"scene.obstacles[{i}]", arena_size) for i, o in enumerate(raw))
+
+
 def parse_scene(spec: Any, arena_size: float, robot_radius: float) -> Scene:
     """Validate a user scene (the ``reset(options={"scene": ...})`` format) and turn it into a :class:`Scene`.
 
@@ -193,20 +226,13 @@ def parse_scene(spec: Any, arena_size: float, robot_radius: float) -> Scene:
     Raises:
         ValueError: naming the offending field and its allowed range.
     """
-    if not isinstance(spec, Mapping):
-        raise ValueError(f"scene must be a dict with keys 'obstacles', 'start', 'goal', got {type(spec).__name__}")
-    unknown = set(spec) - {"obstacles", "start", "goal"}
-    if unknown:
-        raise ValueError(f"scene has unknown keys {sorted(unknown)}; allowed: ['goal', 'obstacles', 'start']")
+    spec = check_scene_keys(spec, ("obstacles", "start", "goal"))
     for key in ("start", "goal"):
         if key not in spec:
             raise ValueError(f"scene.{key} is required")
-    raw = spec.get("obstacles", [])
-    if isinstance(raw, (str, bytes, Mapping)) or not isinstance(raw, Sequence):
-        raise ValueError(f"scene.obstacles must be a list of obstacle dicts, got {raw!r}")
-    obstacles = tuple(parse_obstacle(o, f"scene.obstacles[{i}]", arena_size) for i, o in enumerate(raw))
-    start = _numbers(spec["start"], 3, "scene.start", "x, y in metres and yaw in radians")
-    goal = _numbers(spec["goal"], 2, "scene.goal", "x, y in metres")
+    obstacles = parse_obstacles(spec.get("obstacles", []), arena_size)
+    start = parse_numbers(spec["start"], 3, "scene.start", "x, y in metres and yaw in radians")
+    goal = parse_numbers(spec["goal"], 2, "scene.goal", "x, y in metres")
     _inside(start, "scene.start", 0.5 * arena_size - robot_radius)
     _inside(goal, "scene.goal", 0.5 * arena_size)
     scene = Scene(obstacles, start, goal)

@@ -16,7 +16,7 @@ import numpy as np
 
 from clutter_gym.sim import Sim
 from clutter_gym.worlds.pool import ObstaclePool
-from clutter_gym.worlds.scene import Obstacle, _numbers, check_reset_options, parse_obstacle
+from clutter_gym.worlds.scene import Obstacle, check_scene_keys, parse_numbers, parse_obstacles, scene_from_options
 
 TABLE_GAP = 0.005
 TABLE = Obstacle("box", (1.6, 1.8, 0.05), (0.4, 0.0), 0.0, -0.05 - TABLE_GAP)
@@ -158,22 +158,15 @@ def parse_reach_scene(spec: Any, n_joints: int, lower: np.ndarray, upper: np.nda
     Raises:
         ValueError: naming the offending field and its allowed range.
     """
-    if not isinstance(spec, Mapping):
-        raise ValueError(f"scene must be a dict with keys 'obstacles', 'start', 'target', got {type(spec).__name__}")
-    unknown = set(spec) - {"obstacles", "start", "target"}
-    if unknown:
-        raise ValueError(f"scene has unknown keys {sorted(unknown)}; allowed: ['obstacles', 'start', 'target']")
+    spec = check_scene_keys(spec, ("obstacles", "start", "target"))
     if "target" not in spec:
         raise ValueError("scene.target is required (x, y, z in metres)")
-    raw = spec.get("obstacles", [])
-    if isinstance(raw, (str, bytes, Mapping)) or not isinstance(raw, Sequence):
-        raise ValueError(f"scene.obstacles must be a list of obstacle dicts, got {raw!r}")
-    obstacles = tuple(parse_obstacle(o, f"scene.obstacles[{i}]", 2 * TABLE_LIMIT) for i, o in enumerate(raw))
-    target = _numbers(spec["target"], 3, "scene.target", "x, y, z in metres")
+    obstacles = parse_obstacles(spec.get("obstacles", []), 2 * TABLE_LIMIT)
+    target = parse_numbers(spec["target"], 3, "scene.target", "x, y, z in metres")
     if np.linalg.norm(np.array(target) - SHOULDER) > REACH_RADIUS + 0.1:
         raise ValueError(f"scene.target {target} is beyond the arm's reach: at most {REACH_RADIUS + 0.1} m from "
                          f"the shoulder {SHOULDER.tolist()}")
-    start = (_numbers(spec.get("start", ()), n_joints, "scene.start", "joint positions in rad")
+    start = (parse_numbers(spec.get("start", ()), n_joints, "scene.start", "joint positions in rad")
              if "start" in spec else None)
     if start is not None:
         for i, (v, lo, hi) in enumerate(zip(start, lower, upper)):
@@ -212,11 +205,14 @@ class TabletopArena:
         Raises:
             ValueError: unknown option keys or a malformed scene (the message names the field).
         """
-        options = check_reset_options(options)
-        if "scene" in options:
-            scene = parse_reach_scene(options["scene"], len(self.ready), self._lower, self._upper)
-            return scene if scene.start is not None else ReachScene(scene.obstacles, self.ready, scene.target)
-        return sample_reach_scene(rng, self.spec, self.ready)
+        return scene_from_options(
+            options, parse=self._parse, sample=lambda: sample_reach_scene(rng, self.spec, self.ready)
+        )
+
+    def _parse(self, spec: Any) -> ReachScene:
+        """A user scene; one without a start begins at the ready pose."""
+        scene = parse_reach_scene(spec, len(self.ready), self._lower, self._upper)
+        return scene if scene.start is not None else ReachScene(scene.obstacles, self.ready, scene.target)
 
     def place(self, scene: ReachScene) -> tuple[tuple[Obstacle, ...], list[int]]:
         """Move pooled bodies into ``scene``; returns every obstacle (the table included) and its body ids."""
