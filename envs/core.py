@@ -231,3 +231,19 @@ def check_render_mode(render_mode: str | None) -> None:
             "render_mode='human' opens the pybullet GUI and needs a display (DISPLAY is not set); "
             "use render_mode='rgb_array' on a headless machine"
         )
+
+
+def check_rates(physics_hz: float, control_hz: float, solver_iterations: int) -> None:
+    """Raise at make time, naming the argument, for rates or solver settings the control loop cannot run."""
+    if not (math.isfinite(control_hz) and 0.0 < control_hz <= 1000.0):
+        raise ValueError(f"control_hz must be in (0, 1000] Hz, got {control_hz!r}")
+    if not (math.isfinite(physics_hz) and control_hz <= physics_hz <= 10000.0):
+        raise ValueError(f"physics_hz must be in [control_hz={control_hz}, 10000] Hz, got {physics_hz!r}")
+    ratio = physics_hz / control_hz
+    if abs(ratio - round(ratio)) > 1e-9 * ratio:
+        raise ValueError(
+            f"physics_hz must be an integer multiple of control_hz; {physics_hz} / {control_hz} = {ratio:.6g}"
+        )
+    if (isinstance(solver_iterations, bool) or not isinstance(solver_iterations, int)
+            or not 1 <= solver_iterations <= 1000):
+        raise ValueError(f"solver_iterations must be an integer in [1, 1000], got {solver_iterations!r}")

@@ -7,13 +7,16 @@ from collections.abc import Mapping
 from typing import Any
 
 from clutter_gym.collision import CollisionChecker, RobotCollisionModel, check_fidelity
-from clutter_gym.core import ClutterEnv, check_render_mode
-from clutter_gym.nav import check_rates
+from clutter_gym.core import ClutterEnv, check_rates, check_render_mode
 from clutter_gym.noise.profiles import NoiseProfile, resolve_noise
-from clutter_gym.robots.panda import LOWER, READY, TRACKED_LINKS, UPPER, PandaArm, PandaConfig
+from clutter_gym.planning.joint_space import ArmPlanner
+from clutter_gym.robots.panda import EE_ROW, LOWER, READY, TRACKED_LINKS, UPPER, PandaArm, PandaConfig
 from clutter_gym.sim import Sim
 from clutter_gym.tasks import ReachRewardWeights, ReachTask
 from clutter_gym.worlds import TableSpec, TabletopArena
+
+#: Clearance the subgoal's planner keeps from the layout, metres (on top of ``collision_padding``).
+SUBGOAL_MARGIN = 0.02
 
 
 class ClutterReachEnv(ClutterEnv):
@@ -49,6 +52,7 @@ class ClutterReachEnv(ClutterEnv):
     | ``clearance`` | (10,) | signed FCL distance of each moving link (panda_link1..7, hand, fingers) to the nearest obstacle | m | +-clearance_range |
     | ``clearance_direction`` | (10, 3) | unit vector from each link's witness point to its obstacle's (only with ``observe_directions=True``; zero beyond range or in contact) | world | [-1, 1] |
     | ``target_offset`` | (3,) | target minus end effector (only with ``observe_target_offset=True``) | m, world | +-3 |
+    | ``subgoal`` | (7,) | the point ``subgoal_lookahead`` ahead on the joint-space path planned on the known layout, minus the joint positions (zero if no path was found; only with ``subgoal_lookahead > 0``) | rad | +-6 |
 
     ## Rewards
 
@@ -89,7 +93,14 @@ class ClutterReachEnv(ClutterEnv):
     or overrides; only action noise, timing and dynamics apply: the arm has no exteroceptive sensors);
     ``physics_hz``; ``control_hz``; ``solver_iterations``; ``success_radius`` m; ``clearance_margin`` m;
     ``clearance_range`` m; ``observe_directions``; ``observe_target_offset``; ``terminate_on_collision``;
-    ``contact_tolerance`` m; ``swept_speed`` m/s (``inf`` turns swept checks off); ``*_weight`` reward weights.
+    ``contact_tolerance`` m; ``swept_speed`` m/s (``inf`` turns swept checks off); ``*_weight`` reward weights;
+    ``subgoal_lookahead`` rad [0, 3] (0: off).
+
+    ``subgoal_lookahead > 0`` makes the env map-based: at every reset a joint-space planner
+    (``clutter_gym.planning.joint_space``: IK goals, RRT-Connect, shortcutting, 2 cm clearance plus
+    ``collision_padding`` at ``collision_fidelity``) plans on the known layout, as a global planner hands a local
+    controller its path; the ``subgoal`` entry is the point that far ahead along it. Its random stream is drawn
+    from the layout, so a seed still fixes the episode.
 
     ## Version history
 
@@ -126,6 +137,7 @@ class ClutterReachEnv(ClutterEnv):
         clearance_weight: float = 0.2,
         tunneling_weight: float = 1.0,
         control_weight: float = 0.005,
+        subgoal_lookahead: float = 0.0,
     ) -> None:
         check_render_mode(render_mode)
         check_rates(physics_hz, control_hz, solver_iterations)
@@ -147,7 +159,7 @@ class ClutterReachEnv(ClutterEnv):
         task = ReachTask(
             ReachRewardWeights(progress_weight, success_weight, contact_weight, self_contact_weight, clearance_weight,
                                tunneling_weight, control_weight),
-            ee_row=TRACKED_LINKS.index("panda_grasptarget"),
+            ee_row=EE_ROW,
             links=checker.links,
             success_radius=success_radius,
             clearance_margin=clearance_margin,
@@ -155,6 +167,8 @@ class ClutterReachEnv(ClutterEnv):
             terminate_on_collision=terminate_on_collision,
             observe_directions=observe_directions,
             observe_offset=observe_target_offset,
+            subgoal_lookahead=subgoal_lookahead,
+            make_planner=lambda: ArmPlanner(SUBGOAL_MARGIN + collision_padding, collision_fidelity),
         )
         super().__init__(
             sim=Sim(physics_hz=physics_hz, solver_iterations=solver_iterations, gui=render_mode == "human"),

@@ -1,5 +1,6 @@
-"""The joint-space planner reference for ClutterReach: IK against the simulator's forward kinematics, the
-clearance margin, collision-free paths checked finer than they were planned, and clean reaches in the env."""
+"""The joint-space planner and the ClutterReach reference that tracks it: IK against the simulator's forward
+kinematics, the clearance margin, collision-free paths checked finer than they were planned, clean reaches in the
+env, and walking a path by arc length."""
 
 from __future__ import annotations
 
@@ -8,13 +9,15 @@ import math
 import numpy as np
 import pytest
 
-from clutter_gym.training.joint_planner import (
+from clutter_gym.planning.joint_space import (
     GOAL_BALL,
+    ArmPlanner,
     ConfigurationChecker,
-    JointPlannerReacher,
-    _time_parameterise,
+    JointPath,
     inverse_kinematics,
+    time_parameterise,
 )
+from clutter_gym.training.joint_planner import JointPlannerReacher
 from clutter_gym.worlds.scene import Obstacle
 
 READY = np.array([0.0, -math.pi / 4, 0.0, -3 * math.pi / 4, 0.0, math.pi / 2, math.pi / 4])
@@ -60,9 +63,8 @@ def test_shelf_path_is_collision_free_at_five_times_the_planning_resolution(make
     env = make_env("ClutterReach-v0")
     env.reset(seed=SHELF_SEED)
     scene = env.unwrapped.scene
-    planner = JointPlannerReacher(env)
-    planner.checker.set_obstacles(scene.obstacles)
-    path = planner.plan(np.array(scene.start), np.array(scene.target))
+    planner = ArmPlanner()
+    path = planner.plan(scene.obstacles, np.array(scene.start), np.array(scene.target), np.random.default_rng(0))
     assert path is not None and len(path) > 2  # the straight line is blocked: the search had to work
     assert np.allclose(path[0], scene.start)
     assert np.linalg.norm(planner.checker.ee_positions(path[-1])[0] - scene.target) <= GOAL_BALL + 0.006
@@ -95,7 +97,72 @@ def test_reference_needs_joint_velocity_control(make_env):
 def test_time_parameterisation_keeps_every_joint_under_its_speed():
     speed = np.array([0.05] * 4 + [0.06] * 3)
     path = np.array([READY, READY + [0.5, -0.2, 0, 0, 0.3, 0, 0], READY])
-    ref = _time_parameterise(path, speed)
+    ref = time_parameterise(path, speed)
     assert np.allclose(ref[0], path[0]) and np.allclose(ref[-1], path[-1])
     assert np.all(np.abs(np.diff(ref, axis=0)) <= speed + 1e-12)
     assert any(np.allclose(r, path[1]) for r in ref)  # waypoints are visited, not cut
+
+
+def test_analytic_jacobian_matches_finite_differences(checker):
+    q = np.random.default_rng(1).uniform(-1.0, 1.0, (20, 7)) + READY
+    p, jac = checker.ee_jacobian(q)
+    eps = 1e-6
+    numeric = np.stack([(checker.ee_positions(q + eps * np.eye(7)[i]) - p) / eps for i in range(7)], axis=-1)
+    assert np.abs(jac - numeric).max() < 1e-5  # finite-difference truncation is ~1e-6 at this step
+
+
+def test_joint_path_walks_by_arc_length():
+    path = JointPath(np.array([np.zeros(7), [1.0, 0, 0, 0, 0, 0, 0], [1.0, 1.0, 0, 0, 0, 0, 0]]))
+    assert path.length == pytest.approx(2.0)
+    assert np.allclose(path.waypoint(0.5), [0.5, 0, 0, 0, 0, 0, 0], atol=0.03)
+    assert np.allclose(path.waypoint(1.5), [1.0, 0.5, 0, 0, 0, 0, 0], atol=0.03)
+    assert np.allclose(path.waypoint(5.0), [1.0, 1.0, 0, 0, 0, 0, 0])  # beyond the end: the end
+    path.advance(np.array([1.0, 0.2, 0, 0, 0, 0, 0]), window=0.5)  # out of reach of the window: stops at its edge
+    assert path.arc[path.index] == pytest.approx(0.5, abs=0.03)
+    path.advance(np.array([1.0, 0.2, 0, 0, 0, 0, 0]), window=1.0)
+    assert np.allclose(path.points[path.index], [1.0, 0.2, 0, 0, 0, 0, 0], atol=0.03)
+    path.advance(np.zeros(7), window=1.0)  # never back
+    assert path.arc[path.index] == pytest.approx(1.2, abs=0.03)
+
+
+def test_subgoal_points_along_the_planned_path(make_env):
+    env = make_env("ClutterReach-v0", subgoal_lookahead=0.2)
+    obs, _ = env.reset(seed=SHELF_SEED)
+    task = env.unwrapped.task
+    assert task.path is not None and task.path.length > 0.5
+    q = obs["joint_position"].astype(float)
+    assert np.allclose(task.path.points[0], q, atol=1e-5)  # planned from where the arm stands
+    assert np.linalg.norm(obs["subgoal"]) == pytest.approx(0.2, abs=0.031)  # one path resolution step
+    assert np.allclose(q + obs["subgoal"], task.path.waypoint(0.2), atol=1e-6)
+    speed = env.unwrapped.robot.speed * env.unwrapped.robot.control_dt
+    start_distance = np.linalg.norm(obs["ee_position"] - obs["target"])
+    progress, done = 0.0, False
+    while not done:  # pure pursuit of the subgoal reaches the shelf target
+        obs, _, terminated, truncated, info = env.step(np.clip(obs["subgoal"] / speed, -1.0, 1.0))
+        progress += info["reward_terms"]["progress"]
+        done = terminated or truncated
+    assert info["is_success"]
+    # progress is paid along the path, and the whole path pays what the straight distance would: the sum
+    # telescopes to the straight distance minus what is left at the end, at most the path end's goal ball plus
+    # the success radius (10 per metre)
+    assert progress == pytest.approx(10.0 * start_distance, abs=10.0 * (GOAL_BALL + 0.05))
+
+
+def test_subgoal_is_seeded_by_the_layout_and_planned_once_per_layout(make_env):
+    env = make_env("ClutterReach-v0", subgoal_lookahead=0.2)
+    first, _ = env.reset(seed=SHELF_SEED)
+    checker = env.unwrapped.task.planner.checker
+    checks = checker.checks
+    again, _ = env.reset(seed=SHELF_SEED)
+    assert checker.checks == checks  # the cached plan
+    assert np.array_equal(first["subgoal"], again["subgoal"])
+    other = make_env("ClutterReach-v0", subgoal_lookahead=0.2)
+    fresh, _ = other.reset(seed=SHELF_SEED)  # a new env plans the same path from the same layout
+    assert np.array_equal(first["subgoal"], fresh["subgoal"])
+    assert "subgoal" not in make_env("ClutterReach-v0").observation_space.spaces
+
+
+@pytest.mark.parametrize("value", [-0.1, 3.5, float("nan")])
+def test_subgoal_lookahead_out_of_range_is_refused(make_env, value):
+    with pytest.raises(ValueError, match=r"subgoal_lookahead must be in \[0, 3\] radians"):
+        make_env("ClutterReach-v0", subgoal_lookahead=value)

@@ -21,6 +21,8 @@ EE_LINK = "panda_grasptarget"  # between the fingertips, 0.105 m along the hand'
 #: Links read every step: every link with collision geometry, and the end effector.
 TRACKED_LINKS = (*(f"panda_link{i}" for i in range(1, 8)), "panda_hand", "panda_leftfinger", "panda_rightfinger",
                  EE_LINK)
+#: Row of the end-effector link in the state's tracked links.
+EE_ROW = TRACKED_LINKS.index(EE_LINK)
 #: Joint positions of the "ready" pose (hand 0.49 m above the base, pointing down), rad.
 READY = (0.0, -math.pi / 4, 0.0, -3 * math.pi / 4, 0.0, math.pi / 2, math.pi / 4)
 LOWER = np.array([-2.9671, -1.8326, -2.9671, -3.1416, -2.9671, -0.0873, -2.9671])
@@ -107,7 +109,6 @@ class PandaArm:
         self.link_index = sim.link_indices(self._body)
         self.link_names = TRACKED_LINKS
         self._tracked = tuple(self.link_index[name] for name in TRACKED_LINKS)
-        self._ee_row = TRACKED_LINKS.index(EE_LINK)
         self._ee = self.link_index[EE_LINK]
         links = sorted(i for i in self.link_index.values() if i >= 0)
         self._nominal = dict(zip(links, sim.inertial_properties(self._body, links)))
@@ -174,7 +175,7 @@ class PandaArm:
 
     def ee_position(self, state: RobotState) -> np.ndarray:
         """End-effector (between the fingertips) position, world frame, metres."""
-        return state.links.position[self._ee_row]
+        return state.links.position[EE_ROW]
 
     def observe(self, state: RobotState) -> dict[str, np.ndarray]:
         """Joint positions (rad), joint velocities (rad/s, clipped to twice the limits), end-effector position (m)."""

@@ -7,7 +7,7 @@ observations, and never calls pybullet.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 
 import numpy as np
 from gymnasium import spaces
@@ -15,6 +15,7 @@ from gymnasium import spaces
 from clutter_gym.collision import CollisionReport
 from clutter_gym.interfaces import StepOutcome
 from clutter_gym.robots.state import RobotState
+from clutter_gym.tasks.weights import check_weights
 from clutter_gym.worlds.clutter import ClutterSpec
 from clutter_gym.worlds.path_distance import PathDistance
 from clutter_gym.worlds.scene import Scene
@@ -49,9 +50,7 @@ class NavRewardWeights:
     reverse: float = 0.0
 
     def __post_init__(self) -> None:
-        for name, value in asdict(self).items():
-            if not (math.isfinite(value) and 0.0 <= value <= 1e4):
-                raise ValueError(f"reward weight {name} must be in [0, 1e4], got {value!r}")
+        check_weights(self)
 
 
 class NavigateTask:
