@@ -5,7 +5,8 @@ every row.
 ClutterNav-v0 rows: the mapless potential field; the map-based planner reference (the same field steering for the
 ``subgoal`` waypoint of the costmap planner, an upper bound of what the map allows a simple controller).
 ClutterReach-v0 rows: scripted IK, the end effector heading straight for the target (``control="ee_position"``);
-the joint-space planner reference (RRT-Connect on the known layout, then path tracking in joint velocities).
+the joint-space planner reference (RRT-Connect on the known layout, then path tracking in joint velocities); the
+pursuit of the ``subgoal`` on that path that the shipped PPO residual policy adds its actions to.
 Then one row per trained run given with ``--run NAME=RUN_DIR`` (its own env settings; the clutter level and the
 profile changed per cell). Episode ``i`` of every cell is reset with seed ``EVAL_SEED + i``, so rows are compared
 on identical layouts.
@@ -28,12 +29,15 @@ import clutter_gym  # noqa: F401  (registers the envs)
 from clutter_gym.atomic import write_text_atomically
 from clutter_gym.training import load
 from clutter_gym.training.baselines import PotentialFieldNavigator, StraightLineReacher
-from clutter_gym.training.config import EVAL_SEED
+from clutter_gym.training.config import EVAL_SEED, config_for
 from clutter_gym.training.evaluate import rollouts, summarize
 from clutter_gym.training.joint_planner import JointPlannerReacher
+from clutter_gym.training.residual import pursuit
 
 #: The subgoal lookahead the planner reference runs with, metres.
 PLANNER_LOOKAHEAD = 0.5
+#: The shipped ClutterReach settings: the subgoal pursuit row runs with their lookahead and gain.
+REACH = config_for("ClutterReach-v0")
 
 #: Per env: the gym.make argument that sets the clutter, its default levels, and the scripted rows as
 #: (name, extra gym.make arguments, policy factory from the env).
@@ -51,6 +55,9 @@ TABLES: dict[str, dict[str, Any]] = {
         "scripted": [
             ("straight line (scripted IK)", {"control": "ee_position"}, StraightLineReacher.for_env),
             ("planner reference (map-based: RRT-Connect in joint space)", {}, JointPlannerReacher),
+            ("subgoal pursuit (map-based: the PPO residual's base alone)",
+             {"subgoal_lookahead": REACH.env_kwargs["subgoal_lookahead"]},
+             lambda env: lambda obs: pursuit(obs, REACH.residual_gain)),
         ],
     },
 }

@@ -20,6 +20,12 @@ def test_the_zoo_blocks_carry_the_shipped_settings():
         assert block["policy_kwargs"] == {"net_arch": list(config.ppo.net_arch),
                                           "log_std_init": config.ppo.log_std_init}
         assert block["normalize"] == {"norm_obs": config.ppo.normalize_obs, "norm_reward": config.ppo.normalize_reward}
+    reach = config_for("ClutterReach-v0")
+    assert hyperparams["ClutterReach-v0"]["env_wrapper"] == [
+        {"clutter_gym.training.layout_pool.LayoutPool": {"n_layouts": -(-reach.train_layouts // reach.n_envs)}},
+        {"clutter_gym.training.residual.SubgoalResidual": {"gain": reach.residual_gain}},
+    ]
+    assert "env_wrapper" not in hyperparams["ClutterNav-v0"]
 
 
 def test_rl_zoo3_trains_clutter_nav_from_the_shipped_conf_file(tmp_path):

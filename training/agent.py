@@ -15,7 +15,8 @@ while not done:
 
 The run folder's ``config.yaml`` is the recipe: env id, env arguments, noise profile and the PPO settings, which
 say which observation processing the policy was trained behind (normalisation, and a frame stack whose frames
-the agent keeps in ``state``). The model folder holds SB3's ``model.zip`` and,
+the agent keeps in ``state``) and whether its actions are residuals on the subgoal pursuit, which ``predict``
+then adds. The model folder holds SB3's ``model.zip`` and,
 when observations were normalised, the ``VecNormalize`` statistics.
 """
 
@@ -31,6 +32,7 @@ from gymnasium import spaces
 
 from clutter_gym.training.config import TrainConfig, deep_merge
 from clutter_gym.training.memory import frame_space, push_frame
+from clutter_gym.training.residual import residual_action
 from clutter_gym.training.run_dir import MODEL_FILE, NORMALIZER_FILE, IncompatibleRunError, RunDir
 
 if TYPE_CHECKING:
@@ -72,14 +74,18 @@ class Agent:
             ``(action, state)``, as SB3's ``predict``.
         """
         single = self._check_obs(obs)
+        raw = obs
         if self._normalizer is not None:
             obs = self._normalizer.normalize_obs(obs)
         if self.config.frame_stack > 1:
             batch = _as_batch(obs) if single else obs
             stacked, state = push_frame(batch, state, self.config.frame_stack, self.observation_space)
             action, _ = self.model.predict(stacked, deterministic=deterministic)
-            return (action[0] if single else action), state
-        action, _ = self.model.predict(obs, deterministic=deterministic)
+            action = action[0] if single else action
+        else:
+            action, _ = self.model.predict(obs, deterministic=deterministic)
+        if self.config.residual_gain:
+            action = residual_action(raw, action, self.config.residual_gain)
         return action, state
 
     def make_env(self, noise: str | dict[str, Any] | None = None, render_mode: str | None = None,

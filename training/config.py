@@ -110,6 +110,13 @@ class TrainConfig:
         validate_episodes: episodes per validation.
         frame_stack: the policy sees its episode's last ``frame_stack`` observations (every entry concatenated,
             oldest first; see :mod:`clutter_gym.training.memory`). 1: the current observation only.
+        train_layouts: 0: every training reset samples a new layout; N > 0: the training envs share out N
+            fixed layouts (``ceil(N / n_envs)`` each; see :mod:`clutter_gym.training.layout_pool`), so per-layout
+            work such as the ClutterReach subgoal's plan is done once. Validation and evaluation are unaffected.
+        residual_gain: 0: the policy's action is the env's; g > 0: the env's action is
+            ``clip(clip(g * subgoal) + policy action)`` (both clips to [-1, 1]), a residual policy on a pursuit of
+            the subgoal (ClutterReach-v0 with ``subgoal_lookahead > 0`` only; see
+            :mod:`clutter_gym.training.residual`).
         env_kwargs: extra ``gym.make`` keyword arguments. Its ``noise`` entry, if any, holds noise-section
             overrides (``{"lidar": {"range_sigma": 0.02}}``) applied on top of whichever profile the env is
             made under, for training and evaluation alike.
@@ -128,6 +135,8 @@ class TrainConfig:
     validate_every: int = 0
     validate_episodes: int = 20
     frame_stack: int = 1
+    train_layouts: int = 0
+    residual_gain: float = 0.0
     env_kwargs: dict[str, Any] = field(default_factory=dict)
     ppo: PPOHyperparams = field(default_factory=PPOHyperparams)
 
@@ -149,6 +158,10 @@ class TrainConfig:
         _check_range("validate_every", self.validate_every, 0, 10**10)
         _check_range("validate_episodes", self.validate_episodes, 1, 100_000)
         _check_range("frame_stack", self.frame_stack, 1, 32)
+        _check_range("train_layouts", self.train_layouts, 0, 10**7)
+        _check_range("residual_gain", self.residual_gain, 0.0, 1000.0)
+        if self.residual_gain and not (self.env_id == "ClutterReach-v0" and self.env_kwargs.get("subgoal_lookahead")):
+            raise ValueError("residual_gain > 0 needs env_id ClutterReach-v0 with env_kwargs.subgoal_lookahead > 0")
         check_env_kwargs(self.env_id, self.noise, self.env_kwargs)
         if self.ppo.batch_size > self.ppo.n_steps * self.n_envs:
             raise ValueError(f"ppo.batch_size must be in [2, n_steps * n_envs = {self.ppo.n_steps * self.n_envs}], "

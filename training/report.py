@@ -153,7 +153,15 @@ def _verdict(metrics: dict, seconds: float) -> str:
 
 def _observation_line(config) -> str:
     lookahead = config.env_kwargs.get("subgoal_lookahead", 0.0)
-    if lookahead:
+    if lookahead and config.env_id == "ClutterReach-v0":
+        line = (f"**Map-based agent.** Besides its joints, clearances and the target, the policy is told the "
+                f"subgoal: the point {lookahead} rad ahead on a joint-space path planned over the known layout.")
+        if config.residual_gain:
+            line += (" Its actions are residuals on a pursuit of that subgoal (`residual_gain` "
+                     f"{config.residual_gain:g}): the env is driven by the pursuit plus the policy's correction, so "
+                     "the planner carries most of the skill; the baseline table has the pursuit alone.")
+        line += " It does not solve the mapless task; train without `subgoal_lookahead` for that."
+    elif lookahead:
         line = (f"**Map-based agent.** Besides the LIDAR and the goal, the policy is told the subgoal: the point "
                 f"{lookahead} m ahead on the path a costmap planner finds over the known layout. It does not solve "
                 "the mapless task; train without `subgoal_lookahead` for that.")

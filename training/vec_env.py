@@ -15,21 +15,33 @@ from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv, VecNormalize
 
 from clutter_gym.training.config import TrainConfig
 from clutter_gym.training.episode_stats import EpisodeStats
+from clutter_gym.training.layout_pool import LayoutPool
 from clutter_gym.training.memory import stack_frames
+from clutter_gym.training.residual import SubgoalResidual
 from clutter_gym.training.worker_vec_env import WorkerVecEnv
 
 
-def make_env(env_id: str, make_kwargs: dict[str, Any], render_mode: str | None = None) -> gym.Env:
-    """One env with SB3's Monitor and the EpisodeStats wrapper (importable in a fresh worker process)."""
+def make_env(env_id: str, make_kwargs: dict[str, Any], render_mode: str | None = None, layouts: int = 0,
+             residual_gain: float = 0.0) -> gym.Env:
+    """One env with SB3's Monitor and the EpisodeStats wrapper (importable in a fresh worker process); with
+    ``layouts`` > 0 it resets from a pool of that many layouts (:class:`LayoutPool`), with ``residual_gain`` > 0
+    it takes residual actions on the subgoal pursuit (:class:`SubgoalResidual`)."""
     import clutter_gym  # noqa: F401  (registers the ids in worker processes)
 
-    return EpisodeStats(Monitor(gym.make(env_id, render_mode=render_mode, **make_kwargs)))
+    env = gym.make(env_id, render_mode=render_mode, **make_kwargs)
+    if layouts:
+        env = LayoutPool(env, layouts)
+    if residual_gain:
+        env = SubgoalResidual(env, residual_gain)
+    return EpisodeStats(Monitor(env))
 
 
 def build_vec_env(config: TrainConfig, seed: int) -> VecEnv:
     """``config.n_envs`` envs over ``env_workers(config)`` processes, seeded ``seed, seed + 1, ...`` at their first
-    reset."""
-    factory = functools.partial(make_env, config.env_id, config.make_kwargs())
+    reset; with ``config.train_layouts`` each env resets from its share of that many fixed layouts."""
+    layouts = -(-config.train_layouts // config.n_envs)
+    factory = functools.partial(make_env, config.env_id, config.make_kwargs(), layouts=layouts,
+                                residual_gain=config.residual_gain)
     fns = [factory] * config.n_envs
     workers = env_workers(config)
     venv: VecEnv = DummyVecEnv(fns) if workers == 1 else WorkerVecEnv(fns, workers)

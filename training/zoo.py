@@ -17,7 +17,8 @@ from clutter_gym.training.config import TrainConfig, config_for
 
 def zoo_block(config: TrainConfig) -> dict[str, Any]:
     """One env's rl-zoo3 block: PPO arguments plus the zoo's ``n_timesteps``, ``n_envs``, ``policy``,
-    ``normalize``, ``frame_stack`` and ``env_kwargs`` keys."""
+    ``normalize``, ``frame_stack``, ``env_kwargs`` and ``env_wrapper`` (the layout pool and the residual on the
+    subgoal pursuit) keys."""
     ppo = config.ppo
     block: dict[str, Any] = {
         "n_timesteps": config.timesteps,
@@ -28,6 +29,14 @@ def zoo_block(config: TrainConfig) -> dict[str, Any]:
     }
     if config.frame_stack > 1:
         block["frame_stack"] = config.frame_stack
+    wrappers: list[dict[str, Any]] = []  # rl-zoo3 wraps every env it makes, its evaluation env too
+    if config.train_layouts:
+        wrappers.append({"clutter_gym.training.layout_pool.LayoutPool":
+                         {"n_layouts": -(-config.train_layouts // config.n_envs)}})
+    if config.residual_gain:
+        wrappers.append({"clutter_gym.training.residual.SubgoalResidual": {"gain": config.residual_gain}})
+    if wrappers:
+        block["env_wrapper"] = wrappers
     if ppo.normalize_obs or ppo.normalize_reward:
         block["normalize"] = {"norm_obs": ppo.normalize_obs, "norm_reward": ppo.normalize_reward}
     return block

@@ -1,0 +1,73 @@
+"""The residual policy on the ClutterReach subgoal pursuit: the wrapper and a loaded agent add the same term."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from clutter_gym.training import load
+from clutter_gym.training.config import config_for
+from clutter_gym.training.residual import SubgoalResidual, pursuit, residual_action
+from clutter_gym.training.train import start, train
+
+SHELF_SEED = 1_000_000
+
+
+def test_the_wrapper_steps_the_env_with_pursuit_plus_residual(make_env):
+    plain = make_env("ClutterReach-v0", subgoal_lookahead=0.2)
+    wrapped = SubgoalResidual(make_env("ClutterReach-v0", subgoal_lookahead=0.2), gain=15.0)
+    obs, _ = plain.reset(seed=SHELF_SEED)
+    same, _ = wrapped.reset(seed=SHELF_SEED)
+    residual = np.full(7, 0.1, dtype=np.float32)
+    expected = np.clip(np.clip(15.0 * obs["subgoal"], -1.0, 1.0) + residual, -1.0, 1.0)
+    np.testing.assert_allclose(residual_action(obs, residual, 15.0), expected, rtol=1e-6)
+    a, *_ = plain.step(expected)
+    b, *_ = wrapped.step(residual)
+    np.testing.assert_array_equal(a["joint_position"], b["joint_position"])
+
+
+def test_a_zero_residual_is_the_pursuit_that_reaches_the_shelf_target(make_env):
+    env = SubgoalResidual(make_env("ClutterReach-v0", subgoal_lookahead=0.2), gain=15.0)
+    obs, _ = env.reset(seed=SHELF_SEED)
+    assert np.abs(pursuit(obs, 15.0)).max() == 1.0  # 0.2 rad ahead saturates some joint: full speed along the path
+    done = False
+    while not done:
+        obs, _, terminated, truncated, info = env.step(np.zeros(7, dtype=np.float32))
+        done = terminated or truncated
+    assert info["is_success"]
+
+
+def test_the_wrapper_needs_a_subgoal_shaped_like_the_actions(make_env):
+    with pytest.raises(ValueError, match="needs an env with a 'subgoal' observation"):
+        SubgoalResidual(make_env("ClutterReach-v0"), gain=15.0)
+    with pytest.raises(ValueError, match="same shape"):
+        SubgoalResidual(make_env("ClutterNav-v0", subgoal_lookahead=0.5), gain=15.0)
+    with pytest.raises(ValueError, match="residual_gain > 0 needs env_id ClutterReach-v0"):
+        config_for("ClutterReach-v0", {"env_kwargs": {"subgoal_lookahead": 0.0}})
+    with pytest.raises(ValueError, match="residual_gain"):
+        config_for("ClutterNav-v0", {"residual_gain": 10.0})
+
+
+def test_a_loaded_residual_agent_adds_the_pursuit(tmp_path):
+    tiny = {"timesteps": 64, "n_envs": 1, "train_layouts": 2, "validate_every": 0, "final_eval_episodes": 0,
+            "checkpoint_every": 64, "ppo": {"n_steps": 32, "batch_size": 32, "n_epochs": 1}}
+    run = start(config_for("ClutterReach-v0", tiny), tmp_path / "run")
+    train(run, progress=False)
+    agent = load(run.root)
+    env = agent.make_env()
+    obs, _ = env.reset(seed=SHELF_SEED)
+    env.close()
+    action, _ = agent.predict(obs)
+    raw, _ = agent.model.predict(agent._normalizer.normalize_obs(obs), deterministic=True)
+    np.testing.assert_allclose(action, residual_action(obs, raw, agent.config.residual_gain), rtol=1e-6)
+    batch = {k: np.stack([v, v]) for k, v in obs.items()}
+    actions, _ = agent.predict(batch)
+    np.testing.assert_allclose(actions[0], action, atol=1e-6)
+
+
+def test_the_report_says_the_reach_agent_is_a_residual_on_a_planner():
+    from clutter_gym.training.report import _observation_line
+
+    line = _observation_line(config_for("ClutterReach-v0"))
+    assert "**Map-based agent.**" in line and "0.1 rad ahead on a joint-space path" in line
+    assert "residuals on a pursuit" in line and "costmap" not in line
