@@ -51,6 +51,7 @@ def test_pool_size_must_be_a_positive_integer(make_env, n):
 
 def test_training_envs_share_out_the_pool():
     config = TrainConfig(env_id="ClutterReach-v0", n_envs=2, env_workers=1, train_layouts=5)
+    assert config.layouts_per_env == 3
     venv = build_vec_env(config, seed=0)
     try:
         venv.reset()

@@ -22,7 +22,7 @@ def test_the_zoo_blocks_carry_the_shipped_settings():
         assert block["normalize"] == {"norm_obs": config.ppo.normalize_obs, "norm_reward": config.ppo.normalize_reward}
     reach = config_for("ClutterReach-v0")
     assert hyperparams["ClutterReach-v0"]["env_wrapper"] == [
-        {"clutter_gym.training.layout_pool.LayoutPool": {"n_layouts": -(-reach.train_layouts // reach.n_envs)}},
+        {"clutter_gym.training.layout_pool.LayoutPool": {"n_layouts": reach.layouts_per_env}},
         {"clutter_gym.training.residual.SubgoalResidual": {"gain": reach.residual_gain}},
     ]
     assert "env_wrapper" not in hyperparams["ClutterNav-v0"]

@@ -167,6 +167,11 @@ class TrainConfig:
             raise ValueError(f"ppo.batch_size must be in [2, n_steps * n_envs = {self.ppo.n_steps * self.n_envs}], "
                              f"got {self.ppo.batch_size}")
 
+    @property
+    def layouts_per_env(self) -> int:
+        """Each training env's share of ``train_layouts`` (0: a new layout every reset)."""
+        return -(-self.train_layouts // self.n_envs)
+
     def make_kwargs(self, noise: str | None = None) -> dict[str, Any]:
         """``gym.make`` keyword arguments for the run's env under profile ``noise`` (default: the training one)."""
         kwargs = dict(self.env_kwargs)

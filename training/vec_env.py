@@ -39,8 +39,7 @@ def make_env(env_id: str, make_kwargs: dict[str, Any], render_mode: str | None =
 def build_vec_env(config: TrainConfig, seed: int) -> VecEnv:
     """``config.n_envs`` envs over ``env_workers(config)`` processes, seeded ``seed, seed + 1, ...`` at their first
     reset; with ``config.train_layouts`` each env resets from its share of that many fixed layouts."""
-    layouts = -(-config.train_layouts // config.n_envs)
-    factory = functools.partial(make_env, config.env_id, config.make_kwargs(), layouts=layouts,
+    factory = functools.partial(make_env, config.env_id, config.make_kwargs(), layouts=config.layouts_per_env,
                                 residual_gain=config.residual_gain)
     fns = [factory] * config.n_envs
     workers = env_workers(config)

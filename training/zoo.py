@@ -31,8 +31,7 @@ def zoo_block(config: TrainConfig) -> dict[str, Any]:
         block["frame_stack"] = config.frame_stack
     wrappers: list[dict[str, Any]] = []  # rl-zoo3 wraps every env it makes, its evaluation env too
     if config.train_layouts:
-        wrappers.append({"clutter_gym.training.layout_pool.LayoutPool":
-                         {"n_layouts": -(-config.train_layouts // config.n_envs)}})
+        wrappers.append({"clutter_gym.training.layout_pool.LayoutPool": {"n_layouts": config.layouts_per_env}})
     if config.residual_gain:
         wrappers.append({"clutter_gym.training.residual.SubgoalResidual": {"gain": config.residual_gain}})
     if wrappers:
