@@ -15,7 +15,7 @@ from gymnasium import spaces
 from clutter_gym.collision import CollisionReport
 from clutter_gym.interfaces import StepOutcome
 from clutter_gym.robots.state import RobotState
-from clutter_gym.tasks.weights import check_weights
+from clutter_gym.tasks.terms import check_weights, clearance_term, control_term
 from clutter_gym.worlds.clutter import ClutterSpec
 from clutter_gym.worlds.path_distance import PathDistance
 from clutter_gym.worlds.scene import Scene
@@ -144,13 +144,12 @@ class NavigateTask:
         distance = self._distance(state)
         path = self.path_distance(state)
         success = distance <= self.success_radius
-        shortfall = max(0.0, self.clearance_margin - report.min_clearance)
         terms = {
             "progress": w.progress * (self._previous_path - path),
             "success": w.success if success else 0.0,
             "contact": -w.contact if report.in_contact else 0.0,
-            "clearance": -w.clearance * min(1.0, shortfall / self.clearance_margin) if self.clearance_margin else 0.0,
-            "control": -w.control * float(action @ action),
+            "clearance": clearance_term(w.clearance, self.clearance_margin, report.min_clearance),
+            "control": control_term(w.control, action),
             "time": -w.time,
         }
         if w.reverse:

@@ -15,7 +15,7 @@ from clutter_gym.collision import CollisionReport
 from clutter_gym.interfaces import StepOutcome
 from clutter_gym.planning.joint_space import JointPath
 from clutter_gym.robots.state import RobotState
-from clutter_gym.tasks.weights import check_weights
+from clutter_gym.tasks.terms import check_weights, clearance_term, control_term
 from clutter_gym.worlds.tabletop import ReachScene
 
 if TYPE_CHECKING:
@@ -194,16 +194,15 @@ class ReachTask:
         w = self.weights
         success = self.distance(state) <= self.success_radius
         to_go = self._to_go(state)
-        shortfall = max(0.0, self.clearance_margin - report.min_clearance)
         self_contact = report.self_collision is not None
         terms = {
             "progress": w.progress * (self._previous - to_go),
             "success": w.success if success else 0.0,
             "contact": -w.contact if report.in_contact else 0.0,
             "self_contact": -w.self_contact if self_contact else 0.0,
-            "clearance": -w.clearance * min(1.0, shortfall / self.clearance_margin) if self.clearance_margin else 0.0,
+            "clearance": clearance_term(w.clearance, self.clearance_margin, report.min_clearance),
             "tunneling": -w.tunneling * report.tunneling,
-            "control": -w.control * float(action @ action),
+            "control": control_term(w.control, action),
         }
         self._previous = to_go
         unsafe = report.in_contact or self_contact or report.tunneling > 0
