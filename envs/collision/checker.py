@@ -1,10 +1,12 @@
 """Robot-vs-scene clearance, contacts, self-collision and swept checks with FCL, cross-checked against pybullet.
 
-The obstacle broad phase (a dynamic AABB tree) is rebuilt on reset only. Each step moves the robot's FCL
-objects to the link poses the robot read in one batched call, then:
+The obstacles' FCL objects and their arrays for bounds (:mod:`bounds`) are rebuilt on reset only. Each step
+moves the robot's FCL objects to the link poses the robot read in one batched call, bounds every (shape,
+obstacle) pair from below in one numpy pass, then:
 
-1. one query per robot shape against the obstacle tree gives every link's clearance (capped at
-   ``clearance_range``), its witness points and the closest obstacle;
+1. each moving shape asks FCL about its obstacles in order of their bounds, until no bound can beat the best
+   exact distance: every link's clearance (capped at ``clearance_range``), its witness points and the closest
+   obstacle, exactly as if every pair were measured;
 2. pairs within ``contact_tolerance`` are enumerated as contacts with their penetration depth;
 3. enabled self pairs (the ACM) are tested, after a bounding-ball filter;
 4. shapes that moved faster than ``swept_speed`` are swept from their previous pose (``fcl.continuousCollide``,
@@ -22,6 +24,7 @@ from dataclasses import dataclass
 import fcl
 import numpy as np
 
+from clutter_gym.collision.bounds import ObstacleBounds
 from clutter_gym.collision.distance import signed_distance
 from clutter_gym.collision.robot_model import RobotCollisionModel
 from clutter_gym.robots.state import RobotState
@@ -30,6 +33,8 @@ from clutter_gym.worlds.scene import Obstacle
 
 #: Clearance reported when there is nothing to measure against (an empty scene without walls), metres.
 NO_OBSTACLE_CLEARANCE = 1e3
+#: scenes with at most this many obstacles bound every pair; larger ones first keep those near the robot
+SMALL_SCENE = 64
 
 
 @dataclass(frozen=True, slots=True)
@@ -101,14 +106,6 @@ def obstacle_object(o: Obstacle, shape: fcl.CollisionGeometry | None = None) -> 
     return fcl.CollisionObject(shape or obstacle_shape(o), fcl.Transform(rotation, list(o.centre)))
 
 
-def _half_extents(o: Obstacle) -> tuple[float, float, float]:
-    """Half extents of the world-axis-aligned box around an upright obstacle."""
-    if o.shape == "cylinder":
-        return (o.radius, o.radius, 0.5 * o.size[2])
-    c, s = abs(np.cos(o.yaw)), abs(np.sin(o.yaw))
-    return (0.5 * (c * o.size[0] + s * o.size[1]), 0.5 * (s * o.size[0] + c * o.size[1]), 0.5 * o.size[2])
-
-
 class CollisionChecker:
     """FCL model of one robot and the current scene.
 
@@ -137,20 +134,21 @@ class CollisionChecker:
         self.model = model
         self.links = tuple(link for link in model.links if link not in fixed_links)
         moving = [i for i, s in enumerate(model.shapes) if s.link not in fixed_links]
-        self._link_of_shape = np.array([self.links.index(s.link) if s.link in self.links else -1 for s in model.shapes])
+        #: the moving shapes of every link in ``self.links``
+        self._link_shapes = [[i for i, s in enumerate(model.shapes) if s.link == link] for link in self.links]
+        single = all(len(s) == 1 for s in self._link_shapes)
+        self._link_shape = np.array([s[0] for s in self._link_shapes]) if single else None
         self._base_link = base_link
         self.contact_tolerance = contact_tolerance
         self.clearance_range = clearance_range
         self.swept_speed = swept_speed
         self.dt = dt
         self._moving = np.array(moving, dtype=int)
-        self._radii = np.array([s.radius for s in model.shapes])
+        self._radii = np.array([s.radius for s in model.shapes])  # about each shape's origin
         self._sweepers = [fcl.CollisionObject(s.hull or s.geometry, fcl.Transform()) for s in model.shapes]
         self._obstacles: list[fcl.CollisionObject] = []
-        self._obstacle_index: dict[int, int] = {}
-        self._obstacle_low = self._obstacle_high = np.zeros((0, 3))
+        self._bounds = ObstacleBounds(())
         self._obstacle_bodies: frozenset[int] = frozenset()
-        self._manager: fcl.DynamicAABBTreeCollisionManager | None = None
         self._contact_request = fcl.CollisionRequest(num_max_contacts=4, enable_contact=True)
         self._ccd_request = fcl.ContinuousCollisionRequest()
         self._rows: np.ndarray | None = None
@@ -159,18 +157,9 @@ class CollisionChecker:
     # ------------------------------------------------------------------------------------------- scene
     def set_scene(self, obstacles: Sequence[Obstacle], bodies: Sequence[int]) -> None:
         """Rebuild the obstacle broad phase (call on reset). ``bodies`` are the matching pybullet body ids."""
-        geometries = [obstacle_shape(o) for o in obstacles]
-        self._obstacles = [obstacle_object(o, g) for o, g in zip(obstacles, geometries)]
-        self._obstacle_index = {id(g): i for i, g in enumerate(geometries)}
-        centres = np.array([o.centre for o in obstacles]).reshape(-1, 3)
-        half = np.array([_half_extents(o) for o in obstacles]).reshape(-1, 3)
-        self._obstacle_low, self._obstacle_high = centres - half, centres + half
+        self._obstacles = [obstacle_object(o) for o in obstacles]
+        self._bounds = ObstacleBounds(obstacles)
         self._obstacle_bodies = frozenset(bodies)
-        manager = fcl.DynamicAABBTreeCollisionManager()
-        if self._obstacles:
-            manager.registerObjects(self._obstacles)
-        manager.setup()
-        self._manager = manager
         self._previous = None  # a reset teleports the robot: nothing to sweep from
 
     # ------------------------------------------------------------------------------------------- queries
@@ -186,41 +175,64 @@ class CollisionChecker:
     def clearance(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Per shape: signed distance (capped at the range), obstacle index (-1 beyond it) and witness points.
 
-        Robot objects must be synced. One query per moving shape against the obstacle tree: FCL visits the
-        obstacles nearest-box-first and prunes every subtree farther than the running best the callback hands
-        back: about five narrow-phase calls per shape on the Panda, and the same cost at 1,000 and 10,000
-        obstacles. (One robot-tree-vs-obstacle-tree traversal has a single bound for all shapes, the largest
-        per-shape best, and made twice the narrow-phase calls.)
+        Robot objects must be synced. Obstacles are measured nearest-bound first (:mod:`bounds`), and a shape
+        stops at the first obstacle whose lower bound cannot beat its best exact distance: a shape with nothing
+        in range makes no FCL call.
         """
-        n = len(self.model.objects)
+        return self._measure()[:3]
+
+    def _measure(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`clearance`, and the candidate obstacles and lower bounds it used (rows: moving shapes)."""
+        model, moving = self.model, self._moving
+        n = len(model.objects)
         best = np.full(n, self.clearance_range)
         other = np.full(n, -1)
         points = np.zeros((n, 2, 3))
         if not self._obstacles:
-            return np.full(n, NO_OBSTACLE_CLEARANCE), other, points
-        for i in self._moving:
-            raw, j, p = self._nearest_obstacle(i, self.clearance_range + self.model.padding[i])
+            return np.full(n, NO_OBSTACLE_CLEARANCE), other, points, np.zeros(0, int), np.zeros((len(moving), 0))
+        candidates, bound = self._lower_bounds(moving)
+        order = np.argsort(bound, axis=1, kind="stable")
+        limits = (self.clearance_range + model.padding[moving]).tolist()
+        rows = zip(moving.tolist(), candidates[order].tolist(), np.take_along_axis(bound, order, axis=1).tolist())
+        for (i, nearest_first, lower), limit in zip(rows, limits):
+            raw, j, p = self._nearest_obstacle(i, nearest_first, lower, limit)
             if j >= 0:
-                best[i], other[i], points[i] = raw - self.model.padding[i], j, p
-        return best, other, points
+                best[i], other[i], points[i] = raw - model.padding[i], j, p
+        return best, other, points, candidates, bound
 
-    def _nearest_obstacle(self, i: int, bound: float) -> tuple[float, int, np.ndarray | None]:
-        """(unpadded distance, obstacle index, witness points) of shape ``i``'s nearest obstacle within ``bound``."""
+    def _lower_bounds(self, shapes: np.ndarray, grow: np.ndarray | float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        """Candidate obstacles (indices) and lower bounds (shapes, candidates) on their unpadded distances.
+
+        The balls are the shapes' enclosing balls, their radii grown by ``grow`` (per shape) if given. In a large
+        scene, obstacles farther than the clearance range (or the contact tolerance) plus padding from every ball
+        are left out.
+        """
+        bounds = self._bounds
+        centres = self.model.ball_centres()[shapes]
+        radii = self.model.ball_radius[shapes] + grow
+        if len(bounds) <= SMALL_SCENE:
+            return bounds.index, bounds.signed_distance(centres) - radii[:, None]
+        middle = 0.5 * (centres.min(axis=0) + centres.max(axis=0))
+        reach = float((np.linalg.norm(centres - middle, axis=1) + radii + self.model.padding[shapes]).max())
+        columns = bounds.near(middle, reach + max(self.clearance_range, self.contact_tolerance))
+        return bounds.index[columns], bounds.signed_distance(centres, columns) - radii[:, None]
+
+    def _nearest_obstacle(self, i: int, obstacles: list[int], lower: list[float], limit: float
+                          ) -> tuple[float, int, np.ndarray | None]:
+        """(unpadded distance, obstacle index, witness points) of shape ``i``'s nearest obstacle within ``limit``.
+
+        ``obstacles`` come in ascending order of their lower bounds ``lower``.
+        """
         shape, solid = self.model.objects[i], self.model.solid_objects[i]
-        found: list = [bound, -1, None]
-
-        def visit(o1: fcl.CollisionObject, _o2: fcl.CollisionObject, _data: object) -> tuple[bool, float]:
-            # o1 is a fresh wrapper of an obstacle; the geometry a DistanceResult hands back is the very Python
-            # object the obstacle was built with, so it names the obstacle. The robot shape goes first: as the
-            # first argument a BVH reports world-frame witness points in order.
-            d, result = signed_distance(shape, o1, solid)
-            if d < found[0]:
-                found[:] = d, self._obstacle_index[id(result.o2)], result.nearest_points
-            # FCL visits a box only if it is strictly nearer than the bound: keep overlapping boxes in play
-            return False, max(found[0], 1e-12)
-
-        self._manager.distance(shape, None, visit)
-        return found[0], found[1], found[2]
+        best, nearest, witness = limit, -1, None
+        for j, bound in zip(obstacles, lower):
+            if bound >= best:
+                break
+            # the robot shape goes first: as the first argument a BVH reports world-frame witness points in order
+            d, result = signed_distance(shape, self._obstacles[j], solid)
+            if d < best:
+                best, nearest, witness = d, j, result.nearest_points
+        return best, nearest, witness
 
     def check(self, state: RobotState, pybullet_contacts: Sequence[tuple[int, float]] = ()) -> CollisionReport:
         """Clearance, contacts, self-collision and tunneling of the robot in ``state``.
@@ -230,26 +242,21 @@ class CollisionChecker:
             pybullet_contacts: (other body id, contact distance) of the robot's pybullet contact points.
         """
         self.sync(state)
-        distance, other, points = self.clearance()
+        distance, other, points, candidates, bound = self._measure()
         model = self.model
-        n_links = len(self.links)
-        link_of, moving = self._link_of_shape, self._link_of_shape >= 0
-        link_clearance = np.full(n_links, min(self.clearance_range, NO_OBSTACLE_CLEARANCE))
-        np.minimum.at(link_clearance, link_of[moving], distance[moving])
-        directions = np.zeros((n_links, 3))
-        gap = points[:, 1] - points[:, 0]
+        nearest = self._link_shape  # each link reports its nearest shape
+        if nearest is None:
+            nearest = np.array([s[int(np.argmin(distance[s]))] for s in self._link_shapes])
+        link_clearance = np.minimum(distance[nearest], min(self.clearance_range, NO_OBSTACLE_CLEARANCE))
+        gap = points[nearest, 1] - points[nearest, 0]
         norms = np.linalg.norm(gap, axis=1)
-        closest_shape = np.full(n_links, -1)
-        for i in np.argsort(-distance):  # nearest last, so each link keeps its nearest shape
-            if moving[i]:
-                closest_shape[link_of[i]] = i
-        for link, i in enumerate(closest_shape):
-            if i >= 0 and other[i] >= 0 and distance[i] > 0.0 and norms[i] > 0.0:
-                directions[link] = gap[i] / norms[i]
+        pointing = (other[nearest] >= 0) & (link_clearance > 0.0) & (norms > 0.0)
+        directions = np.zeros((len(self.links), 3))
+        directions[pointing] = gap[pointing] / norms[pointing, None]
         k = int(np.argmin(distance))
         found = other[k] >= 0
-        contacts = self._contacts(distance, points)
-        tunneling = self._swept()
+        contacts = self._contacts(distance, points, candidates, bound)
+        tunneling = self._swept(candidates, bound)
         tol = self.contact_tolerance
         n_pb = sum(1 for body, d in pybullet_contacts if d <= tol and body in self._obstacle_bodies)
         return CollisionReport(
@@ -265,74 +272,71 @@ class CollisionChecker:
             disagreement=bool(contacts) != (n_pb > 0),
         )
 
-    def _contacts(self, distance: np.ndarray, points: np.ndarray) -> tuple[Contact, ...]:
+    def _contacts(self, distance: np.ndarray, points: np.ndarray, candidates: np.ndarray, bound: np.ndarray
+                  ) -> tuple[Contact, ...]:
         """Contacts of the shapes whose nearest obstacle is within the tolerance.
 
-        A shape can touch several obstacles at once: every obstacle whose box meets the touching shape's
-        bounding box is measured, and those within the tolerance get their penetration depth from ``fcl.collide``.
+        A shape can touch several obstacles at once: every candidate obstacle whose lower bound is within the
+        tolerance is measured, and those within it get their penetration depth from ``fcl.collide``.
         """
-        touching = np.flatnonzero(distance <= self.contact_tolerance)
-        if touching.size == 0:
-            return ()
-        model, out = self.model, []
-        centres = model.position[touching]
-        reach = (self._radii[touching] + model.padding[touching] + self.contact_tolerance)[:, None]
-        for k, j in self._boxes_meeting(centres - reach, centres + reach):
-            i = touching[k]
-            obj = model.solid_objects[i]  # a BVH's contact depths are not meaningful; its hull's are
-            d = self._pair_distance(i, j)
-            if d > self.contact_tolerance:
+        model, out, tol = self.model, [], self.contact_tolerance
+        for row, i in enumerate(self._moving):
+            if distance[i] > tol:
                 continue
-            result = fcl.CollisionResult()
-            depth, where = max(0.0, -d), points[i].mean(axis=0)
-            if fcl.collide(obj, self._obstacles[j], self._contact_request, result):
-                deepest = max(result.contacts, key=lambda c: c.penetration_depth)
-                depth = max(depth, float(deepest.penetration_depth))
-                where = np.asarray(deepest.pos, dtype=float)
-            out.append(Contact(model.shapes[i].link, int(j), depth + model.padding[i], where))
+            obj = model.solid_objects[i]  # a BVH's contact depths are not meaningful; its hull's are
+            for j in np.sort(candidates[bound[row] - model.padding[i] <= tol]):
+                d = self._pair_distance(i, j)
+                if d > tol:
+                    continue
+                result = fcl.CollisionResult()
+                depth, where = max(0.0, -d), points[i].mean(axis=0)
+                if fcl.collide(obj, self._obstacles[j], self._contact_request, result):
+                    deepest = max(result.contacts, key=lambda c: c.penetration_depth)
+                    depth = max(depth, float(deepest.penetration_depth))
+                    where = np.asarray(deepest.pos, dtype=float)
+                out.append(Contact(model.shapes[i].link, int(j), depth + model.padding[i], where))
         return tuple(out)
-
-    def _boxes_meeting(self, low: np.ndarray, high: np.ndarray) -> list[tuple[int, int]]:
-        """(row, obstacle) pairs where the box [low, high] of a row (n, 3) overlaps the obstacle's world AABB."""
-        overlap = np.all((low[:, None] <= self._obstacle_high[None]) & (high[:, None] >= self._obstacle_low[None]),
-                         axis=2)
-        return list(zip(*np.nonzero(overlap)))
 
     def _pair_distance(self, shape: int, obstacle: int) -> float:
         """Padded signed distance from a robot shape (its solid: a mesh's hull) to an obstacle, metres."""
         d, _ = signed_distance(self.model.solid_objects[shape], self._obstacles[obstacle])
         return d - self.model.padding[shape]
 
-    def _swept(self) -> int:
+    def _swept(self, candidates: np.ndarray, bound: np.ndarray) -> int:
         """Count swept hits, for shapes faster than ``swept_speed``, that end the step clear of the obstacle.
 
-        Candidates are the obstacles whose axis-aligned box overlaps the box around the shape's bounding ball at
-        both ends of the step.
+        ``candidates`` and ``bound`` are the end-of-step lower bounds (rows: moving shapes). No point of a shape
+        moved farther than its ``travel`` during the step, so the bound less the travel bounds the sweep.
         """
         model = self.model
-        now = (model.position.copy(), model.rotation.copy())
+        now = (model.position, model.rotation)  # sync replaces these arrays, never writes into them
         previous, self._previous = self._previous, now
         if previous is None or not self._obstacles or not np.isfinite(self.swept_speed):
             return 0
-        radius = self._radii
+        radius, moving = self._radii[self._moving], self._moving
+        shift = np.linalg.norm(now[0][moving] - previous[0][moving], axis=1)
         # rotation adds at most angle * radius to the travel of any point of the shape
-        cos_angle = np.clip((np.einsum("nij,nij->n", now[1], previous[1]) - 1.0) / 2.0, -1.0, 1.0)
-        travel = np.linalg.norm(now[0] - previous[0], axis=1) + np.arccos(cos_angle) * radius
-        fast = self._moving[travel[self._moving] > self.swept_speed * self.dt]
-        if fast.size == 0:
+        cos_angle = (np.einsum("nij,nij->n", now[1][moving], previous[1][moving]) - 1.0) / 2.0
+        angle = np.arccos(np.minimum(np.maximum(cos_angle, -1.0), 1.0))
+        travel = shift + angle * radius
+        rows = np.flatnonzero(travel > self.swept_speed * self.dt)
+        if rows.size == 0:
             return 0
-        reach = (radius[fast] + model.padding[fast])[:, None]
-        low = np.minimum(previous[0][fast], now[0][fast]) - reach
-        high = np.maximum(previous[0][fast], now[0][fast]) + reach
+        reach = bound[rows] - travel[rows, None]
+        tol = self.contact_tolerance
+        if len(candidates) < len(self._obstacles) and travel[rows].max() + tol > self.clearance_range:
+            # obstacles left out of the end-of-step bounds may be in the way: bound the whole sweeps instead
+            candidates, bound = self._lower_bounds(moving, grow=travel)
+            reach = bound[rows]
         hits = 0
-        for k, j in self._boxes_meeting(low, high):
-            i = fast[k]
+        for row, k in zip(*np.nonzero(reach <= tol)):
+            i, j = moving[rows[row]], int(candidates[k])
             sweeper, obstacle = self._sweepers[i], self._obstacles[j]
             sweeper.setRotation(previous[1][i])
             sweeper.setTranslation(previous[0][i])
             result = fcl.ContinuousCollisionResult()
             fcl.continuousCollide(sweeper, fcl.Transform(now[1][i], now[0][i]), obstacle, obstacle.getTransform(),
                                   self._ccd_request, result)
-            if result.is_collide and self._pair_distance(i, j) > self.contact_tolerance:  # clear at the end
+            if result.is_collide and self._pair_distance(i, j) > tol:  # clear at the end
                 hits += 1
         return hits

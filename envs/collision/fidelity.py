@@ -35,7 +35,9 @@ class LinkShape:
         position: (3,) shape origin in the link frame, metres.
         rotation: (3, 3) shape orientation in the link frame.
         kind: "sphere", "box", "cylinder", "capsule", "convex" or "mesh".
-        radius: radius of a ball about the shape origin that encloses the shape, metres (broad-phase bound).
+        radius: radius of a ball about the shape origin that encloses the shape, metres (bounds its rotation).
+        ball: (centre (3,) in the shape frame, radius) of a tighter enclosing ball, for distance bounds; None
+            for the ball about the origin.
         hull: for a ``mesh`` shape, its convex hull (``fcl.Convex``), used where FCL's triangle BVH gives no
             answer: penetration depth (its signed distance returns 0 or -1 on overlap), contact depth and swept
             checks (a BVH mover is never detected by conservative advancement, and a shape moving against a
@@ -49,6 +51,12 @@ class LinkShape:
     kind: str
     radius: float
     hull: fcl.CollisionGeometry | None = None
+    ball: tuple[np.ndarray, float] | None = None
+
+    @property
+    def bounding_ball(self) -> tuple[np.ndarray, float]:
+        """(centre in the shape frame, radius) of the tightest enclosing ball this shape knows."""
+        return self.ball if self.ball is not None else (np.zeros(3), self.radius)
 
 
 def check_fidelity(fidelity: str) -> str:
@@ -71,11 +79,15 @@ def _element_shape(e: CollisionElement, fidelity: str) -> LinkShape:
     if e.kind != "mesh":
         return LinkShape(e.link, _primitive(e.kind, e.size), e.position, rotation, e.kind,
                          _primitive_radius(e.kind, e.size))
-    vertices_radius = float(np.linalg.norm(e.mesh.vertices, axis=1).max())
+    vertices = np.asarray(e.mesh.vertices)
+    vertices_radius = float(np.linalg.norm(vertices, axis=1).max())
+    centre = 0.5 * (vertices.min(axis=0) + vertices.max(axis=0))  # a mesh's origin is often far from its middle
+    ball = (centre, float(np.linalg.norm(vertices - centre, axis=1).max()))
     if fidelity == "mesh":
-        return LinkShape(e.link, bvh_model(e.mesh), e.position, rotation, "mesh", vertices_radius, convex(e.mesh))
+        return LinkShape(e.link, bvh_model(e.mesh), e.position, rotation, "mesh", vertices_radius, convex(e.mesh),
+                         ball)
     if fidelity == "convex":
-        return LinkShape(e.link, convex(e.mesh), e.position, rotation, "convex", vertices_radius)
+        return LinkShape(e.link, convex(e.mesh), e.position, rotation, "convex", vertices_radius, ball=ball)
     kind, size, local_position, local_rotation = fitted_primitive(e.mesh.convex_hull.vertices)
     return LinkShape(e.link, _primitive(kind, size), e.position + rotation @ local_position, rotation @ local_rotation,
                      kind, _primitive_radius(kind, size))

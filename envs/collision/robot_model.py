@@ -58,6 +58,9 @@ class RobotCollisionModel:
         self._rows = np.array([self.link_names.index(s.link) for s in self.shapes])  # shape -> pose row
         self._local_pos = np.array([s.position for s in self.shapes])
         self._local_rot = np.array([s.rotation for s in self.shapes])
+        self._ball_offset = np.array([s.bounding_ball[0] for s in self.shapes]).reshape(-1, 3)
+        #: radius of every shape's enclosing ball (:meth:`ball_centres`), metres
+        self.ball_radius = np.array([s.bounding_ball[1] for s in self.shapes])
         self.objects = [fcl.CollisionObject(s.geometry, fcl.Transform()) for s in self.shapes]
         # objects that answer depth and swept queries: the hull of a mesh shape, else the shape itself
         self.solid_objects = [
@@ -93,6 +96,15 @@ class RobotCollisionModel:
             for j in range(i + 1, len(self.shapes))
             if tuple(sorted((self.shapes[i].link, self.shapes[j].link))) in enabled
         ]
+        first, second = np.array(self.self_pairs, dtype=int).reshape(-1, 2).T
+        radius = self.ball_radius + self.padding
+        self._pair_index = (first, second, radius[first] + radius[second])
+
+    def _pair_bounds(self) -> np.ndarray:
+        """Lower bounds on every enabled pair's padded distance, from the shapes' bounding balls."""
+        first, second, reach = self._pair_index
+        centres = self.ball_centres()
+        return np.linalg.norm(centres[first] - centres[second], axis=1) - reach
 
     def world_poses(self, positions: np.ndarray, rotations: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """World positions (n, 3) and rotations (n, 3, 3) of every shape for link poses given by row."""
@@ -108,10 +120,17 @@ class RobotCollisionModel:
         for obj, hull in self._hulls:
             hull.setTransform(obj.getTransform())
 
+    def ball_centres(self) -> np.ndarray:
+        """(n, 3) world centres of the shapes' enclosing balls (radii :attr:`ball_radius`) at the synced poses."""
+        if not self._ball_offset.any():
+            return self.position
+        return self.position + np.einsum("nij,nj->ni", self.rotation, self._ball_offset)
+
     def self_collision(self) -> tuple[str, str] | None:
         """The first enabled link pair in collision (padding included), or None."""
         request, objects, pad = self._collide_request, self.objects, self.padding
-        for i, j in self.self_pairs:
+        for k in np.flatnonzero(self._pair_bounds() <= 0.0):  # pairs whose balls are apart cannot touch
+            i, j = self.self_pairs[k]
             if pad[i] + pad[j] > 0.0:
                 hit = self._pair_distance(i, j) <= 0.0
             else:
@@ -123,7 +142,11 @@ class RobotCollisionModel:
     def self_clearance(self) -> SelfClearance:
         """Smallest signed distance over the enabled link pairs, and that pair."""
         best, pair = np.inf, None
-        for i, j in self.self_pairs:
+        bounds = self._pair_bounds()
+        for k in np.argsort(bounds, kind="stable"):
+            if bounds[k] >= best:
+                break
+            i, j = self.self_pairs[k]
             d = self._pair_distance(i, j)
             if d < best:
                 best, pair = d, (self.shapes[i].link, self.shapes[j].link)
