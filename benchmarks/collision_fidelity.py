@@ -248,8 +248,8 @@ def scaling_table(panda: Robot, sizes: list[int], n_configs: int, budget_s: floa
     moving = [o for o, s in zip(checker.model.objects, checker.model.shapes) if s.link in checker.links]
     emit("\n### Broad phase: Panda (convex), N boxes of 5-15 cm over a square of side 1.5 sqrt(N/10) m, bottoms at "
          "z in [0, 0.9] m (fixed density); us per clearance query (n = queries timed)\n")
-    emit("| N obstacles | checker (bounds, then FCL) | brute force fcl.distance | pybullet loop | pybullet broad phase | "
-         "checker vs brute max diff (mm) |\n|---|---|---|---|---|---|")
+    emit("| N obstacles | checker (bounds, then FCL) | brute force fcl.distance | pybullet loop | "
+         "pybullet broad phase | checker vs brute max diff (mm) |\n|---|---|---|---|---|---|")
     tree_us: dict[int, float] = {}
     last: dict[str, tuple[int, float]] = {}
     for n in sizes:
