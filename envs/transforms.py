@@ -2,24 +2,29 @@
 
 from __future__ import annotations
 
+from typing import TypeVar
+
 import numpy as np
+
+Real = TypeVar("Real", float, np.ndarray)
 
 
 def quat_to_matrix(q: np.ndarray) -> np.ndarray:
     """Rotation matrices from unit quaternions: (4,) -> (3, 3) or (n, 4) -> (n, 3, 3)."""
     q = np.asarray(q, dtype=float)
-    x, y, z, w = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    out = np.empty(q.shape[:-1] + (3, 3))
-    out[..., 0, 0] = 1 - 2 * (y * y + z * z)
-    out[..., 0, 1] = 2 * (x * y - w * z)
-    out[..., 0, 2] = 2 * (x * z + w * y)
-    out[..., 1, 0] = 2 * (x * y + w * z)
-    out[..., 1, 1] = 1 - 2 * (x * x + z * z)
-    out[..., 1, 2] = 2 * (y * z - w * x)
-    out[..., 2, 0] = 2 * (x * z - w * y)
-    out[..., 2, 1] = 2 * (y * z + w * x)
-    out[..., 2, 2] = 1 - 2 * (x * x + y * y)
-    return out
+    if q.ndim == 1:  # Python floats: the same arithmetic, without numpy's cost per operation on 0-d arrays
+        return np.array(_matrix_entries(*q.tolist())).reshape(3, 3)
+    entries = _matrix_entries(q[..., 0], q[..., 1], q[..., 2], q[..., 3])
+    return np.stack(entries, axis=-1).reshape(q.shape[:-1] + (3, 3))
+
+
+def _matrix_entries(x: Real, y: Real, z: Real, w: Real) -> tuple[Real, ...]:
+    """The rotation matrix of quaternion (x, y, z, w), row by row."""
+    return (
+        1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),
+        2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
+        2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y),
+    )
 
 
 def yaw_quat(yaw: float) -> tuple[float, float, float, float]:

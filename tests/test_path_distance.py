@@ -6,10 +6,12 @@ import math
 
 import numpy as np
 import pytest
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import dijkstra
 
 from clutter_gym.tasks.navigate import SUBGOAL_PLAN_MARGIN
-from clutter_gym.worlds.clutter import ClutterSpec, sample_scene
-from clutter_gym.worlds.path_distance import PathDistance
+from clutter_gym.worlds.clutter import ClutterSpec, clearance_field, sample_scene
+from clutter_gym.worlds.path_distance import _MOVES, PathDistance, _dijkstra_from
 from clutter_gym.worlds.scene import Obstacle, Scene
 
 SPEC = ClutterSpec(arena_size=6.0)
@@ -135,6 +137,59 @@ def test_the_subgoal_entry_is_opt_in_and_its_lookahead_is_checked():
     env.close()
     with pytest.raises(ValueError, match="subgoal_lookahead must be in"):
         gym.make("ClutterNav-v0", subgoal_lookahead=-1.0)
+
+
+# -- the search and the field it starts from, against straightforward versions of them ---------------------------
+
+def test_the_search_is_an_undirected_search_on_each_edge_once():
+    """Distances and next cells, ties between equally short paths included, are those of scipy's undirected
+    Dijkstra on a graph that stores each undirected edge of the 16-neighbourhood once."""
+    rng = np.random.default_rng(11)
+    for _ in range(6):
+        scene = sample_scene(rng, SPEC, R)
+        free = clearance_field(scene.obstacles, SPEC, cap=0.5) > R
+        free[30, 30] = True
+        for cost in (None, 1.0 + rng.uniform(0.0, 4.0, free.shape)):
+            distance, after = _dijkstra_from((30, 30), free, SPEC.resolution, cost)
+            reference, reference_after = _undirected_search((30, 30), free, SPEC.resolution, cost)
+            np.testing.assert_array_equal(distance, reference)
+            np.testing.assert_array_equal(after, reference_after)
+
+
+def test_a_generated_scene_gives_the_field_of_its_bare_layout():
+    """The clearance field a generated scene keeps gives bit for bit the field computed from the layout alone."""
+    rng = np.random.default_rng(8)
+    for _ in range(5):
+        scene = sample_scene(rng, SPEC, R)
+        bare = Scene(scene.obstacles, scene.start, scene.goal)
+        assert scene.clearance_grid is not None and bare == scene
+        for margin in (None, SUBGOAL_PLAN_MARGIN):
+            kept, fresh = PathDistance(scene, SPEC, R, margin), PathDistance(bare, SPEC, R, margin)
+            np.testing.assert_array_equal(kept.values, fresh.values)
+            if margin is not None:
+                np.testing.assert_array_equal(kept.path(*scene.start[:2]), fresh.path(*scene.start[:2]))
+
+
+def _undirected_search(source, free, res, cost):
+    """Shortest paths from ``source`` on the half graph: one stored edge per forward move."""
+    n = free.shape[0]
+    padded = np.pad(free, 2)
+    rows, cols, weights = [], [], []
+    for (di, dj), through in _MOVES:
+        ok = free & padded[2 + di:2 + di + n, 2 + dj:2 + dj + n]
+        for ti, tj in through:
+            ok &= padded[2 + ti:2 + ti + n, 2 + tj:2 + tj + n]
+        ids = np.flatnonzero(ok)
+        weight = np.full(ids.size, res * math.hypot(di, dj))
+        if cost is not None:
+            weight *= 0.5 * (cost.ravel()[ids] + cost.ravel()[ids + di * n + dj])
+        rows.append(ids)
+        cols.append(ids + di * n + dj)
+        weights.append(weight)
+    graph = coo_matrix((np.concatenate(weights), (np.concatenate(rows), np.concatenate(cols))), shape=(n * n, n * n))
+    distance, after = dijkstra(graph.tocsr(), directed=False, indices=source[0] * n + source[1],
+                               return_predecessors=True)
+    return distance.reshape(n, n), after
 
 
 def _box_distance(point: tuple[float, float], centre: tuple[float, float], half: tuple[float, float]) -> float:

@@ -6,7 +6,8 @@ Sampling, per attempt:
    ``obstacle_density`` of the arena floor. Sizes take one of ``size_levels`` evenly spaced values per range,
    so that the body pool (``worlds/pool.py``) covers every layout with a few dozen bodies.
 2. A clearance field on an occupancy grid of ``resolution`` metres: the exact signed distance from each cell
-   centre to the nearest obstacle footprint or wall, evaluated only in each obstacle's window.
+   centre to the nearest obstacle footprint or wall, evaluated only in each obstacle's window. The scene keeps it
+   (``Scene.clearance_grid``) for the path-distance grid of ``worlds/path_distance.py``.
 3. A cell is *free* when its clearance exceeds ``r + resolution / 2`` (r = footprint radius). The distance is
    1-Lipschitz and every point of a segment between 4-neighbour centres lies within ``resolution / 2`` of one
    of them, so a 4-connected chain of free cells is a collision-free path for the disc: same free component
@@ -87,16 +88,21 @@ class ClutterSpec:
         return -half + (np.arange(n) + 0.5) * self.arena_size / n
 
     @cached_property
+    def size_values(self) -> dict[str, np.ndarray]:
+        """The ``size_levels`` evenly spaced values (1 mm grid) of each size range, by the range's name."""
+        ranges = {"box_side": self.box_side, "cylinder_radius": self.cylinder_radius, "wall_length": self.wall_length}
+        return {name: np.round(np.linspace(lo, hi, self.size_levels), 3) for name, (lo, hi) in ranges.items()}
+
+    @cached_property
     def wall_clearance(self) -> np.ndarray:
         """(n, n) distance from each cell centre to the arena walls, indexed [ix, iy]."""
         d = 0.5 * self.arena_size - np.abs(self.cell_centres)
         return np.minimum(d[:, None], d[None, :])
 
 
-def _level_values(rng: np.random.Generator, bounds: tuple[float, float], levels: int, n: int) -> np.ndarray:
-    """``n`` values drawn uniformly from ``levels`` evenly spaced sizes in [bounds[0], bounds[1]] (1 mm grid)."""
-    choices = np.round(np.linspace(bounds[0], bounds[1], levels), 3)
-    return choices[rng.integers(0, levels, size=n)]
+def _level_values(rng: np.random.Generator, choices: np.ndarray, n: int) -> np.ndarray:
+    """``n`` values drawn uniformly from ``choices``."""
+    return choices[rng.integers(0, len(choices), size=n)]
 
 
 def _sample_obstacles(rng: np.random.Generator, spec: ClutterSpec) -> tuple[Obstacle, ...]:
@@ -107,10 +113,10 @@ def _sample_obstacles(rng: np.random.Generator, spec: ClutterSpec) -> tuple[Obst
     batch = 32
     while covered < target:
         kind = rng.choice(3, size=batch, p=spec.shape_probs)
-        k = spec.size_levels
-        side_a, side_b = _level_values(rng, spec.box_side, k, batch), _level_values(rng, spec.box_side, k, batch)
-        radius = _level_values(rng, spec.cylinder_radius, k, batch)
-        length = _level_values(rng, spec.wall_length, k, batch)
+        sizes = spec.size_values
+        side_a, side_b = _level_values(rng, sizes["box_side"], batch), _level_values(rng, sizes["box_side"], batch)
+        radius = _level_values(rng, sizes["cylinder_radius"], batch)
+        length = _level_values(rng, sizes["wall_length"], batch)
         yaw = rng.uniform(-math.pi, math.pi, size=batch)
         xy = rng.uniform(-half, half, size=(batch, 2))
         for i in range(batch):
@@ -126,6 +132,25 @@ def _sample_obstacles(rng: np.random.Generator, spec: ClutterSpec) -> tuple[Obst
             obstacles.append(o)
             covered += o.area
     return tuple(obstacles)
+
+
+@dataclass(frozen=True)
+class ClearanceGrid:
+    """A layout's :func:`clearance_field`: ``values`` (n, n) on the grid of ``spec``, capped at ``cap`` metres."""
+
+    spec: ClutterSpec
+    cap: float
+    values: np.ndarray
+
+
+def scene_clearance(scene: Scene, spec: ClutterSpec, cap: float) -> np.ndarray:
+    """``clearance_field(scene.obstacles, spec, cap)``, cut from the field the scene was sampled on when that one
+    is on the same grid and capped no lower: the same numbers, as no obstacle comes nearer than ``cap`` to a cell
+    it leaves out."""
+    grid = scene.clearance_grid
+    if grid is not None and grid.cap >= cap and grid.spec == spec:
+        return np.minimum(grid.values, cap)
+    return clearance_field(scene.obstacles, spec, cap)
 
 
 def clearance_field(obstacles: tuple[Obstacle, ...], spec: ClutterSpec, cap: float) -> np.ndarray:
@@ -181,9 +206,10 @@ def sample_scene(rng: np.random.Generator, spec: ClutterSpec, robot_radius: floa
     free_margin = robot_radius + 0.5 * spec.resolution
     spawn_margin = robot_radius + spec.spawn_clearance
     c = spec.cell_centres
+    cap = spawn_margin + spec.resolution
     for _ in range(spec.max_attempts):
         obstacles = _sample_obstacles(rng, spec)
-        field = clearance_field(obstacles, spec, cap=spawn_margin + spec.resolution)
+        field = clearance_field(obstacles, spec, cap)
         labels, _ = ndimage.label(field > free_margin)
         spawn = np.flatnonzero((field > spawn_margin).ravel())
         if spawn.size < 2:
@@ -199,7 +225,8 @@ def sample_scene(rng: np.random.Generator, spec: ClutterSpec, robot_radius: floa
         goal_cell = int(rng.choice(goals))
         gx, gy = c[goal_cell // len(c)], c[goal_cell % len(c)]
         yaw = float(rng.uniform(-math.pi, math.pi))
-        return Scene(obstacles, (float(sx), float(sy), yaw), (float(gx), float(gy)))
+        field.flags.writeable = False
+        return Scene(obstacles, (float(sx), float(sy), yaw), (float(gx), float(gy)), ClearanceGrid(spec, cap, field))
     raise RuntimeError(
         f"no layout with a reachable goal in {spec.max_attempts} attempts at obstacle_density="
         f"{spec.obstacle_density} in a {spec.arena_size} m arena; lower the density or enlarge the arena"

@@ -14,18 +14,20 @@ off obstacles where there is room to. The subgoal is the point a fixed length ah
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Iterator
+from dataclasses import dataclass
 
 import numpy as np
 from scipy import ndimage
-from scipy.sparse import coo_matrix
+from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
-from clutter_gym.worlds.clutter import ClutterSpec, clearance_field
+from clutter_gym.worlds.clutter import ClutterSpec, scene_clearance
 from clutter_gym.worlds.scene import Scene
 
-# Forward moves (di, dj) of the 16-neighbourhood (their mirror images are the same undirected edges), each with
+# Forward moves (di, dj) of the 16-neighbourhood (the other eight are their mirror images), each with
 # the cells its segment passes through, which must be free too. 16 neighbours bound the path-length error in
 # open space to 2.7% (8 neighbours: 8.2%).
 _MOVES = (
@@ -56,7 +58,7 @@ class PathDistance:
         self._res = float(self._centres[1] - self._centres[0])
         self._origin, self._top = float(self._centres[0]), float(len(self._centres) - 1)  # first centre, last index
         reach = self._res if plan_margin is None else max(self._res, plan_margin)
-        clearance = clearance_field(scene.obstacles, spec, cap=robot_radius + reach)
+        clearance = scene_clearance(scene, spec, cap=robot_radius + reach)
         free = clearance > robot_radius
         goal_cell = self._nearest_cell(scene.goal)
         free[goal_cell] = True
@@ -132,28 +134,65 @@ def _dijkstra_from(source: tuple[int, int], free: np.ndarray, res: float,
 
     ``cost`` (n, n), if given, weighs each metre of a move by the mean cost of the cells it joins."""
     n = free.shape[0]
-    padded = np.pad(free, 2, constant_values=False)
+    stencil = _stencil(n)
+    padded = np.zeros((n + 4, n + 4), dtype=bool)
+    padded[2:-2, 2:-2] = free
 
     def shifted(di: int, dj: int) -> np.ndarray:  # shifted(di, dj)[i, j] = free[i + di, j + dj], False outside
         return padded[2 + di:2 + di + n, 2 + dj:2 + dj + n]
 
-    rows, cols, weights = [], [], []
-    for (di, dj), through in _MOVES:
-        ok = free & shifted(di, dj)
+    ok = np.empty((len(stencil.moves), n, n), dtype=bool)  # ok[k, i, j]: move k from cell (i, j) stays free
+    for k, (move, through) in enumerate(stencil.moves):
+        np.logical_and(free, shifted(*move), out=ok[k])
         for cell in through:
-            ok &= shifted(*cell)
-        source_ids = np.flatnonzero(ok)
-        rows.append(source_ids)
-        cols.append(source_ids + di * n + dj)
-        weight = np.full(source_ids.size, res * math.hypot(di, dj))
-        if cost is not None:
-            flat = cost.ravel()
-            weight *= 0.5 * (flat[source_ids] + flat[source_ids + di * n + dj])
-        weights.append(weight)
-    graph = coo_matrix((np.concatenate(weights), (np.concatenate(rows), np.concatenate(cols))), shape=(n * n, n * n))
-    distance, predecessors = dijkstra(graph.tocsr(), directed=False, indices=source[0] * n + source[1],
-                                      return_predecessors=True)
+            np.logical_and(ok[k], shifted(*cell), out=ok[k])
+    edges = np.flatnonzero(ok.reshape(len(stencil.moves), -1).T)  # row by row, each row in the order of moves
+    indptr = np.zeros(n * n + 1, dtype=np.int32)
+    np.cumsum(ok.sum(axis=0, dtype=np.int32), out=indptr[1:])
+    targets = stencil.targets[edges]
+    weights = (res * stencil.lengths)[edges % len(stencil.moves)]
+    if cost is not None:
+        flat = cost.ravel()
+        weights *= 0.5 * (flat[edges // len(stencil.moves)] + flat[targets])
+    graph = csr_matrix((weights, targets, indptr), shape=(n * n, n * n))
+    distance, predecessors = dijkstra(graph, indices=source[0] * n + source[1], return_predecessors=True)
     return distance.reshape(n, n), predecessors
+
+
+@dataclass(frozen=True)
+class _Stencil:
+    """The 16 directed moves on an n x n grid, in the order each row of the search graph lists its edges.
+
+    A row lists the moves to higher cell indices before those to lower ones, each group by ascending index: the
+    order in which scipy's undirected search scans the edges of a graph that stores each undirected edge once, so
+    that ties between equally short paths (and with them the planned path) resolve as in that search.
+
+    Attributes:
+        moves: ((di, dj), cells the move's segment passes through, relative to its start) per move.
+        lengths: (16,) move lengths in cells.
+        targets: (n * n * 16,) int32 flat index of each move's target cell, row by row (wrapped where outside).
+    """
+
+    moves: tuple[tuple[tuple[int, int], tuple[tuple[int, int], ...]], ...]
+    lengths: np.ndarray
+    targets: np.ndarray
+
+
+@functools.cache
+def _stencil(n: int) -> _Stencil:
+    backward = tuple(((-di, -dj), tuple((ti - di, tj - dj) for ti, tj in through)) for (di, dj), through in _MOVES)
+
+    def offset(move: tuple[tuple[int, int], tuple]) -> int:
+        return move[0][0] * n + move[0][1]
+
+    moves = (*sorted(_MOVES, key=offset), *sorted(backward, key=offset))
+    cells = np.arange(n * n)
+    offsets = np.array([offset(m) for m in moves])
+    return _Stencil(
+        moves=moves,
+        lengths=np.array([math.hypot(*move) for move, _ in moves]),
+        targets=((cells[:, None] + offsets) % (n * n)).astype(np.int32).ravel(),
+    )
 
 
 def _fill_unreachable(distance: np.ndarray, res: float) -> tuple[np.ndarray, np.ndarray]:

@@ -69,25 +69,31 @@ class ObstaclePool:
             return self._sim.add_static_box([0.5 * s for s in o.size], _COLOURS["box"])
         return self._sim.add_static_cylinder(o.radius, o.size[2], _COLOURS["cylinder"])
 
-    def _take(self, key: tuple, o: Obstacle) -> int:
+    def _take(self, key: tuple, o: Obstacle, shown: set[int]) -> int:
+        """A body for ``o``: a parked one if the pool has one (made visible unless in ``shown``), else a new one."""
         if self._free[key]:
             body = self._free[key].pop()
             del self._parked[body]
-            self._sim.set_visible(body, True, _COLOURS[key[0]])
+            if body not in shown:
+                self._sim.set_visible(body, True, _COLOURS[key[0]])
             return body
         return self._create(o)
 
     def place(self, obstacles: tuple[Obstacle, ...]) -> list[int]:
-        """Show exactly ``obstacles`` (in order) and park the bodies they no longer need; returns body ids."""
+        """Show exactly ``obstacles`` (in order) and park the bodies they no longer need; returns body ids.
+
+        The last scene's bodies are reused first (each shape's free list is last in, first out), and those are
+        still visible."""
         released = self._active
         for key, body in released:
             self._free[key].append(body)
             self._parked[body] = key
+        shown = {body for _, body in released}
         self._active = []
         bodies = []
         for o in obstacles:
             key = _key(o)
-            body = self._take(key, o)
+            body = self._take(key, o, shown)
             self._sim.move_static(body, o.centre, yaw_quat(o.yaw))
             self._sim.sleep(body)
             self._active.append((key, body))

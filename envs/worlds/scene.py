@@ -10,10 +10,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
-from typing import Any, TypeVar
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from clutter_gym.worlds.clutter import ClearanceGrid
 
 SHAPES = ("box", "cylinder")
 MAX_OBSTACLE_HEIGHT = 5.0  # metres; anything taller only costs render time
@@ -89,11 +92,17 @@ class Obstacle:
 
 @dataclass(frozen=True)
 class Scene:
-    """One layout: obstacles, robot start (x, y, yaw) and goal (x, y)."""
+    """One layout: obstacles, robot start (x, y, yaw) and goal (x, y).
+
+    ``clearance_grid`` is not part of the layout (``==``, ``repr`` and :meth:`to_dict` ignore it): the clearance
+    field the generator sampled start and goal on, kept so that the path-distance grid need not compute it again;
+    None for a scene made any other way.
+    """
 
     obstacles: tuple[Obstacle, ...]
     start: tuple[float, float, float]
     goal: tuple[float, float]
+    clearance_grid: ClearanceGrid | None = field(default=None, compare=False, repr=False)
 
     def to_dict(self) -> dict[str, Any]:
         """The reset-options format: ``env.reset(options={"scene": scene.to_dict()})`` reproduces it."""
