@@ -11,6 +11,7 @@ descriptors; :func:`quiet_c_output` silences them around the calls that print, s
 from __future__ import annotations
 
 import contextlib
+import functools
 import importlib.util
 import operator
 from collections.abc import Sequence
@@ -32,6 +33,11 @@ CYLINDER_SIDES = 64
 RAY_INVISIBLE_GROUP = 4
 _RAY_MASK = -1 ^ RAY_INVISIBLE_GROUP
 
+
+#: Added to a body's bounding-sphere radius for view culling: covers the 1 mm margin TinyRenderer's hull of a
+#: cylinder visual carries, and rounding.
+CULL_MARGIN = 0.01
+_INVISIBLE = (0.0, 0.0, 0.0, 0.0)
 
 _UNIT_PRISM = prism_mesh(1.0, 1.0, CYLINDER_SIDES)
 _HIT_FRACTION = operator.itemgetter(2)  # field 2 of a rayTestBatch result row
@@ -61,6 +67,19 @@ def pybullet_data_file(relative: str) -> Path:
     return Path(pybullet_data.getDataPath()) / relative
 
 
+@functools.lru_cache(maxsize=8)
+def _frustum_planes(projection: tuple[float, ...], width: int, height: int) -> np.ndarray:
+    """(6, 4) planes (unit normal pointing in, offset) in eye coordinates that bound what a camera can draw: the
+    left, right, bottom and top of the image widened by a pixel (x and y in normalised device coordinates up to
+    +-(1 + 2 / size) still land on a pixel), the plane of the eye and the far plane. Gribb and Hartmann's planes
+    of the projection matrix (column-major)."""
+    clip = np.array(projection, dtype=float).reshape(4, 4).T
+    sx, sy = 1.0 + 2.0 / width, 1.0 + 2.0 / height
+    r0, r1, r2, r3 = clip
+    planes = np.array([sx * r3 + r0, sx * r3 - r0, sy * r3 + r1, sy * r3 - r1, r3, r3 - r2])
+    return planes / np.linalg.norm(planes[:, :3], axis=1, keepdims=True)
+
+
 class Sim:
     """One pybullet physics client.
 
@@ -87,6 +106,10 @@ class Sim:
         self.physics_hz = float(physics_hz)
         self._renderer = pb.ER_TINY_RENDERER
         self._visuals: dict[int, list[tuple[int, tuple]]] = {}
+        # static bodies made here, for view culling: body -> [x, y, z, bounding radius] and body -> rgba while shown
+        self._spheres: dict[int, list[float]] = {}
+        self._shown: dict[int, tuple] = {}
+        self._cull_table: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None  # shown bodies, rebuilt on change
         pb.setPhysicsEngineParameter(
             fixedTimeStep=1.0 / self.physics_hz,
             numSolverIterations=int(solver_iterations),
@@ -162,7 +185,7 @@ class Sim:
         vis = pb.createVisualShape(
             pb.GEOM_BOX, halfExtents=half_extents, rgbaColor=rgba, physicsClientId=self._cid
         )
-        return self._static_body(col, vis)
+        return self._static_body(col, vis, float(np.linalg.norm(half_extents)), rgba)
 
     def add_static_cylinder(self, radius: float, height: float, rgba: Sequence[float]) -> int:
         """A static (mass 0) upright cylinder with its centre at the origin.
@@ -187,27 +210,47 @@ class Sim:
         vis = pb.createVisualShape(
             pb.GEOM_CYLINDER, radius=radius, length=height, rgbaColor=rgba, physicsClientId=self._cid
         )
-        body = self._static_body(col, vis)
+        body = self._static_body(col, vis, float(np.hypot(radius, 0.5 * height)), rgba)
         pb.changeDynamics(body, -1, collisionMargin=0.0, physicsClientId=self._cid)
         return body
 
-    def _static_body(self, collision: int, visual: int) -> int:
+    def _static_body(
+        self, collision: int, visual: int, radius: float | None = None, rgba: Sequence[float] = ()
+    ) -> int:
         """A mass-0 body (collision -1: visual only) as a plain rigid body, not a Featherstone multibody.
 
         Every multibody in the world costs each physics tick even when fixed and far away (measured: 0.22 us per
-        body per tick); a static rigid body costs a third of that, and a sleeping one less again.
+        body per tick); a static rigid body costs a third of that, and a sleeping one less again. A body given the
+        ``radius`` of a sphere about its origin that holds its visual is culled from camera frames it cannot
+        appear in (:meth:`outside_view`).
         """
-        return pb.createMultiBody(0.0, collision, visual, useMaximalCoordinates=True, physicsClientId=self._cid)
+        body = pb.createMultiBody(0.0, collision, visual, useMaximalCoordinates=True, physicsClientId=self._cid)
+        if radius is not None:
+            self._spheres[body] = [0.0, 0.0, 0.0, radius + CULL_MARGIN]
+            self._set_shown(body, tuple(np.float32(rgba).tolist()))  # createVisualShape keeps single precision
+        return body
+
+    def _set_shown(self, body: int, rgba: tuple | None) -> None:
+        """Record the colour a culled body gets back after a frame (None: hidden, never culled or shown)."""
+        if rgba is None or rgba[3] == 0.0:
+            self._shown.pop(body, None)
+        else:
+            self._shown[body] = rgba
+        self._cull_table = None
 
     def remove_body(self, body: int) -> None:
         """Delete a body from the world (its collision and visual shapes stay cached for reuse)."""
         pb.removeBody(body, physicsClientId=self._cid)
+        self._spheres.pop(body, None)
+        self._set_shown(body, None)
 
     def set_visible(self, body: int, visible: bool, rgba: Sequence[float]) -> None:
         """Show a single-shape body in colour ``rgba``, or hide it from every renderer (fully transparent shapes are
         skipped by TinyRenderer: a parked obstacle then costs a camera frame nothing)."""
         colour = (*rgba[:3], rgba[3] if visible else 0.0)
         pb.changeVisualShape(body, -1, rgbaColor=colour, physicsClientId=self._cid)
+        if body in self._spheres:
+            self._set_shown(body, colour)
 
     def sleep(self, body: int) -> None:
         """Deactivate a static body so the physics tick skips it (teleporting it wakes it again)."""
@@ -218,7 +261,7 @@ class Sim:
         vis = pb.createVisualShape(
             pb.GEOM_CYLINDER, radius=radius, length=0.01, rgbaColor=rgba, physicsClientId=self._cid
         )
-        return self._register(name, self._static_body(-1, vis))
+        return self._register(name, self._static_body(-1, vis, float(np.hypot(radius, 0.005)), rgba))
 
     def _register(self, name: str, body: int) -> int:
         if name in self.bodies:
@@ -256,6 +299,10 @@ class Sim:
     def move_static(self, body: int, position: Sequence[float], quaternion: Sequence[float]) -> None:
         """Teleport a static body (its base inertial frame); it has no velocity to reset."""
         pb.resetBasePositionAndOrientation(body, position, quaternion, physicsClientId=self._cid)
+        sphere = self._spheres.get(body)
+        if sphere is not None:
+            sphere[:3] = position
+            self._cull_table = None
 
     def set_pose(self, body: int, position: Sequence[float], quaternion: Sequence[float]) -> None:
         """Teleport a body's base (its inertial frame) and zero its velocity."""
@@ -459,20 +506,28 @@ class Sim:
         projection: Sequence[float],
         segmentation: bool,
         behind: int = -1,
+        cull: bool = True,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         """One ``getCameraImage``: RGB (height, width, 3) uint8, the raw depth buffer (height, width) in [0, 1],
         and body ids per pixel (-1 = nothing) when ``segmentation`` is set.
 
-        The renderer is TinyRenderer unless :meth:`use_egl` loaded the EGL plugin. ``behind`` names a body that
-        lies wholly behind the camera (the robot carrying it) and is hidden for the frame: TinyRenderer does not
-        cull triangles behind the eye but rasterises their projection over the whole viewport, so the diffbot's
-        own visuals cost 0.9 ms of a 2.2 ms 84x84 frame while contributing no pixel. Hiding and showing them
-        costs 17 us.
+        The renderer is TinyRenderer unless :meth:`use_egl` loaded the EGL plugin. TinyRenderer transforms every
+        triangle of every shown visual, in view or not, so some bodies are hidden for the frame (made fully
+        transparent, which it skips; the images are the same, tests/test_camera_culling.py):
+
+        * ``behind``, a body that lies wholly behind the camera (the robot carrying it). TinyRenderer rasterises
+          the projection of its triangles that reach in front of the eye over the whole viewport, so the
+          diffbot's own visuals cost 0.9 ms of a 2.2 ms 84x84 frame while contributing no pixel.
+        * with ``cull``, and TinyRenderer, the static bodies :meth:`outside_view` names.
         """
         flags = pb.ER_SEGMENTATION_MASK_OBJECT_AND_LINKINDEX if segmentation else pb.ER_NO_SEGMENTATION_MASK
         colours = self._visual_colours(behind) if behind >= 0 else []
+        tiny = self._renderer == pb.ER_TINY_RENDERER
+        culled = self.outside_view(view, projection, width, height) if cull and tiny else []
         for link, _ in colours:
-            pb.changeVisualShape(behind, link, rgbaColor=(0.0, 0.0, 0.0, 0.0), physicsClientId=self._cid)
+            pb.changeVisualShape(behind, link, rgbaColor=_INVISIBLE, physicsClientId=self._cid)
+        for body in culled:
+            pb.changeVisualShape(body, -1, rgbaColor=_INVISIBLE, physicsClientId=self._cid)
         try:
             _, _, rgba, depth, seg = pb.getCameraImage(
                 width, height, view, projection, renderer=self._renderer, flags=flags, physicsClientId=self._cid
@@ -480,12 +535,31 @@ class Sim:
         finally:
             for link, colour in colours:
                 pb.changeVisualShape(behind, link, rgbaColor=colour, physicsClientId=self._cid)
+            for body in culled:
+                pb.changeVisualShape(body, -1, rgbaColor=self._shown[body], physicsClientId=self._cid)
         rgb = np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)[:, :, :3]
         depth = np.asarray(depth, dtype=np.float64).reshape(height, width)
         if not segmentation:
             return rgb, depth, None
         seg = np.asarray(seg, dtype=np.int64).reshape(height, width)
         return rgb, depth, np.where(seg >= 0, seg & ((1 << 24) - 1), -1)  # low 24 bits: the body id
+
+    def outside_view(self, view: Sequence[float], projection: Sequence[float], width: int, height: int) -> list[int]:
+        """The shown static bodies (boxes, cylinders, markers made here) that no pixel of this camera can show.
+
+        A body is named when the sphere holding its visual lies wholly behind the eye, beyond the far plane, or
+        more than a pixel past a side of the image: every triangle of it then lands outside the viewport, behind
+        the eye or past the far plane, so hiding it changes no pixel. ``view`` and ``projection`` are OpenGL
+        matrices, column-major, as for ``getCameraImage``.
+        """
+        if self._cull_table is None:
+            bodies = list(self._shown)
+            spheres = np.array([self._spheres[b] for b in bodies], dtype=float).reshape(-1, 4)
+            centres = np.vstack([spheres[:, :3].T, np.ones(len(bodies))])
+            self._cull_table = (np.array(bodies, dtype=int), centres, -spheres[:, 3])
+        bodies, centres, neg_radii = self._cull_table
+        planes = _frustum_planes(tuple(projection), width, height) @ np.array(view).reshape(4, 4).T
+        return bodies[(planes @ centres < neg_radii).any(axis=0)].tolist()
 
     def _visual_colours(self, body: int) -> list[tuple[int, tuple]]:
         """(link, rgba) of each link of ``body`` with a visual shape (read once, cached).
