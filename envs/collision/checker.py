@@ -193,7 +193,7 @@ class CollisionChecker:
         candidates, bound = self._lower_bounds(moving)
         order = np.argsort(bound, axis=1, kind="stable")
         limits = (self.clearance_range + model.padding[moving]).tolist()
-        rows = zip(moving.tolist(), candidates[order].tolist(), np.take_along_axis(bound, order, axis=1).tolist())
+        rows = zip(moving.tolist(), candidates[order].tolist(), np.sort(bound, axis=1).tolist())
         for (i, nearest_first, lower), limit in zip(rows, limits):
             raw, j, p = self._nearest_obstacle(i, nearest_first, lower, limit)
             if j >= 0:

@@ -128,6 +128,8 @@ class RobotCollisionModel:
 
     def self_collision(self) -> tuple[str, str] | None:
         """The first enabled link pair in collision (padding included), or None."""
+        if not self.self_pairs:
+            return None
         request, objects, pad = self._collide_request, self.objects, self.padding
         for k in np.flatnonzero(self._pair_bounds() <= 0.0):  # pairs whose balls are apart cannot touch
             i, j = self.self_pairs[k]
