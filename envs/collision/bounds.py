@@ -17,19 +17,6 @@ import numpy as np
 from clutter_gym.worlds.scene import Obstacle
 
 
-def _signed(qx: np.ndarray, qy: np.ndarray, qz: np.ndarray | None = None) -> np.ndarray:
-    """Signed distance from per-axis excesses ``|local| - half`` (2 or 3 axes)."""
-    ox, oy = np.maximum(qx, 0.0), np.maximum(qy, 0.0)
-    inside = np.maximum(qx, qy)
-    if qz is None:
-        outside = np.hypot(ox, oy)
-    else:
-        oz = np.maximum(qz, 0.0)
-        outside = np.sqrt(ox * ox + oy * oy + oz * oz)
-        np.maximum(inside, qz, out=inside)
-    return outside + np.minimum(inside, 0.0, out=inside)
-
-
 class ObstacleBounds:
     """The obstacles of one scene as arrays, for vectorised point distances.
 
@@ -45,15 +32,21 @@ class ObstacleBounds:
         cylinders = [i for i, o in enumerate(obstacles) if o.shape == "cylinder"]
         #: obstacle index of every column
         self.index = np.array(boxes + cylinders, dtype=int)
-        centres = np.array([o.centre for o in obstacles], dtype=float).reshape(-1, 3)
-        half = 0.5 * np.array([o.size for o in obstacles], dtype=float).reshape(-1, 3)
-        yaw = np.array([o.yaw for o in obstacles], dtype=float)
-        self._box = (*centres[boxes].T, np.cos(yaw[boxes]), np.sin(yaw[boxes]), *half[boxes].T)
-        self._cylinder = (*centres[cylinders].T, half[cylinders, 0], half[cylinders, 2])
+        ordered = [obstacles[i] for i in self.index]
+        centres = np.array([o.centre for o in ordered], dtype=float).reshape(-1, 3)
+        yaw = np.array([o.yaw if o.shape != "cylinder" else 0.0 for o in ordered])
+        cos, sin, zero, one = np.cos(yaw), np.sin(yaw), np.zeros(len(yaw)), np.ones(len(yaw))
+        # world -> obstacle frame as one (4, 3 * n) matrix acting on homogeneous points: columns x..., y..., z...
+        rotation_t = np.stack([np.stack([cos, sin, zero], -1), np.stack([-sin, cos, zero], -1),
+                               np.stack([zero, zero, one], -1)], axis=1)  # (n, 3, 3): rows of R^T
+        offset = -np.einsum("nij,nj->ni", rotation_t, centres)
+        self._to_local = np.concatenate([rotation_t.transpose(2, 1, 0).reshape(3, -1), offset.T.reshape(1, -1)])
+        self._half = 0.5 * np.array([o.size for o in ordered], dtype=float).reshape(-1, 3).T.copy()  # (3, n)
         self._split = len(boxes)
+        self._radius = self._half[0, self._split:].copy()  # cylinders: the x half extent is the radius
         #: per column: the radius of the ball about the obstacle's centre that encloses it, and that centre
-        self.enclosing = np.linalg.norm(half[self.index], axis=1)
-        self.centres = centres[self.index]
+        self.enclosing = np.linalg.norm(self._half, axis=0)
+        self.centres = centres
 
     def __len__(self) -> int:
         return len(self.index)
@@ -68,20 +61,20 @@ class ObstacleBounds:
 
         Positive outside, minus the distance to the nearest face inside. ``columns`` (ascending) selects some.
         """
-        box, cylinder, split = self._box, self._cylinder, self._split
+        n = len(self.index)
+        to_local, half, split, radius = self._to_local, self._half, self._split, self._radius
         if columns is not None:
             split = int(np.searchsorted(columns, self._split))
-            box = tuple(a[columns[:split]] for a in box)
-            cylinder = tuple(a[columns[split:] - self._split] for a in cylinder)
-        x, y, z = points[:, 0:1], points[:, 1:2], points[:, 2:3]
-        out = np.empty((len(points), len(box[0]) + len(cylinder[0])))
-        if split:
-            cx, cy, cz, cos, sin, hx, hy, hz = box
-            dx, dy = x - cx, y - cy
-            qx = np.abs(dx * cos + dy * sin) - hx
-            qy = np.abs(dy * cos - dx * sin) - hy
-            out[:, :split] = _signed(qx, qy, np.abs(z - cz) - hz)
-        if split < out.shape[1]:
-            cx, cy, cz, radius, hz = cylinder
-            out[:, split:] = _signed(np.hypot(x - cx, y - cy) - radius, np.abs(z - cz) - hz)
-        return out
+            to_local = to_local.reshape(4, 3, n)[:, :, columns].reshape(4, -1)
+            half, radius, n = half[:, columns], self._radius[columns[split:] - self._split], len(columns)
+        local = (np.hstack([points, np.ones((len(points), 1))]) @ to_local).reshape(len(points), 3, n)
+        q = np.abs(local)
+        q -= half
+        if split < n:  # a cylinder is a box in (radial distance, nothing, z)
+            q[:, 0, split:] = np.hypot(local[:, 0, split:], local[:, 1, split:]) - radius
+            q[:, 1, split:] = -np.inf
+        out = np.maximum(q, 0.0)
+        out *= out
+        outside = np.sqrt(out[:, 0] + out[:, 1] + out[:, 2])
+        inside = np.minimum(np.maximum(np.maximum(q[:, 0], q[:, 1]), q[:, 2]), 0.0)
+        return outside + inside

@@ -35,6 +35,8 @@ from clutter_gym.worlds.scene import Obstacle
 NO_OBSTACLE_CLEARANCE = 1e3
 #: scenes with at most this many obstacles bound every pair; larger ones first keep those near the robot
 SMALL_SCENE = 64
+#: metres taken off every bound, so that rounding in its arithmetic cannot lift it above an exact distance
+BOUND_SLACK = 1e-9
 
 
 @dataclass(frozen=True, slots=True)
@@ -144,6 +146,7 @@ class CollisionChecker:
         self.swept_speed = swept_speed
         self.dt = dt
         self._moving = np.array(moving, dtype=int)
+        self._limits = (clearance_range + model.padding[self._moving]).tolist()  # unpadded range per moving shape
         self._radii = np.array([s.radius for s in model.shapes])  # about each shape's origin
         self._sweepers = [fcl.CollisionObject(s.hull or s.geometry, fcl.Transform()) for s in model.shapes]
         self._obstacles: list[fcl.CollisionObject] = []
@@ -192,7 +195,7 @@ class CollisionChecker:
             return np.full(n, NO_OBSTACLE_CLEARANCE), other, points, np.zeros(0, int), np.zeros((len(moving), 0))
         candidates, bound = self._lower_bounds(moving)
         order = np.argsort(bound, axis=1, kind="stable")
-        limits = (self.clearance_range + model.padding[moving]).tolist()
+        limits = self._limits
         rows = zip(moving.tolist(), candidates[order].tolist(), np.sort(bound, axis=1).tolist())
         for (i, nearest_first, lower), limit in zip(rows, limits):
             raw, j, p = self._nearest_obstacle(i, nearest_first, lower, limit)
@@ -210,6 +213,7 @@ class CollisionChecker:
         bounds = self._bounds
         centres = self.model.ball_centres()[shapes]
         radii = self.model.ball_radius[shapes] + grow
+        radii = radii + BOUND_SLACK
         if len(bounds) <= SMALL_SCENE:
             return bounds.index, bounds.signed_distance(centres) - radii[:, None]
         middle = 0.5 * (centres.min(axis=0) + centres.max(axis=0))
@@ -313,12 +317,12 @@ class CollisionChecker:
         previous, self._previous = self._previous, now
         if previous is None or not self._obstacles or not np.isfinite(self.swept_speed):
             return 0
-        radius, moving = self._radii[self._moving], self._moving
-        shift = np.linalg.norm(now[0][moving] - previous[0][moving], axis=1)
+        moving = self._moving
+        step = now[0] - previous[0]
         # rotation adds at most angle * radius to the travel of any point of the shape
-        cos_angle = (np.einsum("nij,nij->n", now[1][moving], previous[1][moving]) - 1.0) / 2.0
+        cos_angle = (np.einsum("nij,nij->n", now[1], previous[1]) - 1.0) / 2.0
         angle = np.arccos(np.minimum(np.maximum(cos_angle, -1.0), 1.0))
-        travel = shift + angle * radius
+        travel = (np.sqrt(np.einsum("ni,ni->n", step, step)) + angle * self._radii)[moving]
         rows = np.flatnonzero(travel > self.swept_speed * self.dt)
         if rows.size == 0:
             return 0
