@@ -26,13 +26,13 @@ from typing import Any
 import gymnasium as gym
 
 import clutter_gym  # noqa: F401  (registers the envs)
-from clutter_gym.atomic import write_text_atomically
 from clutter_gym.training import load
 from clutter_gym.training.baselines import PotentialFieldNavigator, StraightLineReacher
 from clutter_gym.training.config import EVAL_SEED, config_for
 from clutter_gym.training.evaluate import rollouts, summarize
 from clutter_gym.training.joint_planner import JointPlannerReacher
 from clutter_gym.training.residual import pursuit
+from clutter_gym.util.atomic import write_text_atomically
 
 #: The subgoal lookahead the planner reference runs with, metres.
 PLANNER_LOOKAHEAD = 0.5

@@ -45,10 +45,10 @@ from clutter_gym.collision import (
     UrdfKinematics,
     obstacle_object,
 )
-from clutter_gym.quiet import quiet_c_output
 from clutter_gym.robots import DiffDriveRobot
 from clutter_gym.robots.panda import READY, PandaArm
 from clutter_gym.training.figures import plt, save_figure
+from clutter_gym.util.quiet import quiet_c_output
 from clutter_gym.worlds.clutter import ClutterSpec, sample_scene
 from clutter_gym.worlds.pool import arena_walls
 from clutter_gym.worlds.scene import Obstacle

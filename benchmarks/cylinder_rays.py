@@ -1,7 +1,7 @@
 """Speed against error of LIDAR rays on cylinder obstacles: Bullet's cylinder primitive vs n-gon trimesh prisms.
 
 Twenty cylinders (r = 0.2 m) ring a 64-beam scan; the error is measured on 400 beams fanned across one cylinder
-against the exact ray-circle intersection. Prisms have the circle's area (see clutter_gym.meshes.prism_mesh).
+against the exact ray-circle intersection. Prisms have the circle's area (see clutter_gym.util.meshes.prism_mesh).
 
     python benchmarks/cylinder_rays.py
 """
@@ -13,9 +13,9 @@ import time
 
 import numpy as np
 
-from clutter_gym.meshes import prism_mesh
-from clutter_gym.quiet import quiet_c_output
 from clutter_gym.sim import pb
+from clutter_gym.util.meshes import prism_mesh
+from clutter_gym.util.quiet import quiet_c_output
 
 R, H = 0.2, 0.5
 

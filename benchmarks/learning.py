@@ -18,10 +18,10 @@ from pathlib import Path
 
 import numpy as np
 
-from clutter_gym.atomic import write_text_atomically
 from clutter_gym.training.commands import add_settings_options, settings
 from clutter_gym.training.figures import plt, save_figure
 from clutter_gym.training.report import WINDOW, main_job, prepare_run, rolling_rate
+from clutter_gym.util.atomic import write_text_atomically
 
 
 def main() -> None:

@@ -111,7 +111,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from clutter_gym.quiet import quiet_c_output
+from clutter_gym.util.quiet import quiet_c_output
 
 with quiet_c_output():  # pybullet prints its build banner on import
     import pybullet as pb

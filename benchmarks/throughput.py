@@ -23,9 +23,9 @@ import gymnasium as gym
 import numpy as np
 
 import clutter_gym  # noqa: F401  (registers the envs)
-from clutter_gym.quiet import quiet_c_output
 from clutter_gym.sim import RAY_INVISIBLE_GROUP
 from clutter_gym.training.baselines import PotentialFieldNavigator
+from clutter_gym.util.quiet import quiet_c_output
 
 with quiet_c_output():  # pybullet prints its build banner on import
     import pybullet as pb

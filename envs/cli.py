@@ -18,7 +18,7 @@ from clutter_gym.noise.profiles import PROFILE_NAMES, profile_description, profi
 from clutter_gym.training import commands as training_commands
 from clutter_gym.training.baselines import PotentialFieldNavigator
 from clutter_gym.training.commands import UserError, positive_int
-from clutter_gym.video import write_video
+from clutter_gym.util.video import write_video
 
 
 def demo(args: argparse.Namespace) -> dict:

@@ -25,7 +25,7 @@ from clutter_gym.noise.timing import SampleHoldDelay
 from clutter_gym.robots.safety import SafetyFilter
 from clutter_gym.robots.state import RobotState
 from clutter_gym.sim import Sim
-from clutter_gym.transforms import yaw_quat
+from clutter_gym.util.transforms import yaw_quat
 
 RENDER_MODES = ("human", "rgb_array")
 

@@ -20,8 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
-from clutter_gym.meshes import prism_mesh
-from clutter_gym.quiet import quiet_c_output
+from clutter_gym.util.meshes import prism_mesh
+from clutter_gym.util.quiet import quiet_c_output
 
 with quiet_c_output():
     import pybullet as pb

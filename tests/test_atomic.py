@@ -8,8 +8,8 @@ import stat
 import numpy as np
 import pytest
 
-from clutter_gym.atomic import atomic_folder, atomic_path, write_text_atomically
-from clutter_gym.video import write_video
+from clutter_gym.util.atomic import atomic_folder, atomic_path, write_text_atomically
+from clutter_gym.util.video import write_video
 
 
 def test_a_failed_write_keeps_the_old_file_and_leaves_no_temporary(tmp_path):

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from clutter_gym.meshes import prism_mesh
+from clutter_gym.util.meshes import prism_mesh
 
 
 @pytest.mark.parametrize("sides", [16, 64])

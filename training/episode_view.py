@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from clutter_gym.training.figures import plt
-from clutter_gym.video import write_video
+from clutter_gym.util.video import write_video
 
 #: Height of one episode's panel in pixels (the width follows the square arena plus the caption).
 PANEL_PX = 520

@@ -14,7 +14,7 @@ from clutter_gym.noise.profiles import PROFILE_NAMES
 from clutter_gym.training.agent import load
 from clutter_gym.training.episode_stats import EpisodeStats
 from clutter_gym.training.stats import mean_interval, wilson_interval
-from clutter_gym.video import write_video
+from clutter_gym.util.video import write_video
 
 #: Metric names of an evaluation summary, each {"value", "ci95": [low, high]}; also sweep.csv's column order.
 METRICS = ("success_rate", "collision_rate", "mean_cost", "mean_return", "mean_length", "mean_min_clearance")

@@ -9,7 +9,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from clutter_gym.atomic import atomic_path  # noqa: E402
+from clutter_gym.util.atomic import atomic_path  # noqa: E402
 
 
 def save_figure(fig: plt.Figure, path: Path) -> Path:

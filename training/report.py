@@ -14,12 +14,12 @@ from pathlib import Path
 
 import numpy as np
 
-from clutter_gym.atomic import write_text_atomically
 from clutter_gym.robots.safety import SafetyConfig
 from clutter_gym.training.config import EVAL_SEED, config_for, deep_merge
 from clutter_gym.training.evaluate import evaluate
 from clutter_gym.training.run_dir import RunDir
 from clutter_gym.training.train import start, train
+from clutter_gym.util.atomic import write_text_atomically
 
 PROFILES = ("none", "nominal")
 WINDOW = 100

@@ -30,8 +30,8 @@ from typing import Any
 
 import yaml
 
-from clutter_gym.atomic import atomic_folder, atomic_path, write_text_atomically
 from clutter_gym.training.config import TrainConfig
+from clutter_gym.util.atomic import atomic_folder, atomic_path, write_text_atomically
 
 MODEL_FILE = "model.zip"
 NORMALIZER_FILE = "vecnormalize.pkl"

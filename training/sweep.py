@@ -27,8 +27,8 @@ from typing import Any
 
 import yaml
 
-from clutter_gym.atomic import atomic_path, write_text_atomically
 from clutter_gym.training.config import EVAL_SEED, TrainConfig, config_for, deep_merge
+from clutter_gym.util.atomic import atomic_path, write_text_atomically
 
 
 @dataclass(frozen=True)

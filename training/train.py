@@ -14,12 +14,12 @@ from stable_baselines3.common.callbacks import CallbackList
 from stable_baselines3.common.logger import configure
 from stable_baselines3.common.vec_env import VecEnv
 
-from clutter_gym.atomic import write_text_atomically
 from clutter_gym.training.callbacks import BestPolicyKeeper, RunMonitor
 from clutter_gym.training.config import EVAL_SEED, TrainConfig
 from clutter_gym.training.evaluate import evaluate
 from clutter_gym.training.run_dir import NORMALIZER_FILE, RunDir
 from clutter_gym.training.vec_env import policy_name, training_env
+from clutter_gym.util.atomic import write_text_atomically
 
 
 def check_env_builds(config: TrainConfig) -> None:

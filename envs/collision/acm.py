@@ -32,10 +32,10 @@ import fcl
 import numpy as np
 
 from clutter_gym.assets import ASSET_DIR
-from clutter_gym.atomic import write_text_atomically
 from clutter_gym.collision.fidelity import build_link_shapes, check_fidelity
 from clutter_gym.collision.kinematics import UrdfKinematics
 from clutter_gym.collision.urdf_geometry import load_collision_elements, urdf_digest
+from clutter_gym.util.atomic import write_text_atomically
 
 ACM_SAMPLES = 10_000
 ALWAYS_FRACTION = 0.95

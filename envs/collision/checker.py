@@ -28,7 +28,7 @@ from clutter_gym.collision.bounds import ObstacleBounds
 from clutter_gym.collision.distance import signed_distance
 from clutter_gym.collision.robot_model import RobotCollisionModel
 from clutter_gym.robots.state import RobotState
-from clutter_gym.transforms import quat_to_matrix, yaw_quat
+from clutter_gym.util.transforms import quat_to_matrix, yaw_quat
 from clutter_gym.worlds.scene import Obstacle
 
 #: Clearance reported when there is nothing to measure against (an empty scene without walls), metres.

@@ -20,7 +20,7 @@ import numpy as np
 import trimesh
 
 from clutter_gym.collision.urdf_geometry import CollisionElement
-from clutter_gym.transforms import quat_to_matrix
+from clutter_gym.util.transforms import quat_to_matrix
 
 FIDELITY_LEVELS = ("sphere", "primitive", "convex", "mesh")
 

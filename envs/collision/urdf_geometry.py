@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from clutter_gym.transforms import rpy_quat
+from clutter_gym.util.transforms import rpy_quat
 
 KINDS = ("box", "cylinder", "sphere", "capsule", "mesh")
 

@@ -13,7 +13,7 @@ from clutter_gym.noise.dynamics import DynamicsSample
 from clutter_gym.robots.dynamics import scale_link_dynamics
 from clutter_gym.robots.state import RobotState
 from clutter_gym.sim import Sim
-from clutter_gym.transforms import quat_to_matrix, yaw_quat
+from clutter_gym.util.transforms import quat_to_matrix, yaw_quat
 
 #: Links whose states are read every step: the IMU and every link with collision geometry. The LIDAR needs only
 #: its link's index: its rays are cast in the link's frame.

@@ -14,7 +14,7 @@ from __future__ import annotations
 from collections import OrderedDict, defaultdict
 
 from clutter_gym.sim import Sim
-from clutter_gym.transforms import yaw_quat
+from clutter_gym.util.transforms import yaw_quat
 from clutter_gym.worlds.scene import Obstacle
 
 PARK_POSITION = (0.0, 0.0, -10.0)

@@ -7,7 +7,7 @@ from pathlib import Path
 import imageio.v2 as imageio
 import numpy as np
 
-from clutter_gym.atomic import atomic_path
+from clutter_gym.util.atomic import atomic_path
 
 VIDEO_SUFFIXES = (".gif", ".mp4")
 
