@@ -16,7 +16,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from clutter_gym.collision import CollisionChecker, CollisionReport
+from clutter_gym.collision import CollisionChecker, CollisionReport, RobotCollisionModel, check_fidelity
 from clutter_gym.interfaces import Arena, Layout, Robot, Sensor, Task
 from clutter_gym.noise.action import ActionChannel
 from clutter_gym.noise.dynamics import sample_dynamics
@@ -34,13 +34,15 @@ class ClutterEnv(gym.Env):
     """Composition of the parts; see :class:`clutter_gym.nav.ClutterNavEnv` for a documented env.
 
     Args:
-        sim: the physics client (owned: closed by :meth:`close`).
-        robot: loaded into ``sim`` here.
-        arena: loaded into ``sim`` here; chooses and places each episode's scene.
+        physics_hz: physics ticks per simulated second; the env opens its own physics client (:class:`Sim`, a GUI
+            one for ``render_mode="human"``) and closes it in :meth:`close`.
+        solver_iterations: constraint solver iterations per physics tick.
+        robot: loaded into the client here.
+        arena: loaded into the client here; chooses and places each episode's scene.
         sensors: read after every step, in order (each fills the observation keys in its ``spaces``).
         checker: FCL model of the robot against the scene.
         task: reward, termination and the goal observation.
-        control_hz: actions per simulated second; ``sim.physics_hz`` must be a multiple of it.
+        control_hz: actions per simulated second; ``physics_hz`` must be a multiple of it.
         noise: sensor timing, actuation noise and dynamics randomisation (the sensors carry their own noise).
         render_mode: None, "rgb_array" or "human".
         render_size: (width, height) of rgb_array frames in pixels.
@@ -52,7 +54,8 @@ class ClutterEnv(gym.Env):
 
     def __init__(
         self,
-        sim: Sim,
+        physics_hz: float,
+        solver_iterations: int,
         robot: Robot,
         arena: Arena,
         sensors: Sequence[Sensor],
@@ -64,6 +67,7 @@ class ClutterEnv(gym.Env):
         render_size: tuple[int, int] = (320, 240),
         safety: SafetyFilter | None = None,
     ) -> None:
+        sim = Sim(physics_hz=physics_hz, solver_iterations=solver_iterations, gui=render_mode == "human")
         self.sim, self.robot, self.arena, self.checker, self.task = sim, robot, arena, checker, task
         self.safety = safety
         self._scan: np.ndarray | None = None  # the latest lidar_ranges delivered, for the safety filter
@@ -220,6 +224,32 @@ class ClutterEnv(gym.Env):
 
     def close(self) -> None:
         self.sim.close()
+
+
+def check_env_settings(render_mode: str | None, physics_hz: float, control_hz: float, solver_iterations: int,
+                       contact_tolerance: float) -> None:
+    """Raise at make time, naming the argument, for the settings every env shares (before anything is built)."""
+    check_render_mode(render_mode)
+    check_rates(physics_hz, control_hz, solver_iterations)
+    if not (math.isfinite(contact_tolerance) and 0.0 <= contact_tolerance <= 0.05):
+        raise ValueError(f"contact_tolerance must be in [0, 0.05] metres, got {contact_tolerance!r}")
+
+
+def collision_checker(robot: Robot, tracked_links: Sequence[str], fidelity: str, padding: float,
+                      contact_tolerance: float, clearance_range: float, control_hz: float, *,
+                      self_collision: bool = True, swept_speed: float = 0.2,
+                      fixed_links: Sequence[str] = ()) -> CollisionChecker:
+    """The FCL model of ``robot`` (its base and ``tracked_links``) at ``fidelity``, and its checker, which sweeps
+    links between two control steps.
+
+    Raises:
+        ValueError: an unknown fidelity level, or a padding outside [0, 1] metres.
+    """
+    model = RobotCollisionModel.from_urdf(robot.urdf_path, check_fidelity(fidelity),
+                                          (robot.base_link, *tracked_links), padding, self_collision)
+    return CollisionChecker(model, base_link=robot.base_link, contact_tolerance=contact_tolerance,
+                            clearance_range=clearance_range, swept_speed=swept_speed, dt=1.0 / control_hz,
+                            fixed_links=fixed_links)
 
 
 def check_render_mode(render_mode: str | None) -> None:

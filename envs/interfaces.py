@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, Protocol
 
 import numpy as np
@@ -43,6 +44,7 @@ class Robot(Protocol):
 
     Attributes:
         name: short name, used in asset and cache paths.
+        urdf_path: the robot's URDF (its collision geometry builds the FCL model).
         base_link: the URDF's root link (its pose is ``RobotState.position`` / ``rotation``).
         action_space: the env's action space (``Box(-1, 1, ...)``).
         spaces: the observation entries :meth:`observe` fills.
@@ -53,6 +55,9 @@ class Robot(Protocol):
     base_link: str
     action_space: spaces.Box
     spaces: dict[str, spaces.Space]
+
+    @property
+    def urdf_path(self) -> Path: ...
 
     @property
     def body(self) -> int: ...

@@ -8,15 +8,13 @@ from typing import Any
 
 import numpy as np
 
-from clutter_gym.collision import CollisionChecker, RobotCollisionModel, check_fidelity
 from clutter_gym.collision.kinematics import UrdfKinematics
-from clutter_gym.core import ClutterEnv, check_rates, check_render_mode
+from clutter_gym.core import ClutterEnv, check_env_settings, collision_checker
 from clutter_gym.noise.profiles import NoiseProfile, resolve_noise
 from clutter_gym.robots import DiffDriveConfig, DiffDriveRobot
 from clutter_gym.robots.diffdrive import TRACKED_LINKS
 from clutter_gym.robots.safety import SafetyConfig, SafetyFilter
 from clutter_gym.sensors import CameraConfig, ImuConfig, LidarConfig, build_sensors
-from clutter_gym.sim import Sim
 from clutter_gym.tasks import NavigateTask, NavRewardWeights
 from clutter_gym.worlds import ClutterArena, ClutterSpec
 
@@ -173,10 +171,7 @@ class ClutterNavEnv(ClutterEnv):
         safety_margin: float = 0.02,
         safety_recovery: float = 0.0,
     ) -> None:
-        check_render_mode(render_mode)
-        check_rates(physics_hz, control_hz, solver_iterations)
-        if not (math.isfinite(contact_tolerance) and 0.0 <= contact_tolerance <= 0.05):
-            raise ValueError(f"contact_tolerance must be in [0, 0.05] metres, got {contact_tolerance!r}")
+        check_env_settings(render_mode, physics_hz, control_hz, solver_iterations, contact_tolerance)
         robot = DiffDriveRobot(DiffDriveConfig(max_linear_speed=max_linear_speed, max_angular_speed=max_angular_speed))
         spec = ClutterSpec(arena_size=arena_size, obstacle_density=obstacle_density)
         lidar = LidarConfig(n_rays=n_rays, fov=lidar_fov, max_range=lidar_range, mount_height=lidar_mount_height,
@@ -195,17 +190,14 @@ class ClutterNavEnv(ClutterEnv):
             robot_radius=robot.config.footprint_radius,
             subgoal_lookahead=subgoal_lookahead,
         )
-        model = RobotCollisionModel.from_urdf(
-            robot.urdf_path, check_fidelity(collision_fidelity), (robot.base_link, *TRACKED_LINKS), collision_padding
-        )
-        checker = CollisionChecker(
-            model, base_link=robot.base_link, contact_tolerance=contact_tolerance,
-            clearance_range=math.sqrt(2.0) * arena_size, dt=1.0 / control_hz,
-        )
+        # the whole arena is in range: every step reports the distance to the nearest obstacle
+        checker = collision_checker(robot, TRACKED_LINKS, collision_fidelity, collision_padding, contact_tolerance,
+                                    math.sqrt(2.0) * arena_size, control_hz)
         safety = _safety_filter(SafetyConfig(safety_horizon, safety_margin, safety_recovery), sensors, lidar, robot,
                                 control_hz)
         super().__init__(
-            sim=Sim(physics_hz=physics_hz, solver_iterations=solver_iterations, gui=render_mode == "human"),
+            physics_hz=physics_hz,
+            solver_iterations=solver_iterations,
             robot=robot,
             arena=ClutterArena(spec, robot.config.footprint_radius),
             sensors=sensor_objects,

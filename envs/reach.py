@@ -6,12 +6,10 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
-from clutter_gym.collision import CollisionChecker, RobotCollisionModel, check_fidelity
-from clutter_gym.core import ClutterEnv, check_rates, check_render_mode
+from clutter_gym.core import ClutterEnv, check_env_settings, collision_checker
 from clutter_gym.noise.profiles import NoiseProfile, resolve_noise
 from clutter_gym.planning.joint_space import ArmPlanner
 from clutter_gym.robots.panda import EE_ROW, LOWER, READY, TRACKED_LINKS, UPPER, PandaArm, PandaConfig
-from clutter_gym.sim import Sim
 from clutter_gym.tasks import ReachRewardWeights, ReachTask
 from clutter_gym.worlds import TableSpec, TabletopArena
 
@@ -139,23 +137,15 @@ class ClutterReachEnv(ClutterEnv):
         control_weight: float = 0.005,
         subgoal_lookahead: float = 0.0,
     ) -> None:
-        check_render_mode(render_mode)
-        check_rates(physics_hz, control_hz, solver_iterations)
-        check_fidelity(collision_fidelity)
-        if not (math.isfinite(contact_tolerance) and 0.0 <= contact_tolerance <= 0.05):
-            raise ValueError(f"contact_tolerance must be in [0, 0.05] metres, got {contact_tolerance!r}")
+        check_env_settings(render_mode, physics_hz, control_hz, solver_iterations, contact_tolerance)
         if not (math.isfinite(clearance_range) and 0.01 <= clearance_range <= 2.0):
             raise ValueError(f"clearance_range must be in [0.01, 2] metres, got {clearance_range!r}")
         if not (swept_speed > 0.0):  # inf allowed: no swept checks
             raise ValueError(f"swept_speed must be > 0 m/s (inf disables swept checks), got {swept_speed!r}")
         robot = PandaArm(PandaConfig(control, max_joint_speed, max_ee_step), control_dt=1.0 / control_hz)
-        model = RobotCollisionModel.from_urdf(
-            robot.urdf_path, collision_fidelity, (robot.base_link, *TRACKED_LINKS), collision_padding, self_collision
-        )
-        checker = CollisionChecker(
-            model, base_link=robot.base_link, contact_tolerance=contact_tolerance, clearance_range=clearance_range,
-            swept_speed=swept_speed, dt=1.0 / control_hz, fixed_links=(robot.base_link,),
-        )
+        checker = collision_checker(robot, TRACKED_LINKS, collision_fidelity, collision_padding, contact_tolerance,
+                                    clearance_range, control_hz, self_collision=self_collision,
+                                    swept_speed=swept_speed, fixed_links=(robot.base_link,))
         task = ReachTask(
             ReachRewardWeights(progress_weight, success_weight, contact_weight, self_contact_weight, clearance_weight,
                                tunneling_weight, control_weight),
@@ -171,7 +161,8 @@ class ClutterReachEnv(ClutterEnv):
             make_planner=lambda: ArmPlanner(SUBGOAL_MARGIN + collision_padding, collision_fidelity),
         )
         super().__init__(
-            sim=Sim(physics_hz=physics_hz, solver_iterations=solver_iterations, gui=render_mode == "human"),
+            physics_hz=physics_hz,
+            solver_iterations=solver_iterations,
             robot=robot,
             arena=TabletopArena(TableSpec(n_obstacles=n_obstacles, shelf=bool(shelf)), READY, LOWER, UPPER),
             sensors=(),
