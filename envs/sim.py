@@ -513,7 +513,7 @@ class Sim:
 
         The renderer is TinyRenderer unless :meth:`use_egl` loaded the EGL plugin. TinyRenderer transforms every
         triangle of every shown visual, in view or not, so some bodies are hidden for the frame (made fully
-        transparent, which it skips; the images are the same, tests/test_camera_culling.py):
+        transparent, which it skips; the images are the same, tests/sensors/test_camera_culling.py):
 
         * ``behind``, a body that lies wholly behind the camera (the robot carrying it). TinyRenderer rasterises
           the projection of its triangles that reach in front of the eye over the whole viewport, so the

@@ -1,4 +1,4 @@
-"""Shared fixtures: envs that are always closed, and a standard open scene for analytic checks."""
+"""Shared fixtures (plain helpers are in helpers.py): envs that are always closed."""
 
 from __future__ import annotations
 
@@ -22,7 +22,3 @@ def make_env():
     for env in made:
         env.close()
 
-
-def empty_scene(start=(0.0, 0.0, 0.0), goal=(2.5, 2.5), obstacles=()) -> dict:
-    """A scene in the reset-options format."""
-    return {"obstacles": list(obstacles), "start": list(start), "goal": list(goal)}

@@ -2,15 +2,11 @@
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import gymnasium as gym
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
-from clutter_gym.training.baselines import PotentialFieldNavigator  # noqa: E402
-from contact_agreement import measure  # noqa: E402
+from benchmarks.contact_agreement import measure
+from clutter_gym.training.baselines import PotentialFieldNavigator
 
 pytestmark = pytest.mark.slow
 

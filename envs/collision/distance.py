@@ -2,7 +2,7 @@
 
 python-fcl 0.7 answers sphere-sphere, sphere-box and capsule-capsule in closed form only without the signed flag;
 with ``enable_signed_distance`` every pair goes through libccd's GJK, which measured up to 4 mm of error for
-separated spheres and 0.32 m for one capsule pose in 10^4 (tests/test_fcl_analytic.py). Without the flag an
+separated spheres and 0.32 m for one capsule pose in 10^4 (tests/collision/test_fcl_analytic.py). Without the flag an
 overlap returns -1, so the depth is asked for only then, with the signed request (EPA).
 """
 

@@ -17,8 +17,8 @@ from clutter_gym.sim import Sim
 @dataclass(frozen=True)
 class LidarConfig:
     """Scan geometry. Range defaults are the TurtleBot3 LDS-01's (0.12-3.5 m; docs/sensor-noise-reference.md L8),
-    the sensor window of the ``harsh`` noise profile too (profiles.yaml, held equal by tests/test_noise_profiles.py);
-    ClutterNav's ``lidar_range`` default is ``max_range``.
+    the sensor window of the ``harsh`` noise profile too (profiles.yaml, held equal by
+    tests/noise/test_noise_profiles.py); ClutterNav's ``lidar_range`` default is ``max_range``.
 
     Attributes:
         n_rays: beams per channel, in [1, 4096].

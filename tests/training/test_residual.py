@@ -4,13 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from helpers import SHELF_SEED
 
 from clutter_gym.training import load
 from clutter_gym.training.config import config_for
 from clutter_gym.training.residual import SubgoalResidual, pursuit, residual_action
 from clutter_gym.training.train import start, train
-
-SHELF_SEED = 1_000_000
 
 
 def test_the_wrapper_steps_the_env_with_pursuit_plus_residual(make_env):

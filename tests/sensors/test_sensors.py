@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from conftest import empty_scene
+from helpers import empty_scene
 
 from clutter_gym.sensors import LidarConfig
 

@@ -4,9 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import empty_scene
-
-CHASSIS_RADIUS = 0.17
+from helpers import CHASSIS_RADIUS, empty_scene
 
 CLUTTER = [
     {"shape": "box", "size": [0.6, 0.3, 0.5], "position": [1.2, 0.4], "yaw": 0.7},

@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 import pytest
+from helpers import SHELF_SEED
 
 from clutter_gym.planning.joint_space import (
     GOAL_BALL,
@@ -21,7 +22,6 @@ from clutter_gym.training.joint_planner import JointPlannerReacher
 from clutter_gym.worlds.scene import Obstacle
 
 READY = np.array([0.0, -math.pi / 4, 0.0, -3 * math.pi / 4, 0.0, math.pi / 2, math.pi / 4])
-SHELF_SEED = 1_000_000  # the first evaluation layout: its target is inside the shelf, no straight line reaches it
 
 
 @pytest.fixture(scope="module")

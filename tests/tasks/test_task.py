@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import empty_scene
+from helpers import empty_scene
 
 
 def test_goal_within_reach_is_a_success(make_env):

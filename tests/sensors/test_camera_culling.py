@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pybullet as pb
 import pytest
-from conftest import empty_scene
+from helpers import empty_scene
 
 from clutter_gym.sensors.camera import Camera, CameraConfig, _view_matrix
 from clutter_gym.sim import CULL_MARGIN, Sim

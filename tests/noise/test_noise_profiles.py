@@ -17,7 +17,7 @@ from clutter_gym.noise.profiles import (
 )
 from clutter_gym.sensors.lidar import LidarConfig
 
-NOISE_DOC = Path(__file__).resolve().parents[1] / "docs" / "noise.md"
+NOISE_DOC = Path(__file__).resolve().parents[2] / "docs" / "noise.md"
 
 
 def test_the_four_profiles_exist_and_none_is_clean():

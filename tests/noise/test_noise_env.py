@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import empty_scene
 from gymnasium.utils.env_checker import check_env
+from helpers import empty_scene
 
 from clutter_gym.noise.profiles import PROFILE_NAMES
 

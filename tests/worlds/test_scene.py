@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import empty_scene
+from helpers import CHASSIS_RADIUS, empty_scene
 
 from clutter_gym.sim import pb
 
-CHASSIS_RADIUS = 0.17  # diffbot.urdf: the chassis cylinder encloses every other link seen from above
 LIDAR_X = 0.05  # lidar_link origin ahead of the base frame
 
 

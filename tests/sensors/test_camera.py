@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import empty_scene
+from helpers import empty_scene
 from scipy.ndimage import binary_erosion
 
 from clutter_gym.sensors import SEGMENTATION_CLASSES
