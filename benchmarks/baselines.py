@@ -11,8 +11,8 @@ Then one row per trained run given with ``--run NAME=RUN_DIR`` (its own env sett
 profile changed per cell). Episode ``i`` of every cell is reset with seed ``EVAL_SEED + i``, so rows are compared
 on identical layouts.
 
-    python benchmarks/baselines.py --run "PPO subgoal=out/learning/seed0/run" [--episodes 50] [--out docs/baselines]
-    python benchmarks/baselines.py --env ClutterReach-v0 --run "PPO=runs/ClutterReach-v0/none-seed0"
+    python -m benchmarks.baselines --run "PPO subgoal=out/learning/seed0/run" [--episodes 50] [--out docs/baselines]
+    python -m benchmarks.baselines --env ClutterReach-v0 --run "PPO=runs/ClutterReach-v0/none-seed0"
 """
 
 from __future__ import annotations
@@ -26,6 +26,7 @@ from typing import Any
 import gymnasium as gym
 
 import clutter_gym  # noqa: F401  (registers the envs)
+from benchmarks.harness import table_header
 from clutter_gym.training import load
 from clutter_gym.training.baselines import PotentialFieldNavigator, StraightLineReacher
 from clutter_gym.training.config import EVAL_SEED, config_for
@@ -113,8 +114,7 @@ def main() -> None:
         trained = f"{int(timing['steps']):,} steps, {timing['seconds'] / 60:.1f} min"
         rows.append((name, trained, lambda c, p, r=run_dir: agent_cell(r, c, p, args.episodes)))
     cells = [(level, p) for level in levels for p in args.profiles]
-    header = "| policy | training | " + " | ".join(f"{knob} {level}, `{p}`" for level, p in cells) + " |"
-    lines = [header, "|---|---|" + "---|" * len(cells)]
+    lines = [table_header("policy", "training", *(f"{knob} {level}, `{p}`" for level, p in cells))]
     results: dict[str, dict[str, Any]] = {}
     for name, trained, run_cell in rows:
         texts, results[name] = [], {}

@@ -1,24 +1,24 @@
 """ClutterNav-v0 with an 84x84 RGB-D camera against gym-pybullet-drones' 64x48-camera env, side by side.
 
-The peer is rebuilt call for call in ``peer_drones.py`` (the package cannot be installed here). Both run in
-alternating blocks of uniform-random actions in one process; each block counts the time in ``step`` and in the
-resets that episode ends trigger, as a training loop pays them. Figures are medians over blocks. Variants of
+The peer is rebuilt call for call in ``benchmarks.peers.drones`` (the package cannot be installed here). Both
+run in alternating blocks of uniform-random actions in one process; each block counts the time in ``step`` and in
+the resets that episode ends trigger, as a training loop pays them. Figures are medians over blocks. Variants of
 ours show what the camera costs (no camera, 64x48) and what the nominal noise profile adds on top.
 
-    python benchmarks/camera_throughput.py
+    python -m benchmarks.camera_throughput
 """
 
 from __future__ import annotations
 
 import argparse
 import statistics
-import time
 
 import gymnasium as gym
 import numpy as np
 
 import clutter_gym  # noqa: F401  (registers the envs)
-from peer_drones import make_drone_camera_workload
+from benchmarks.harness import run_block, table_header
+from benchmarks.peers.drones import make_drone_camera_workload
 
 CAMERA = {"sensors": ("lidar", "imu", "camera"), "camera_modes": ("rgb", "depth")}
 VARIANTS = {
@@ -32,15 +32,7 @@ PEER = "gym-pybullet-drones HoverAviary, 64x48 RGB camera (reconstructed)"
 
 def block(env, actions: np.ndarray) -> tuple[float, float]:
     """(steps/s counting resets, steps/s in step() only) over one block of actions."""
-    step_s = reset_s = 0.0
-    for a in actions:
-        t0 = time.perf_counter()
-        _, _, terminated, truncated, _ = env.step(a)
-        t1 = time.perf_counter()
-        step_s += t1 - t0
-        if terminated or truncated:
-            env.reset()
-            reset_s += time.perf_counter() - t1
+    step_s, reset_s = run_block(env, actions)
     return len(actions) / (step_s + reset_s), len(actions) / step_s
 
 
@@ -65,7 +57,7 @@ def main() -> None:
         rows[PEER].append(block(peer, rng.uniform(-1, 1, (args.steps, 1, 4)).astype(np.float32)))
     peer_rate = statistics.median(r[0] for r in rows[PEER])
     print(f"{args.rounds} alternating blocks of {args.steps} uniform-random steps; medians over blocks\n")
-    print("| env | steps/s (resets included) | steps/s (step only) | vs peer |\n|---|---|---|---|")
+    print(table_header("env", "steps/s (resets included)", "steps/s (step only)", "vs peer"))
     for label, values in rows.items():
         total, step_only = statistics.median(v[0] for v in values), statistics.median(v[1] for v in values)
         print(f"| {label} | {total:,.0f} | {step_only:,.0f} | {total / peer_rate:.2f}x |")

@@ -21,8 +21,8 @@
 Competitors run interleaved in one process (per scene, per configuration or per block), so machine noise hits
 them alike; compare ratios rather than absolute times. Writes docs/collision_fidelity.md and .png.
 
-    python benchmarks/collision_fidelity.py            # about 5 min on 2 cores
-    python benchmarks/collision_fidelity.py --quick    # under a minute, fewer samples
+    python -m benchmarks.collision_fidelity            # about 5 min on 2 cores
+    python -m benchmarks.collision_fidelity --quick    # under a minute, fewer samples
 """
 
 from __future__ import annotations
@@ -38,6 +38,7 @@ import gymnasium as gym
 import numpy as np
 
 import clutter_gym  # noqa: F401  (registers the envs)
+from benchmarks.harness import alternating_rounds, pb, run_block, table_header
 from clutter_gym.collision import (
     FIDELITY_LEVELS,
     CollisionChecker,
@@ -53,9 +54,6 @@ from clutter_gym.worlds.clutter import ClutterSpec, sample_scene
 from clutter_gym.worlds.pool import arena_walls
 from clutter_gym.worlds.scene import Obstacle
 from clutter_gym.worlds.tabletop import TABLE, TableSpec, sample_reach_scene
-
-with quiet_c_output():  # pybullet prints its build banner on import
-    import pybullet as pb
 
 RANGE = 0.5  # clearance range, metres (the envs' default)
 NEAR = 0.15  # configurations kept: mesh clearance in (0, NEAR]
@@ -128,8 +126,8 @@ def fidelity_table(name: str, robot: Robot, cases: list[dict], self_query: bool)
     mesh = np.array(res["mesh"]["d"])
     emit(f"\n### {name}: {len(mesh)} configurations near obstacles (mesh clearance in (0, {NEAR}] m), "
          f"{len(cases)} scenes\n")
-    emit("| level | env query (us) | self query (us) | speed vs mesh | mean abs err (mm) | p95 (mm) | max (mm) "
-         "| conservative |\n|---|---|---|---|---|---|---|---|")
+    emit(table_header("level", "env query (us)", "self query (us)", "speed vs mesh", "mean abs err (mm)", "p95 (mm)",
+                      "max (mm)", "conservative"))
     mesh_us = 1e6 * np.mean(res["mesh"]["env"])
     for level in FIDELITY_LEVELS:
         r = res[level]
@@ -217,8 +215,8 @@ def pybullet_table(panda: Robot, cases: list[dict], fcl_res: dict) -> dict[str, 
     loop_us = 1e6 * np.mean(res["loop"])
     emit(f"\n### Panda: FCL against pybullet getClosestPoints, same {len(mesh)} configurations "
          f"(distance error against FCL mesh)\n")
-    emit("| method | us per query | pybullet loop time / this | mean abs err (mm) | mean signed (mm) | p95 (mm) "
-         "| max (mm) |\n|---|---|---|---|---|---|---|")
+    emit(table_header("method", "us per query", "pybullet loop time / this", "mean abs err (mm)", "mean signed (mm)",
+                      "p95 (mm)", "max (mm)"))
     out = {}
     for key, label, d in (("loop", "pybullet getClosestPoints, every obstacle", res["d_loop"]),
                           ("broad", "pybullet, getOverlappingObjects first", res["d_broad"]),
@@ -248,8 +246,8 @@ def scaling_table(panda: Robot, sizes: list[int], n_configs: int, budget_s: floa
     moving = [o for o, s in zip(checker.model.objects, checker.model.shapes) if s.link in checker.links]
     emit("\n### Broad phase: Panda (convex), N boxes of 5-15 cm over a square of side 1.5 sqrt(N/10) m, bottoms at "
          "z in [0, 0.9] m (fixed density); us per clearance query (n = queries timed)\n")
-    emit("| N obstacles | checker (bounds, then FCL) | brute force fcl.distance | pybullet loop | "
-         "pybullet broad phase | checker vs brute max diff (mm) |\n|---|---|---|---|---|---|")
+    emit(table_header("N obstacles", "checker (bounds, then FCL)", "brute force fcl.distance", "pybullet loop",
+                      "pybullet broad phase", "checker vs brute max diff (mm)"))
     tree_us: dict[int, float] = {}
     last: dict[str, tuple[int, float]] = {}
     for n in sizes:
@@ -303,23 +301,18 @@ def env_table(rounds: int, steps: int) -> None:
         import panda_gym  # noqa: F401
 
         envs["PandaReach-v3 (panda-gym)"] = gym.make("PandaReach-v3")
-    rng, rates = np.random.default_rng(0), {name: [] for name in envs}
+    rng = np.random.default_rng(0)
     for env in envs.values():
         env.reset(seed=0)
-    for _ in range(rounds):
-        for name, env in envs.items():
-            actions = rng.uniform(-1, 1, size=(steps, *env.action_space.shape)).astype(np.float32)
-            total = 0.0
-            for a in actions:
-                t0 = time.perf_counter()
-                _, _, terminated, truncated, _ = env.step(a)
-                total += time.perf_counter() - t0
-                if terminated or truncated:
-                    env.reset()
-            rates[name].append(steps / total)
+
+    def block(env) -> float:  # steps/s in env.step (resets not counted)
+        actions = rng.uniform(-1, 1, size=(steps, *env.action_space.shape)).astype(np.float32)
+        return steps / run_block(env, actions)[0]
+
+    rates = alternating_rounds({name: partial(block, env) for name, env in envs.items()}, rounds)
     peer = statistics.median(rates["PandaReach-v3 (panda-gym)"])
     emit(f"\n### Env throughput: random actions, {rounds} alternating rounds of {steps} steps, medians\n")
-    emit("| env | steps/s | vs PandaReach-v3 |\n|---|---|---|")
+    emit(table_header("env", "steps/s", "vs PandaReach-v3"))
     for name, r in rates.items():
         emit(f"| {name} | {statistics.median(r):,.0f} | {statistics.median(r) / peer:.2f}x |")
     for env in envs.values():

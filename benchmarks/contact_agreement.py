@@ -4,7 +4,7 @@ FCL measures the exact geometry (cylinders as cylinders) at the pose after the s
 contact points of its last narrow phase, with 64-gon prisms for cylinder obstacles and its own contact margins.
 A disagreement is a step where exactly one engine sees a contact within ``contact_tolerance`` (1 mm).
 
-    python benchmarks/contact_agreement.py
+    python -m benchmarks.contact_agreement
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ import gymnasium as gym
 import numpy as np
 
 import clutter_gym  # noqa: F401
-from throughput import smooth_actions
+from benchmarks.harness import smooth_actions
 
 
 def measure(steps: int, seed: int) -> dict[str, float]:

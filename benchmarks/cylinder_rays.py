@@ -3,17 +3,18 @@
 Twenty cylinders (r = 0.2 m) ring a 64-beam scan; the error is measured on 400 beams fanned across one cylinder
 against the exact ray-circle intersection. Prisms have the circle's area (see clutter_gym.util.meshes.prism_mesh).
 
-    python benchmarks/cylinder_rays.py
+    python -m benchmarks.cylinder_rays
 """
 
 from __future__ import annotations
 
+import argparse
 import math
 import time
 
 import numpy as np
 
-from clutter_gym.sim import pb
+from benchmarks.harness import pb, table_header
 from clutter_gym.util.meshes import prism_mesh
 from clutter_gym.util.quiet import quiet_c_output
 
@@ -59,8 +60,7 @@ def range_errors_mm(kind: str, sides: int) -> np.ndarray:
 
 
 def main() -> None:
-    print("| cylinder model | 64-beam scan, 20 cylinders (us) | max range error (mm) | mean error (mm) |")
-    print("|---|---|---|---|")
+    print(table_header("cylinder model", "64-beam scan, 20 cylinders (us)", "max range error (mm)", "mean error (mm)"))
     for kind, sides in (("primitive", 0), ("prism", 16), ("prism", 32), ("prism", 64)):
         err = range_errors_mm(kind, sides)
         label = "Bullet cylinder primitive" if kind == "primitive" else f"{sides}-gon trimesh prism"
@@ -68,4 +68,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
+    argparse.ArgumentParser(description=__doc__.split("\n\n")[0]).parse_args()  # --help; no options
     main()

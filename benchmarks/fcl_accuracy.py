@@ -4,16 +4,18 @@ The chassis cylinder against floor-standing boxes, wall segments and cylinders t
 3D distance is the 2D distance between the footprints. Both of python-fcl's GJK solvers are run on the same
 random positions.
 
-    python benchmarks/fcl_accuracy.py
+    python -m benchmarks.fcl_accuracy
 """
 
 from __future__ import annotations
 
+import argparse
 import time
 
 import fcl
 import numpy as np
 
+from benchmarks.harness import table_header
 from clutter_gym.collision import obstacle_object
 from clutter_gym.worlds.scene import Obstacle
 
@@ -34,8 +36,7 @@ def main(samples: int = 5000) -> None:
     objects = [obstacle_object(o) for o in OBSTACLES]
     chassis = fcl.Cylinder(CHASSIS_RADIUS, 0.12)
     print(f"{samples} random chassis positions x {len(OBSTACLES)} obstacles; error = |FCL - closed form|\n")
-    header = " | ".join(f"max error, d in [{lo}, {hi}) m" for lo, hi in BINS)
-    print(f"| GJK solver | {header} | us per pair |\n|---|{'---|' * len(BINS)}---|")
+    print(table_header("GJK solver", *(f"max error, d in [{lo}, {hi}) m" for lo, hi in BINS), "us per pair"))
     for name, solver in (("libccd (default)", fcl.GJKSolverType.GST_LIBCCD),
                          ("FCL's own (GST_INDEP)", fcl.GJKSolverType.GST_INDEP)):
         request = fcl.DistanceRequest(enable_signed_distance=True, gjk_solver_type=solver)
@@ -56,4 +57,5 @@ def main(samples: int = 5000) -> None:
 
 
 if __name__ == "__main__":
+    argparse.ArgumentParser(description=__doc__.split("\n\n")[0]).parse_args()  # --help; no options
     main()

@@ -5,7 +5,7 @@ within 15 minutes of wall time per seed on the 2-core reference machine. Prints,
 training, the evaluation under the clean and nominal profiles, and the success / collision rates of the
 training episodes at each quarter of the budget; writes ``OUT/learning.md`` and ``OUT/learning.png``.
 
-    python benchmarks/learning.py --seeds 0 1 [--timesteps N] [--out out/learning] [--hyperparams F.yml]
+    python -m benchmarks.learning --seeds 0 1 [--timesteps N] [--out out/learning] [--hyperparams F.yml]
         [--env-kwargs KEY=VALUE ...]
 """
 
@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from benchmarks.harness import table_header
 from clutter_gym.training.commands import add_settings_options, settings
 from clutter_gym.training.figures import plt, save_figure
 from clutter_gym.training.report import WINDOW, main_job, prepare_run, rolling_rate
@@ -34,9 +35,9 @@ def main() -> None:
     add_settings_options(parser)
     args = parser.parse_args()
     out = Path(args.out)
-    lines = ["| seed | train wall (min) | steps | training success / collision at 25 / 50 / 75 / 100% of budget "
-             "| eval `none` success | eval `none` collision | eval `nominal` success | eval `nominal` collision |",
-             "|---|---|---|---|---|---|---|---|"]
+    lines = [table_header("seed", "train wall (min)", "steps",
+                          "training success / collision at 25 / 50 / 75 / 100% of budget", "eval `none` success",
+                          "eval `none` collision", "eval `nominal` success", "eval `nominal` collision")]
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.6), sharey=True)
     for seed in args.seeds:
         t0 = time.perf_counter()

@@ -10,7 +10,7 @@ round; figures are medians over blocks. The end-to-end difference is within the 
 here), so the script also times the noise code itself inside the "sensor noise only" runs: every noise function
 and delay line, wrapped with a stopwatch, as a share of the step.
 
-    python benchmarks/noise_cost.py
+    python -m benchmarks.noise_cost
 """
 
 from __future__ import annotations
@@ -26,9 +26,9 @@ import numpy as np
 import clutter_gym  # noqa: F401  (registers the envs)
 import clutter_gym.sensors.imu
 import clutter_gym.sensors.lidar
+from benchmarks.harness import EnvRunner, smooth_actions, table_header
 from clutter_gym.noise.profiles import PROFILE_NAMES
 from clutter_gym.noise.timing import SampleHoldDelay
-from throughput import EnvRunner, smooth_actions
 
 SENSOR_NOISE_ONLY = {
     "lidar": {"rate_hz": 0.0},
@@ -118,7 +118,7 @@ def main() -> None:
     base = statistics.median(rates["none"])
     print(f"ClutterNav-v0 defaults (64-beam LIDAR + IMU), {args.rounds} alternating blocks of {args.steps} "
           "random-walk steps\n")
-    print("| noise | steps/s | us/step | step time vs none | noise code, share of the step |\n|---|---|---|---|---|")
+    print(table_header("noise", "steps/s", "us/step", "step time vs none", "noise code, share of the step"))
     for label, values in rates.items():
         rate = statistics.median(values)
         share = f"{statistics.median(shares[label]):.1%}" if label in shares else ""

@@ -2,7 +2,7 @@
 
 Every profile sees the same layout (a seed gives the same layouts under every profile) from the same pose.
 
-    python benchmarks/noise_figure.py            # writes docs/noise_profiles.png
+    python -m benchmarks.noise_figure            # writes docs/noise_profiles.png
 """
 
 from __future__ import annotations

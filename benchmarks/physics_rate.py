@@ -4,17 +4,19 @@ solver iteration counts, compared with a 3840 Hz / 200-iteration reference drive
 The error is first order in the time step (heading errors accumulate into position), so the reference is
 checked against the next coarser rate, and that gap is printed with the table.
 
-    python benchmarks/physics_rate.py
+    python -m benchmarks.physics_rate
 """
 
 from __future__ import annotations
 
+import argparse
 import time
 
 import gymnasium as gym
 import numpy as np
 
 import clutter_gym  # noqa: F401
+from benchmarks.harness import table_header
 
 SCENE = {"obstacles": [], "start": [-2.0, 0.0, 0.0], "goal": [2.5, 2.5]}
 REFERENCE, REFERENCE_CHECK = (3840.0, 200), (1920.0, 200)
@@ -49,8 +51,8 @@ def main() -> None:
           f"by {gap:.1f} mm\n")
     length = np.linalg.norm(np.diff(reference, axis=0), axis=1).sum()
     print(f"path length {length:.2f} m\n")
-    print("| physics Hz | solver iterations | steps/s (no sensors) | max position error over 8 s (mm) | % of path |")
-    print("|---|---|---|---|---|")
+    print(table_header("physics Hz", "solver iterations", "steps/s (no sensors)", "max position error over 8 s (mm)",
+                       "% of path"))
     for hz, iterations in SETTINGS:
         path, rate = trajectory(hz, iterations, actions)
         error = 1000 * np.linalg.norm(path - reference, axis=1).max()
@@ -59,4 +61,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
+    argparse.ArgumentParser(description=__doc__.split("\n\n")[0]).parse_args()  # --help; no options
     main()

@@ -9,7 +9,7 @@ clearance and contacts, the pybullet contact cross-check, sensor and reward math
 overhead the ratio measures. Env and floor run in alternating blocks so that machine noise hits both alike;
 figures are medians over blocks. If panda-gym is installed, PandaReach-v3 joins the alternation as the peer.
 
-    python benchmarks/throughput.py            # or: python3 tasks.py bench
+    python -m benchmarks.throughput            # or: python3 tasks.py bench
 """
 
 from __future__ import annotations
@@ -23,44 +23,10 @@ import gymnasium as gym
 import numpy as np
 
 import clutter_gym  # noqa: F401  (registers the envs)
+from benchmarks.harness import EnvRunner, pb, smooth_actions, table_header
 from clutter_gym.sim import RAY_INVISIBLE_GROUP
 from clutter_gym.training.baselines import PotentialFieldNavigator
 from clutter_gym.util.quiet import quiet_c_output
-
-with quiet_c_output():  # pybullet prints its build banner on import
-    import pybullet as pb
-
-
-def smooth_actions(rng: np.random.Generator, n: int) -> np.ndarray:
-    """A clipped random walk: the robot drives around and often into things, like a policy early in training."""
-    steps = rng.normal(0.0, 0.25, size=(n, 2))
-    out = np.empty((n, 2), dtype=np.float32)
-    a = np.array([0.5, 0.0])
-    for i in range(n):
-        a = np.clip(a + steps[i], -1.0, 1.0)
-        out[i] = a
-    return out
-
-
-class EnvRunner:
-    """Steps an env with a policy, timing env.step only; records the actions and episode ends for the floor."""
-
-    def __init__(self, env: gym.Env, seed: int) -> None:
-        self.env = env
-        self.obs, _ = env.reset(seed=seed)
-
-    def run(self, choose, n: int) -> tuple[float, np.ndarray, list[int]]:
-        """``n`` steps with actions ``choose(obs, i)``; returns (seconds in env.step, actions, end steps)."""
-        total, actions, ends = 0.0, np.empty((n, *self.env.action_space.shape), dtype=np.float32), []
-        for i in range(n):
-            actions[i] = choose(self.obs, i)
-            t0 = time.perf_counter()
-            self.obs, _, terminated, truncated, _ = self.env.step(actions[i])
-            total += time.perf_counter() - t0
-            if terminated or truncated:
-                ends.append(i)
-                self.obs, _ = self.env.reset()
-        return total, actions, ends
 
 
 class Floor:
@@ -169,7 +135,7 @@ def main() -> None:
 
     print(f"ClutterNav-v0 defaults (64-beam LIDAR + IMU + FCL clearance and contacts), one process, "
           f"{args.rounds} alternating blocks of {args.steps} steps per scenario\n")
-    print("| scenario | env steps/s | raw pybullet floor steps/s | env time / floor time |\n|---|---|---|---|")
+    print(table_header("scenario", "env steps/s", "raw pybullet floor steps/s", "env time / floor time"))
     for name, label in (("navigator", "scripted navigator (drives around clutter)"),
                         ("random-walk", "random walk (frequent contact)")):
         f = figures[name]

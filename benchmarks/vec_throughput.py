@@ -8,7 +8,7 @@ Configurations run in alternating rounds (machine noise hits them alike); figure
 last line is the training loop itself: PPO with the main job's settings (rollouts, updates, observation
 normalisation), in samples per second of wall time.
 
-    python benchmarks/vec_throughput.py [--rounds 3] [--steps 2000] [--ppo-steps 16384] [--bare]
+    python -m benchmarks.vec_throughput [--rounds 3] [--steps 2000] [--ppo-steps 16384] [--bare]
 """
 
 from __future__ import annotations
@@ -24,11 +24,11 @@ import numpy as np
 import torch
 from stable_baselines3.common.vec_env import SubprocVecEnv, VecEnv
 
+from benchmarks.harness import alternating_rounds, smooth_actions, table_header
 from clutter_gym.training.config import config_for
 from clutter_gym.training.train import build_model
 from clutter_gym.training.vec_env import env_workers, make_env, training_env
 from clutter_gym.training.worker_vec_env import WorkerVecEnv
-from throughput import smooth_actions  # the random walk every throughput benchmark drives with
 
 
 def one_env(factory, steps: int, seed: int) -> float:
@@ -112,16 +112,13 @@ def main() -> None:
     for per_worker in (1, 4, 8, 16):
         configurations[f"WorkerVecEnv, 2 workers x {per_worker} envs"] = functools.partial(
             lambda k: vector(WorkerVecEnv([factory] * (2 * k), workers=2), args.steps, args.seed), per_worker)
-    rates: dict[str, list[float]] = {name: [] for name in configurations}
-    for _ in range(args.rounds):
-        for name, measure in configurations.items():
-            rates[name].append(measure())
+    rates = alternating_rounds(configurations, args.rounds)
     base = statistics.median(rates["one env, one process"])
 
     settings = "its default settings" if args.bare else "the main job's env settings"
     print(f"ClutterNav-v0 with {settings}, {os.cpu_count()} cores, random-walk actions, "
           f"{args.steps} samples per configuration, median of {args.rounds} alternating rounds\n")
-    print("| configuration | samples/s | vs one env |\n|---|---|---|")
+    print(table_header("configuration", "samples/s", "vs one env"))
     for name, values in rates.items():
         median = statistics.median(values)
         print(f"| {name} | {median:,.0f} | {median / base:.2f}x |", flush=True)
