@@ -28,7 +28,7 @@ import clutter_gym.sensors.imu
 import clutter_gym.sensors.lidar
 from benchmarks.harness import EnvRunner, smooth_actions, table_header
 from clutter_gym.noise.profiles import PROFILE_NAMES
-from clutter_gym.noise.timing import SampleHoldDelay
+from clutter_gym.sensors.timing import SampleHoldDelay
 
 SENSOR_NOISE_ONLY = {
     "lidar": {"rate_hz": 0.0},

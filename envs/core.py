@@ -21,9 +21,9 @@ from clutter_gym.interfaces import Arena, Layout, Robot, Sensor, Task
 from clutter_gym.noise.action import ActionChannel
 from clutter_gym.noise.dynamics import sample_dynamics
 from clutter_gym.noise.profiles import NoiseProfile
-from clutter_gym.noise.timing import SampleHoldDelay
 from clutter_gym.robots.safety import SafetyFilter
 from clutter_gym.robots.state import RobotState
+from clutter_gym.sensors.timing import SampleHoldDelay, timed_reading
 from clutter_gym.sim import Sim
 from clutter_gym.util.transforms import yaw_quat
 
@@ -191,14 +191,9 @@ class ClutterEnv(gym.Env):
         obs: dict[str, np.ndarray] = {}
         info: dict[str, Any] = {}
         for sensor, clock in zip(self.sensors, self._clocks):
-            due = clock.due()
-            reading = sensor.read(self.sim, state, self._noise_rng) if due or sensor.read_every_step else None
-            fresh = (sensor.observe(reading), sensor.info(reading)) if due else None
-            delivered = clock.push(fresh)
-            if delivered is not fresh:  # held or delayed: already returned once, so hand out copies
-                delivered = tuple({k: np.copy(v) for k, v in part.items()} for part in delivered)
-            obs.update(delivered[0])
-            info.update(delivered[1])
+            sensor_obs, sensor_info = timed_reading(sensor, clock, self.sim, state, self._noise_rng)
+            obs.update(sensor_obs)
+            info.update(sensor_info)
         self._scan = info.get("lidar_ranges")
         obs.update(self.task.observe(state, report))
         obs.update(self.robot.observe(state))

@@ -137,7 +137,7 @@ class Sensor(Protocol):
     """A noisy reading in physical units, and its observation form.
 
     A sensor is a clean read of the world and a chain of pure noise functions (``clutter_gym.noise``); the env
-    runs each sensor's sample-and-hold and delay line (:class:`clutter_gym.noise.timing.SampleHoldDelay`).
+    runs each sensor's sample-and-hold and delay line (:class:`clutter_gym.sensors.timing.SampleHoldDelay`).
 
     Attributes:
         name: the sensor's name in ``sensors=(...)`` and in the noise profile's timing.

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from clutter_gym.noise.action import ActionChannel, ActionNoise
-from clutter_gym.noise.timing import SampleHoldDelay, SensorTiming
+from clutter_gym.noise.timing import SensorTiming
+from clutter_gym.sensors.timing import SampleHoldDelay
 
 
 def run(timing: SensorTiming, steps: int, seed: int = 0, dt: float = 0.05) -> list:

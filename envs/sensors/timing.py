@@ -1,0 +1,77 @@
+"""Each sensor's timing at run time: sample-and-hold at its rate, then a delay line of its latency.
+
+The parameters are :class:`clutter_gym.noise.timing.SensorTiming` (part of a noise profile); this module holds the
+state that runs them, one clock per sensor, ticking once per control step.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from typing import Any
+
+import numpy as np
+
+from clutter_gym.interfaces import Sensor
+from clutter_gym.noise.timing import SensorTiming
+from clutter_gym.robots.state import RobotState
+from clutter_gym.sim import Sim
+
+
+class SampleHoldDelay:
+    """Sample-and-hold at ``rate_hz`` followed by a ``latency_steps`` delay line, ticking once per control step.
+
+    Args:
+        timing: rate and latency.
+        control_dt: control period, seconds.
+    """
+
+    def __init__(self, timing: SensorTiming, control_dt: float) -> None:
+        self.timing = timing
+        self._period = 0.0 if timing.rate_hz == 0.0 else 1.0 / timing.rate_hz
+        self._dt = control_dt
+        self._line: deque[Any] = deque(maxlen=timing.latency_steps + 1)
+        self._since_update = 0.0
+
+    def reset(self, rng: np.random.Generator) -> None:
+        """Empty the line and draw this episode's phase (nothing is drawn when the sensor runs every step)."""
+        self._line.clear()
+        if self._period > self._dt:
+            self._since_update = float(rng.uniform(0.0, self._period))
+
+    def due(self) -> bool:
+        """Advance one control step; True when the sensor takes a new reading in it (always on the first)."""
+        if not self._line or self._period <= self._dt:
+            return True  # the first reading of an episode, or a sensor at least as fast as the control loop
+        self._since_update += self._dt
+        if self._since_update + 1e-9 >= self._period:
+            self._since_update -= self._period
+            return True
+        return False
+
+    def push(self, reading: Any | None) -> Any:
+        """Record this step's reading (None = held) and return the one that arrives now.
+
+        The first reading of an episode fills the whole line, so the first observations are not blank.
+        """
+        if reading is None:
+            reading = self._line[-1]
+        elif not self._line:
+            self._line.extend([reading] * self._line.maxlen)
+        self._line.append(reading)
+        return self._line[0]
+
+
+def timed_reading(sensor: Sensor, clock: SampleHoldDelay, sim: Sim, state: RobotState,
+                  rng: np.random.Generator) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+    """One control step of ``sensor`` behind its ``clock``: the (observation, info) entries that arrive now.
+
+    The sensor reads when its clock makes a reading due (or every step, if it must keep its own state current);
+    a held or delayed reading was handed out before, so it comes back as copies.
+    """
+    due = clock.due()
+    reading = sensor.read(sim, state, rng) if due or sensor.read_every_step else None
+    fresh = (sensor.observe(reading), sensor.info(reading)) if due else None
+    delivered = clock.push(fresh)
+    if delivered is not fresh:
+        delivered = tuple({k: np.copy(v) for k, v in part.items()} for part in delivered)
+    return delivered
