@@ -11,7 +11,7 @@ except PackageNotFoundError:  # imported from a source tree that was never insta
 
 ENV_IDS = ("ClutterNav-v0", "ClutterReach-v0")
 
-register(id="ClutterNav-v0", entry_point="clutter_gym.nav:ClutterNavEnv", max_episode_steps=400)
-register(id="ClutterReach-v0", entry_point="clutter_gym.reach:ClutterReachEnv", max_episode_steps=100)
+register(id="ClutterNav-v0", entry_point="clutter_gym.clutter_nav:ClutterNavEnv", max_episode_steps=400)
+register(id="ClutterReach-v0", entry_point="clutter_gym.clutter_reach:ClutterReachEnv", max_episode_steps=100)
 
 __all__ = ["ENV_IDS", "__version__"]

@@ -31,7 +31,7 @@ RENDER_MODES = ("human", "rgb_array")
 
 
 class ClutterEnv(gym.Env):
-    """Composition of the parts; see :class:`clutter_gym.nav.ClutterNavEnv` for a documented env.
+    """Composition of the parts; see :class:`clutter_gym.clutter_nav.ClutterNavEnv` for a documented env.
 
     Args:
         physics_hz: physics ticks per simulated second; the env opens its own physics client (:class:`Sim`, a GUI
