@@ -100,12 +100,12 @@ def obstacle_shape(o: Obstacle) -> fcl.CollisionGeometry:
     return fcl.Cylinder(o.radius, o.size[2]) if o.shape == "cylinder" else fcl.Box(*o.size)
 
 
-def obstacle_object(o: Obstacle, shape: fcl.CollisionGeometry | None = None) -> fcl.CollisionObject:
-    """FCL object for an obstacle (its bottom face at height ``o.z``), optionally with a given shape."""
+def obstacle_object(o: Obstacle) -> fcl.CollisionObject:
+    """FCL object for an obstacle (its bottom face at height ``o.z``)."""
     # a rotation matrix, not a quaternion: FCL's are (w, x, y, z), ours (x, y, z, w); bit for bit the matrix FCL
     # would build from the quaternion
     rotation = quat_to_matrix(np.array(yaw_quat(o.yaw)))
-    return fcl.CollisionObject(shape or obstacle_shape(o), fcl.Transform(rotation, list(o.centre)))
+    return fcl.CollisionObject(obstacle_shape(o), fcl.Transform(rotation, list(o.centre)))
 
 
 class CollisionChecker:
