@@ -1,9 +1,10 @@
 """Samples per second of the main job's ClutterNav-v0 envs: one env alone against vector envs over worker processes.
 
-Target (issue 12): two worker processes step at least 1.8x one env alone on a 2-core machine. Every configuration
+Target (issue 12): two workers step at least 1.8x one env alone on a 2-core machine. Every configuration
 steps the main job's env settings (subgoal, terminate on collision; ``--bare``: the env's defaults) with random-walk
 actions, so that episodes end and reset as often as early in training. Two free-running processes, one env each,
 show what two cores can give at most; the vector envs step in lockstep (every vector step waits for every worker).
+``WorkerVecEnv`` with two workers steps one block in this process and the other in one worker process.
 Configurations run in alternating rounds (machine noise hits them alike); figures are medians over rounds. The
 last line is the training loop itself: PPO with the main job's settings (rollouts, updates, observation
 normalisation), in samples per second of wall time.
@@ -110,7 +111,7 @@ def main() -> None:
                                                                     args.seed),
     }
     for per_worker in (1, 4, 8, 16):
-        configurations[f"WorkerVecEnv, 2 workers x {per_worker} envs"] = functools.partial(
+        configurations[f"WorkerVecEnv, 2 workers (this process + 1) x {per_worker} envs"] = functools.partial(
             lambda k: vector(WorkerVecEnv([factory] * (2 * k), workers=2), args.steps, args.seed), per_worker)
     rates = alternating_rounds(configurations, args.rounds)
     base = statistics.median(rates["one env, one process"])

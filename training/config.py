@@ -99,8 +99,9 @@ class TrainConfig:
         noise: noise profile name the agent trains under.
         timesteps: total environment steps.
         n_envs: parallel envs.
-        env_workers: processes that step the ``n_envs`` envs, each a contiguous block of them (0: one per CPU
-            core, at most ``n_envs``; 1: the training process itself). Only speed depends on it, never results.
+        env_workers: processes that step the ``n_envs`` envs, each a contiguous block of them: the training
+            process itself and ``env_workers - 1`` worker processes (0: one per CPU core, at most ``n_envs``).
+            Only speed depends on it, never results.
         checkpoint_every: env steps between checkpoints.
         keep_checkpoints: how many of the newest checkpoints to keep.
         final_eval_episodes: episodes of the evaluation written to ``eval.json`` after training (0: none).

@@ -1,10 +1,12 @@
-"""A vector env that steps several envs per worker process, one message per worker per vector step.
+"""A vector env that steps several envs per process, one message per worker process per vector step.
 
 SB3's ``SubprocVecEnv`` gives every env its own process and exchanges one message per env per step. On a small
 machine the exchange costs about as much as a ClutterNav step, so more workers than cores only add wake-ups, and
-a worker per core still waits on one message per env. Here each worker process runs a ``DummyVecEnv`` over its
-contiguous share of the envs and answers a whole batch per message. Env ``i`` is the same env, seeded the same
-way, whatever the number of workers: the split changes the speed, never the trajectories.
+a worker per core still waits on one message per env. Here the envs are split into contiguous blocks, one per
+worker, and the first worker is this process itself: it steps its block while the worker processes step theirs,
+instead of sleeping until they answer. Each worker process runs a ``DummyVecEnv`` over its block and answers a
+whole batch per message. Env ``i`` is the same env, seeded the same way, whatever the number of workers: the split
+changes the speed, never the trajectories.
 """
 
 from __future__ import annotations
@@ -38,8 +40,6 @@ def _answer(envs: DummyVecEnv, cmd: str, data: Any) -> Any:
             envs.seed(seed)  # env k of this worker gets seed + k, as in the parent's numbering
         envs.set_options(options)
         return envs.reset(), envs.reset_infos
-    if cmd == "get_spaces":
-        return envs.observation_space, envs.action_space
     if cmd == "get_attr":
         return envs.get_attr(*data)
     if cmd == "set_attr":
@@ -73,13 +73,17 @@ def _worker(remote: Any, parent_remote: Any, fns: CloudpickleWrapper) -> None:
             remote.send(WorkerError(error))
 
 
-def _gather(remotes: Sequence[Any]) -> list[Any]:
-    """One reply from each of ``remotes`` (all of them, so that no reply is left in a pipe), or a worker's error."""
-    replies = [remote.recv() for remote in remotes]
+def _gather(remotes: Sequence[Any], local: Callable[[], Any] | None = None) -> list[Any]:
+    """``local()``'s answer (when given) and then one reply from each of ``remotes``, in that order, or the first
+    error: every remote's reply is read first, so that none is left in a pipe, whatever raised."""
+    try:
+        answers = [] if local is None else [local()]
+    finally:
+        replies = [remote.recv() for remote in remotes]
     for reply in replies:
         if isinstance(reply, WorkerError):
             raise reply.error from RuntimeError(f"in an env worker process:\n{reply.trace}")
-    return replies
+    return answers + replies
 
 
 def _flat(blocks: Sequence[Sequence[Any]]) -> list[Any]:
@@ -94,7 +98,8 @@ def _concat(parts: Sequence[VecEnvObs], space: spaces.Space) -> VecEnvObs:
 
 
 class WorkerVecEnv(VecEnv):
-    """``len(env_fns)`` envs spread over ``workers`` processes in contiguous blocks (sizes differ by at most 1)."""
+    """``len(env_fns)`` envs over ``workers`` workers in contiguous blocks (sizes differ by at most 1): the first
+    block in this process, each other block in a worker process of its own (``workers - 1`` processes)."""
 
     def __init__(self, env_fns: list[Callable[[], gym.Env]], workers: int, start_method: str | None = None) -> None:
         if not 1 <= workers <= len(env_fns):
@@ -105,7 +110,7 @@ class WorkerVecEnv(VecEnv):
             start_method = "forkserver" if "forkserver" in mp.get_all_start_methods() else "spawn"
         ctx = mp.get_context(start_method)
         self.remotes, self.processes = [], []
-        for start, stop in self.blocks:
+        for start, stop in self.blocks[1:]:  # started first: they build their envs while this process builds its own
             remote, work_remote = ctx.Pipe()
             args = (work_remote, remote, CloudpickleWrapper(env_fns[start:stop]))
             process = ctx.Process(target=_worker, args=args, daemon=True)  # daemon: never outlive a crashed parent
@@ -113,28 +118,34 @@ class WorkerVecEnv(VecEnv):
             work_remote.close()
             self.remotes.append(remote)
             self.processes.append(process)
+        self.local = DummyVecEnv(env_fns[: self.blocks[0][1]])
         self.waiting, self.closed = False, False
-        self.remotes[0].send(("get_spaces", None))
-        [(observation_space, action_space)] = _gather(self.remotes[:1])
-        super().__init__(len(env_fns), observation_space, action_space)
+        self._local_actions: np.ndarray | None = None
+        super().__init__(len(env_fns), self.local.observation_space, self.local.action_space)
+
+    def _call(self, cmd: str, data: Sequence[Any]) -> list[Any]:
+        """Send worker ``k`` (``k`` >= 1) ``(cmd, data[k])``, answer ``data[0]`` here meanwhile; answers in
+        worker order."""
+        for remote, item in zip(self.remotes, data[1:]):
+            remote.send((cmd, item))
+        return _gather(self.remotes, lambda: _answer(self.local, cmd, data[0]))
 
     def step_async(self, actions: np.ndarray) -> None:
-        for remote, (start, stop) in zip(self.remotes, self.blocks):
+        for remote, (start, stop) in zip(self.remotes, self.blocks[1:]):
             remote.send(("step", actions[start:stop]))
+        self._local_actions = actions[: self.blocks[0][1]]
         self.waiting = True
 
     def step_wait(self) -> VecEnvStepReturn:
         self.waiting = False
-        results = _gather(self.remotes)
+        results = _gather(self.remotes, lambda: _answer(self.local, "step", self._local_actions))
         obs, rewards, dones, infos, reset_infos = zip(*results)
         self.reset_infos = _flat(reset_infos)
         return _concat(obs, self.observation_space), np.concatenate(rewards), np.concatenate(dones), _flat(infos)
 
     def reset(self) -> VecEnvObs:
-        for remote, (start, stop) in zip(self.remotes, self.blocks):
-            # VecEnv.seed numbers the envs seed, seed + 1, ...: a block needs only its first seed.
-            remote.send(("reset", (self._seeds[start], self._options[start:stop])))
-        results = _gather(self.remotes)
+        # VecEnv.seed numbers the envs seed, seed + 1, ...: a block needs only its first seed.
+        results = self._call("reset", [(self._seeds[start], self._options[start:stop]) for start, stop in self.blocks])
         obs, reset_infos = zip(*results)
         self.reset_infos = _flat(reset_infos)
         self._reset_seeds()
@@ -153,6 +164,7 @@ class WorkerVecEnv(VecEnv):
             process.join()
         for remote in self.remotes:
             remote.close()
+        self.local.close()
         self.closed = True
 
     def _ask(self, cmd: str, indices: VecEnvIndices, make_data: Callable[[list[int]], Any]) -> list[Any]:
@@ -162,11 +174,14 @@ class WorkerVecEnv(VecEnv):
         for i in wanted:
             w = next(k for k, (start, stop) in enumerate(self.blocks) if start <= i < stop)
             by_worker.setdefault(w, []).append(i)
-        for w, members in by_worker.items():
-            self.remotes[w].send((cmd, make_data([i - self.blocks[w][0] for i in members])))
-        replies = _gather([self.remotes[w] for w in by_worker])
+        asked = [w for w in by_worker if w > 0]
+        for w in asked:
+            self.remotes[w - 1].send((cmd, make_data([i - self.blocks[w][0] for i in by_worker[w]])))
+        local = (lambda: _answer(self.local, cmd, make_data(by_worker[0]))) if 0 in by_worker else None
+        replies = _gather([self.remotes[w - 1] for w in asked], local)
         answers: dict[int, Any] = {}
-        for members, reply in zip(by_worker.values(), replies):
+        for w, reply in zip(([0] if local else []) + asked, replies):
+            members = by_worker[w]
             answers.update(zip(members, reply if reply is not None else [None] * len(members)))
         return [answers[i] for i in wanted]
 
@@ -184,6 +199,4 @@ class WorkerVecEnv(VecEnv):
         return self._ask("is_wrapped", indices, lambda local: (wrapper_class, local))
 
     def get_images(self) -> Sequence[np.ndarray | None]:
-        for remote in self.remotes:
-            remote.send(("get_images", None))
-        return _flat(_gather(self.remotes))
+        return _flat(self._call("get_images", [None] * len(self.blocks)))

@@ -95,12 +95,17 @@ def test_training_envs_split_over_workers_step_like_one_process():
         reference.close()
 
 
-def test_an_env_error_in_a_worker_reaches_the_caller_and_leaves_the_vector_usable():
+@pytest.mark.parametrize("bad", [0, 2], ids=["in this process", "in a worker process"])
+def test_an_env_error_reaches_the_caller_and_leaves_the_vector_usable(bad):
     venv = WorkerVecEnv([cartpole] * 4, workers=2)
     try:
         venv.reset()
+        actions = np.array([0, 1, 1, 0])
+        actions[bad] = 7
         with pytest.raises(AssertionError):  # CartPole asserts its action space
-            venv.step(np.array([0, 1, 7, 0]))
-        assert venv.step(np.array([0, 1, 1, 0]))[1].shape == (4,)
+            venv.step(actions)
+        obs, rewards, _, _ = venv.step(np.array([0, 1, 1, 0]))  # the other block's reply did not stay in its pipe
+        assert rewards.shape == (4,) and obs.shape == (4, 4)
+        assert len(venv.processes) == 1  # the first block steps in this process
     finally:
         venv.close()
