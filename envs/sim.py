@@ -1,8 +1,8 @@
 """The one gateway to pybullet (docs/architecture.md, "Rules"): a physics client, bodies by name, batched reads.
 
-Every pybullet call in clutter-gym goes through :class:`Sim`. It talks to pybullet directly with its own
-``physicsClientId`` rather than through ``pybullet_utils.BulletClient``, whose ``__getattr__`` builds a
-``functools.partial`` on every call: measurable in a step that makes about ten calls.
+Every pybullet call in clutter-gym goes through :class:`Sim`. It passes its own ``physicsClientId`` to pybullet
+directly rather than going through ``pybullet_utils.BulletClient``, which adds overhead to every call
+(docs/design-notes.md#no-bulletclient).
 
 pybullet prints its build banner (stderr) and URDF/shape warnings (stdout) from C, straight to the file
 descriptors; :func:`quiet_c_output` silences them around the calls that print, so output stays readable.
@@ -11,7 +11,6 @@ descriptors; :func:`quiet_c_output` silences them around the calls that print, s
 from __future__ import annotations
 
 import contextlib
-import functools
 import importlib.util
 import operator
 from collections.abc import Sequence
@@ -22,6 +21,7 @@ import numpy as np
 
 from clutter_gym.util.meshes import prism_mesh
 from clutter_gym.util.quiet import quiet_c_output
+from clutter_gym.util.view_culling import ViewCuller
 
 with quiet_c_output():
     import pybullet as pb
@@ -33,10 +33,6 @@ CYLINDER_SIDES = 64
 RAY_INVISIBLE_GROUP = 4
 _RAY_MASK = -1 ^ RAY_INVISIBLE_GROUP
 
-
-#: Added to a body's bounding-sphere radius for view culling: covers the 1 mm margin TinyRenderer's hull of a
-#: cylinder visual carries, and rounding.
-CULL_MARGIN = 0.01
 _INVISIBLE = (0.0, 0.0, 0.0, 0.0)
 
 _UNIT_PRISM = prism_mesh(1.0, 1.0, CYLINDER_SIDES)
@@ -67,19 +63,6 @@ def pybullet_data_file(relative: str) -> Path:
     return Path(pybullet_data.getDataPath()) / relative
 
 
-@functools.lru_cache(maxsize=8)
-def _frustum_planes(projection: tuple[float, ...], width: int, height: int) -> np.ndarray:
-    """(6, 4) planes (unit normal pointing in, offset) in eye coordinates that bound what a camera can draw: the
-    left, right, bottom and top of the image widened by a pixel (x and y in normalised device coordinates up to
-    +-(1 + 2 / size) still land on a pixel), the plane of the eye and the far plane. Gribb and Hartmann's planes
-    of the projection matrix (column-major)."""
-    clip = np.array(projection, dtype=float).reshape(4, 4).T
-    sx, sy = 1.0 + 2.0 / width, 1.0 + 2.0 / height
-    r0, r1, r2, r3 = clip
-    planes = np.array([sx * r3 + r0, sx * r3 - r0, sy * r3 + r1, sy * r3 - r1, r3, r3 - r2])
-    return planes / np.linalg.norm(planes[:, :3], axis=1, keepdims=True)
-
-
 class Sim:
     """One pybullet physics client.
 
@@ -88,6 +71,11 @@ class Sim:
         solver_iterations: constraint solver iterations per physics tick.
         gravity: gravitational acceleration in m/s^2 (points along -z).
         gui: open the pybullet GUI window (needs a display) instead of a DIRECT client.
+
+    Attributes:
+        bodies: body id of each body given a name (:meth:`load_urdf`, :meth:`add_ground`, :meth:`add_marker`).
+        culler: bounding spheres and shown colours of the static bodies made here (boxes, cylinders, markers), for
+            culling them from the camera frames they cannot appear in (:meth:`camera_image`).
     """
 
     def __init__(
@@ -106,10 +94,7 @@ class Sim:
         self.physics_hz = float(physics_hz)
         self._renderer = pb.ER_TINY_RENDERER
         self._visuals: dict[int, list[tuple[int, tuple]]] = {}
-        # static bodies made here, for view culling: body -> [x, y, z, bounding radius] and body -> rgba while shown
-        self._spheres: dict[int, list[float]] = {}
-        self._shown: dict[int, tuple] = {}
-        self._cull_table: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None  # shown bodies, rebuilt on change
+        self.culler = ViewCuller()
         pb.setPhysicsEngineParameter(
             fixedTimeStep=1.0 / self.physics_hz,
             numSolverIterations=int(solver_iterations),
@@ -139,10 +124,15 @@ class Sim:
 
     # ------------------------------------------------------------------------------------------- bodies
     def add_ground(self, visual_size: float, name: str = "ground") -> int:
-        """An infinite static collision plane at z = 0, drawn as a ``visual_size`` square (metres).
+        """Add an infinite static collision plane at z = 0, drawn as a square; returns its body id.
 
-        The drawn square is a flat box, not pybullet's plane visual: TinyRenderer pays per shaded pixel, and the
-        plane visual cost 35% more than an untextured box for the floor half of every camera image.
+        The drawn square is a flat untextured box, not pybullet's plane visual: TinyRenderer pays per shaded pixel,
+        and the plane visual shades the floor, a large part of every camera image, slower
+        (docs/design-notes.md#ground-visual).
+
+        Args:
+            visual_size: side of the drawn square in metres.
+            name: the ground's name in :attr:`bodies`.
         """
         half = 0.5 * visual_size
         shape = pb.createCollisionShape(pb.GEOM_PLANE, physicsClientId=self._cid)
@@ -155,12 +145,17 @@ class Sim:
     def load_urdf(
         self, name: str, path: str | Path, position: Sequence[float] = (0.0, 0.0, 0.0), fixed_base: bool = False
     ) -> int:
-        """Load a URDF once and address it by ``name``.
+        """Load a URDF once and address it by ``name``; returns its body id.
 
-        Cylinders stay true cylinders (``URDF_USE_IMPLICIT_CYLINDER``). By default pybullet turns them into
-        convex hulls, and for the diffbot that cost: polygonal wheels shook the chassis (vertical acceleration
-        std 0.98 m/s^2 at constant speed, gyro jitter 0.05 rad/s), and the hull with its margin made pybullet see
-        contact while FCL measured 1-3 mm of clearance (5.0% of steps disagreed, 2.6% with true cylinders).
+        Cylinders stay true cylinders (``URDF_USE_IMPLICIT_CYLINDER``). By default pybullet turns them into convex
+        hulls: polygonal wheels shake the chassis (IMU noise that is not in the model), and the hull with its margin
+        reports contact where FCL's exact cylinder still has clearance (docs/design-notes.md#robot-cylinders).
+
+        Args:
+            name: the body's name in :attr:`bodies`.
+            path: the URDF file.
+            position: base position in metres, world frame.
+            fixed_base: fix the base to the world.
 
         Raises:
             FileNotFoundError: ``path`` does not exist.
@@ -180,7 +175,12 @@ class Sim:
         return self._register(name, body)
 
     def add_static_box(self, half_extents: Sequence[float], rgba: Sequence[float]) -> int:
-        """A static (mass 0) box with its centre at the origin; move it with :meth:`move_static`."""
+        """Add a static (mass 0) box centred at the origin (move it with :meth:`move_static`); returns its body id.
+
+        Args:
+            half_extents: half sizes along x, y and z in metres.
+            rgba: colour, each channel in [0, 1].
+        """
         col = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=half_extents, physicsClientId=self._cid)
         vis = pb.createVisualShape(
             pb.GEOM_BOX, halfExtents=half_extents, rgbaColor=rgba, physicsClientId=self._cid
@@ -188,15 +188,19 @@ class Sim:
         return self._static_body(col, vis, float(np.linalg.norm(half_extents)), rgba)
 
     def add_static_cylinder(self, radius: float, height: float, rgba: Sequence[float]) -> int:
-        """A static (mass 0) upright cylinder with its centre at the origin.
+        """Add a static (mass 0) upright cylinder centred at the origin, like :meth:`add_static_box`.
 
-        Its collision shape is a concave triangle mesh of a ``CYLINDER_SIDES``-gon prism with the circle's
-        area, not Bullet's cylinder primitive: rays against the primitive go through GJK convex casting
-        (about 10 us per ray per cylinder, 7x a scan's cost with 20 cylinders) and still miss the exact circle by
-        up to 2.8 mm, while the 64-gon prism is hit by BVH ray-triangle tests with at most 0.52 mm error and no
-        mean bias (measured in benchmarks/cylinder_rays.py). The visual shape stays a true cylinder. The mesh's
-        collision margin is zero: pybullet's default 1 mm margin made contacts fire 1-2 mm before FCL's exact
-        cylinder touched (contact disagreement 2.6% -> 0.3% of steps, benchmarks/contact_agreement.py).
+        Its collision shape is a concave triangle mesh of a ``CYLINDER_SIDES``-gon prism with the circle's area, not
+        Bullet's cylinder primitive: rays against the primitive go through GJK convex casting, which is slow and
+        still inexact, while the prism is hit by BVH ray-triangle tests, faster and with sub-millimetre error
+        (docs/design-notes.md#cylinders). The visual shape stays a true cylinder. The mesh has no collision margin:
+        pybullet's default margin makes contacts fire before FCL's exact cylinder touches
+        (docs/design-notes.md#mesh-collision-margin).
+
+        Args:
+            radius: radius in metres.
+            height: height in metres.
+            rgba: colour, each channel in [0, 1].
         """
         vertices, indices = _UNIT_PRISM  # one shared list: pybullet keeps a reference to every list it is given
         col = pb.createCollisionShape(
@@ -217,47 +221,45 @@ class Sim:
     def _static_body(
         self, collision: int, visual: int, radius: float | None = None, rgba: Sequence[float] = ()
     ) -> int:
-        """A mass-0 body (collision -1: visual only) as a plain rigid body, not a Featherstone multibody.
+        """Add a mass-0 body as a plain (maximal-coordinate) rigid body, not a Featherstone multibody; returns its id.
 
-        Every multibody in the world costs each physics tick even when fixed and far away (measured: 0.22 us per
-        body per tick); a static rigid body costs a third of that, and a sleeping one less again. A body given the
-        ``radius`` of a sphere about its origin that holds its visual is culled from camera frames it cannot
-        appear in (:meth:`outside_view`).
+        Every body in the world costs each physics tick, even fixed and far away, and a multibody costs more than a
+        static rigid body, a sleeping one less again (docs/design-notes.md#static-bodies).
+
+        Args:
+            collision: collision shape id (-1: visual only).
+            visual: visual shape id.
+            radius: radius in metres of a sphere about the body's origin that holds its visual. A body given one
+                joins :attr:`culler` and is culled from the camera frames it cannot appear in.
+            rgba: the visual's colour, each channel in [0, 1] (needed with ``radius``).
         """
         body = pb.createMultiBody(0.0, collision, visual, useMaximalCoordinates=True, physicsClientId=self._cid)
         if radius is not None:
-            self._spheres[body] = [0.0, 0.0, 0.0, radius + CULL_MARGIN]
-            self._set_shown(body, tuple(np.float32(rgba).tolist()))  # createVisualShape keeps single precision
+            # the colour as pybullet stores it: createVisualShape keeps single precision
+            self.culler.add(body, radius, tuple(np.float32(rgba).tolist()))
         return body
-
-    def _set_shown(self, body: int, rgba: tuple | None) -> None:
-        """Record the colour a culled body gets back after a frame (None: hidden, never culled or shown)."""
-        if rgba is None or rgba[3] == 0.0:
-            self._shown.pop(body, None)
-        else:
-            self._shown[body] = rgba
-        self._cull_table = None
 
     def remove_body(self, body: int) -> None:
         """Delete a body from the world (its collision and visual shapes stay cached for reuse)."""
         pb.removeBody(body, physicsClientId=self._cid)
-        self._spheres.pop(body, None)
-        self._set_shown(body, None)
+        self.culler.remove(body)
 
     def set_visible(self, body: int, visible: bool, rgba: Sequence[float]) -> None:
-        """Show a single-shape body in colour ``rgba``, or hide it from every renderer (fully transparent shapes are
-        skipped by TinyRenderer: a parked obstacle then costs a camera frame nothing)."""
+        """Show a single-shape body in colour ``rgba`` (channels in [0, 1]), or hide it from every renderer (fully
+        transparent shapes are skipped by TinyRenderer: a parked obstacle then costs a camera frame nothing)."""
         colour = (*rgba[:3], rgba[3] if visible else 0.0)
         pb.changeVisualShape(body, -1, rgbaColor=colour, physicsClientId=self._cid)
-        if body in self._spheres:
-            self._set_shown(body, colour)
+        self.culler.set_colour(body, colour)
 
     def sleep(self, body: int) -> None:
         """Deactivate a static body so the physics tick skips it (teleporting it wakes it again)."""
         pb.changeDynamics(body, -1, activationState=pb.ACTIVATION_STATE_SLEEP, physicsClientId=self._cid)
 
     def add_marker(self, name: str, radius: float, rgba: Sequence[float]) -> int:
-        """A visual-only disc (no collision shape: rays, contacts and FCL never see it), e.g. a goal marker."""
+        """Add a visual-only disc 1 cm thick, ``radius`` in metres, e.g. a goal marker; returns its body id.
+
+        It has no collision shape: rays, contacts and FCL never see it.
+        """
         vis = pb.createVisualShape(
             pb.GEOM_CYLINDER, radius=radius, length=0.01, rgbaColor=rgba, physicsClientId=self._cid
         )
@@ -297,15 +299,14 @@ class Sim:
             pb.setCollisionFilterGroupMask(body, link, group, mask, physicsClientId=self._cid)
 
     def move_static(self, body: int, position: Sequence[float], quaternion: Sequence[float]) -> None:
-        """Teleport a static body (its base inertial frame); it has no velocity to reset."""
+        """Teleport a static body's base inertial frame to ``position`` (metres, world frame) and ``quaternion``
+        (x, y, z, w); it has no velocity to reset."""
         pb.resetBasePositionAndOrientation(body, position, quaternion, physicsClientId=self._cid)
-        sphere = self._spheres.get(body)
-        if sphere is not None:
-            sphere[:3] = position
-            self._cull_table = None
+        self.culler.move(body, position)
 
     def set_pose(self, body: int, position: Sequence[float], quaternion: Sequence[float]) -> None:
-        """Teleport a body's base (its inertial frame) and zero its velocity."""
+        """Teleport a body's base inertial frame to ``position`` (metres) and ``quaternion`` (x, y, z, w), world
+        frame, and zero its velocity."""
         pb.resetBasePositionAndOrientation(body, position, quaternion, physicsClientId=self._cid)
         pb.resetBaseVelocity(body, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), physicsClientId=self._cid)
 
@@ -433,10 +434,11 @@ class Sim:
         return pos, np.array(pb.getMatrixFromQuaternion(quat)).reshape(3, 3), lin, ang
 
     def link_states(self, body: int, links: Sequence[int]) -> LinkStates:
-        """One batched ``getLinkStates`` call with velocities; see :class:`LinkStates`.
+        """The states of ``links`` (pybullet link indices, each >= 0; the base is :meth:`base_state`'s), in their order,
+        from one batched ``getLinkStates`` call with velocities.
 
-        Rotation matrices come from pybullet's C ``getMatrixFromQuaternion`` (0.7 us per link here, against
-        17 us for the numpy expression on six links).
+        Rotation matrices come from pybullet's C ``getMatrixFromQuaternion``, one call per link, which is faster than
+        a vectorised numpy conversion for the few links a robot tracks (docs/design-notes.md#link-rotations).
         """
         rows = pb.getLinkStates(
             body, links, computeLinkVelocity=1, computeForwardKinematics=1, physicsClientId=self._cid
@@ -456,8 +458,9 @@ class Sim:
         """Cast a batch of rays in one ``rayTestBatch``; returns the hit fraction per ray (1.0 = no hit).
 
         Args:
-            starts, ends: (n, 3) metres. pybullet converts a ready nested list twice as fast as an ndarray, but an
-                ndarray made this step is faster to pass as it is than through ``tolist()``.
+            starts, ends: (n, 3) metres. pybullet converts a ready nested list faster than an ndarray, but an
+                ndarray made this step is faster to pass as it is than through ``tolist()``
+                (docs/design-notes.md#ray-lists).
             body, link: when ``body`` >= 0 the rays are given in that link's frame and pybullet moves them with it,
                 so a sensor can keep constant ray lists.
 
@@ -484,7 +487,8 @@ class Sim:
         target: Sequence[float],
         fov_deg: float = 60.0,
     ) -> np.ndarray:
-        """An RGB image (height, width, 3) uint8 from TinyRenderer looking from ``eye`` to ``target``."""
+        """An RGB image (height, width, 3) uint8 from TinyRenderer looking from ``eye`` to ``target`` (world frame,
+        metres) with a vertical field of view of ``fov_deg`` degrees."""
         view = pb.computeViewMatrix(eye, target, (0.0, 0.0, 1.0), physicsClientId=self._cid)
         proj = pb.computeProjectionMatrixFOV(fov_deg, width / height, 0.05, 50.0, physicsClientId=self._cid)
         _, _, rgba, _, _ = pb.getCameraImage(
@@ -508,22 +512,32 @@ class Sim:
         behind: int = -1,
         cull: bool = True,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-        """One ``getCameraImage``: RGB (height, width, 3) uint8, the raw depth buffer (height, width) in [0, 1],
-        and body ids per pixel (-1 = nothing) when ``segmentation`` is set.
+        """One ``getCameraImage``.
 
         The renderer is TinyRenderer unless :meth:`use_egl` loaded the EGL plugin. TinyRenderer transforms every
         triangle of every shown visual, in view or not, so some bodies are hidden for the frame (made fully
         transparent, which it skips; the images are the same, tests/sensors/test_camera_culling.py):
 
         * ``behind``, a body that lies wholly behind the camera (the robot carrying it). TinyRenderer rasterises
-          the projection of its triangles that reach in front of the eye over the whole viewport, so the
-          diffbot's own visuals cost 0.9 ms of a 2.2 ms 84x84 frame while contributing no pixel.
-        * with ``cull``, and TinyRenderer, the static bodies :meth:`outside_view` names.
+          the projection of its triangles that reach in front of the eye over the whole viewport, so such a body
+          costs a large share of a frame while contributing no pixel (docs/design-notes.md#camera-frames).
+        * with ``cull``, and TinyRenderer, the static bodies ``culler.outside_view`` names.
+
+        Args:
+            width, height: image size in pixels.
+            view, projection: OpenGL matrices, column-major (16 values each; the view's translation in metres).
+            segmentation: also return body ids per pixel.
+            behind: id of a body wholly behind the camera, hidden for the frame (-1: none).
+            cull: hide, for the frame, the static bodies the camera cannot show.
+
+        Returns:
+            RGB (height, width, 3) uint8; the raw depth buffer (height, width) in [0, 1]; with ``segmentation``, the
+            body id per pixel (height, width), -1 where there is none, else None.
         """
         flags = pb.ER_SEGMENTATION_MASK_OBJECT_AND_LINKINDEX if segmentation else pb.ER_NO_SEGMENTATION_MASK
         colours = self._visual_colours(behind) if behind >= 0 else []
         tiny = self._renderer == pb.ER_TINY_RENDERER
-        culled = self.outside_view(view, projection, width, height) if cull and tiny else []
+        culled = self.culler.outside_view(view, projection, width, height) if cull and tiny else []
         for link, _ in colours:
             pb.changeVisualShape(behind, link, rgbaColor=_INVISIBLE, physicsClientId=self._cid)
         for body in culled:
@@ -536,30 +550,13 @@ class Sim:
             for link, colour in colours:
                 pb.changeVisualShape(behind, link, rgbaColor=colour, physicsClientId=self._cid)
             for body in culled:
-                pb.changeVisualShape(body, -1, rgbaColor=self._shown[body], physicsClientId=self._cid)
+                pb.changeVisualShape(body, -1, rgbaColor=self.culler.colour(body), physicsClientId=self._cid)
         rgb = np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)[:, :, :3]
         depth = np.asarray(depth, dtype=np.float64).reshape(height, width)
         if not segmentation:
             return rgb, depth, None
         seg = np.asarray(seg, dtype=np.int64).reshape(height, width)
         return rgb, depth, np.where(seg >= 0, seg & ((1 << 24) - 1), -1)  # low 24 bits: the body id
-
-    def outside_view(self, view: Sequence[float], projection: Sequence[float], width: int, height: int) -> list[int]:
-        """The shown static bodies (boxes, cylinders, markers made here) that no pixel of this camera can show.
-
-        A body is named when the sphere holding its visual lies wholly behind the eye, beyond the far plane, or
-        more than a pixel past a side of the image: every triangle of it then lands outside the viewport, behind
-        the eye or past the far plane, so hiding it changes no pixel. ``view`` and ``projection`` are OpenGL
-        matrices, column-major, as for ``getCameraImage``.
-        """
-        if self._cull_table is None:
-            bodies = list(self._shown)
-            spheres = np.array([self._spheres[b] for b in bodies], dtype=float).reshape(-1, 4)
-            centres = np.vstack([spheres[:, :3].T, np.ones(len(bodies))])
-            self._cull_table = (np.array(bodies, dtype=int), centres, -spheres[:, 3])
-        bodies, centres, neg_radii = self._cull_table
-        planes = _frustum_planes(tuple(projection), width, height) @ np.array(view).reshape(4, 4).T
-        return bodies[(planes @ centres < neg_radii).any(axis=0)].tolist()
 
     def _visual_colours(self, body: int) -> list[tuple[int, tuple]]:
         """(link, rgba) of each link of ``body`` with a visual shape (read once, cached).
@@ -607,5 +604,6 @@ class Sim:
         return {body: name for name, body in self.bodies.items()}
 
     def follow_camera(self, target: Sequence[float], distance: float, yaw_deg: float, pitch_deg: float) -> None:
-        """Point the GUI camera (render_mode="human")."""
+        """Point the GUI camera (render_mode="human") at ``target`` (metres) from ``distance`` metres away, turned by
+        ``yaw_deg`` and ``pitch_deg`` degrees."""
         pb.resetDebugVisualizerCamera(distance, yaw_deg, pitch_deg, target, physicsClientId=self._cid)

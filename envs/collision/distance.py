@@ -1,9 +1,9 @@
 """Signed distance between two FCL objects, accurate on both sides of contact.
 
 python-fcl 0.7 answers sphere-sphere, sphere-box and capsule-capsule in closed form only without the signed flag;
-with ``enable_signed_distance`` every pair goes through libccd's GJK, which measured up to 4 mm of error for
-separated spheres and 0.32 m for one capsule pose in 10^4 (tests/collision/test_fcl_analytic.py). Without the flag an
-overlap returns -1, so the depth is asked for only then, with the signed request (EPA).
+with ``enable_signed_distance`` every pair goes through libccd's GJK, which is inexact even for separated spheres
+and fails badly on rare capsule poses (docs/design-notes.md#signed-distance). Without the flag an overlap returns
+-1, so the depth is asked for only then, with the signed request (EPA).
 """
 
 from __future__ import annotations

@@ -74,10 +74,10 @@ class CameraConfig:
     def intrinsics(self) -> Intrinsics:
         """Pinhole intrinsics of the rendered image (pixel indices, row 0 at the top).
 
-        TinyRenderer samples each pixel at its corner, not its centre: measured against analytic floor depths
-        and box edges (tests/sensors/test_camera.py), its principal point is ``(width / 2, height / 2 - 1)``, half a
-        pixel off the ``((width - 1) / 2, (height - 1) / 2)`` of a centre-sampling renderer, which EGL's OpenGL
-        rasteriser is assumed to be.
+        TinyRenderer samples each pixel at its corner, not its centre, so its principal point is
+        ``(width / 2, height / 2 - 1)``, half a pixel off the ``((width - 1) / 2, (height - 1) / 2)`` of a
+        centre-sampling renderer, which EGL's OpenGL rasteriser is assumed to be
+        (docs/design-notes.md#pixel-sampling).
         """
         ideal = Intrinsics.from_fov(self.width, self.height, self.vertical_fov)
         if self.renderer == "egl":

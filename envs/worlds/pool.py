@@ -2,11 +2,11 @@
 
 Bodies are pooled by exact shape (shape and size). A scene takes what the pool has and creates only the
 shapes it lacks; bodies it does not need are parked under the floor, asleep and invisible (a camera frame
-would otherwise pay for their triangles). Parked bodies are not free: Bullet
-visits every body each physics tick (measured: 245 parked bodies took a tick from 29 to 77 us), so the pool
-keeps at most ``max_parked`` of them and deletes the least recently used beyond that. Generated layouts draw
-their sizes from a few levels per range (``ClutterSpec.size_levels``), so a small pool covers every layout and
-resets rarely create anything; user scenes with new sizes create bodies (about 0.1 ms each) as needed.
+would otherwise pay for their triangles). Parked bodies are not free: Bullet visits every body each physics
+tick, so the pool keeps at most ``max_parked`` of them and deletes the least recently used beyond that
+(docs/design-notes.md#parked-bodies). Generated layouts draw their sizes from a few levels per range
+(``ClutterSpec.size_levels``), so a small pool covers every layout and resets rarely create anything; user
+scenes with new sizes create bodies as needed, a one-off cost per new shape.
 """
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
-"""View culling: hiding the static bodies no pixel of the camera can show (Sim.outside_view) leaves RGB, depth and
-segmentation exactly as they were, and every body gets its colour back after the frame."""
+"""View culling: hiding the static bodies no pixel of the camera can show (Sim.culler.outside_view) leaves RGB, depth
+and segmentation exactly as they were, and every body gets its colour back after the frame."""
 
 from __future__ import annotations
 
@@ -12,7 +12,8 @@ import pytest
 from helpers import empty_scene
 
 from clutter_gym.sensors.camera import Camera, CameraConfig, _view_matrix
-from clutter_gym.sim import CULL_MARGIN, Sim
+from clutter_gym.sim import Sim
+from clutter_gym.util.view_culling import CULL_MARGIN
 
 MODES = ("rgb", "depth", "segmentation")
 LENS_X = 0.165  # camera joint x in base_link (diffbot.urdf); the lens is 0.15 m above the floor
@@ -31,7 +32,7 @@ def frames_agree(env) -> tuple[np.ndarray, list[int]]:
     culled = sim.camera_image(*args, behind=state.body, cull=True)
     for name, a, b in zip(("rgb", "depth buffer", "segmentation"), plain, culled):
         np.testing.assert_array_equal(a, b, err_msg=f"{name} differs")
-    culled_ids = sim.outside_view(view, camera.projection, c.width, c.height)
+    culled_ids = sim.culler.outside_view(view, camera.projection, c.width, c.height)
     assert not np.isin(plain[2], culled_ids).any(), "a body in view was culled"
     return plain[2], culled_ids
 
@@ -126,7 +127,7 @@ def test_no_pixel_ray_meets_a_culled_body(size, far):
             centres = np.column_stack([depth, ray[:, 1:] * depth[:, None] + offset[:, None] * outward])
             for body, centre in zip(bodies, centres):
                 sim.move_static(body, eye + rotation @ centre, (0.0, 0.0, 0.0, 1.0))
-            for body in sim.outside_view(_view_matrix(eye, rotation), camera.projection, k.width, k.height):
+            for body in sim.culler.outside_view(_view_matrix(eye, rotation), camera.projection, k.width, k.height):
                 i = bodies.index(body)
                 along = np.clip(rays @ centres[i] / (rays * rays).sum(axis=1), config.near, far)
                 miss = np.linalg.norm(rays * along[:, None] - centres[i], axis=1).min() - radii[i]
@@ -146,7 +147,7 @@ def test_culled_bodies_get_their_colours_back(make_env):
     """Two envs run the same resets (so the pool parks and reuses bodies) and actions, one culling and one not:
     after every step each visual shape, the robot's and the parked bodies' included, has the same colour in both."""
     culling, plain = (make_env(sensors=("camera",), camera_modes=MODES) for _ in range(2))
-    plain.unwrapped.sim.outside_view = lambda *args: []
+    plain.unwrapped.sim.culler.outside_view = lambda *args: []
     rng = np.random.default_rng(0)
     for seed in range(4):
         for env in (culling, plain):
