@@ -189,7 +189,10 @@ def _user_cache_dir() -> Path:
 
 def load_acm(urdf: str | Path, fidelity: str, samples: int = ACM_SAMPLES,
              seed: int = ACM_SEED) -> AllowedCollisionMatrix:
-    """The cached ACM of ``urdf`` at ``fidelity`` (shipped or user cache), generating and caching it if absent."""
+    """The cached ACM of ``urdf`` at ``fidelity`` (shipped or user cache), generating and caching it if absent.
+    ``auto`` shares ``mesh``'s: its shapes are the mesh's to within ``AUTO_HULL_TOLERANCE``."""
+    if fidelity == "auto":
+        fidelity = "mesh"
     key = acm_key(urdf, fidelity, samples, seed)
     name = f"{Path(urdf).stem}-{key}.json"
     for folder in (SHIPPED_DIR, _user_cache_dir()):

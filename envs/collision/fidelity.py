@@ -6,12 +6,17 @@
 | ``primitive`` | its elements | the enclosing capsule or oriented box, whichever has less volume | as they are |
 | ``convex`` | its elements | its convex hull (``fcl.Convex``) | as they are |
 | ``mesh`` | its elements | its triangles (``fcl.BVHModel``, OBBRSS tree; hull for depth) | as they are |
+| ``auto`` | its elements | its hull if within ``AUTO_HULL_TOLERANCE`` of the mesh, else its triangles | as they are |
 
 Every approximation encloses the exact geometry, so a coarser level can report contact early but never late.
+``auto`` is ``mesh`` to within the tolerance at ``convex``'s cost for the elements that are convex already: the
+hull lies outside the mesh, so the distance to it is short of the distance to the mesh by at most the largest gap
+between the two surfaces.
 """
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -22,7 +27,11 @@ import trimesh
 from clutter_gym.collision.urdf_geometry import CollisionElement
 from clutter_gym.util.transforms import quat_to_matrix
 
-FIDELITY_LEVELS = ("sphere", "primitive", "convex", "mesh")
+FIDELITY_LEVELS = ("sphere", "primitive", "convex", "mesh", "auto")
+#: ``auto`` keeps a mesh element's triangles when its convex hull strays further than this from it, metres.
+AUTO_HULL_TOLERANCE = 5e-4
+#: Points sampled on a hull's surface to measure its gap to the mesh (plus every hull vertex).
+HULL_GAP_SAMPLES = 1000
 
 
 @dataclass(frozen=True, eq=False)
@@ -83,6 +92,8 @@ def _element_shape(e: CollisionElement, fidelity: str) -> LinkShape:
     vertices_radius = float(np.linalg.norm(vertices, axis=1).max())
     centre = 0.5 * (vertices.min(axis=0) + vertices.max(axis=0))  # a mesh's origin is often far from its middle
     ball = (centre, float(np.linalg.norm(vertices - centre, axis=1).max()))
+    if fidelity == "auto":
+        fidelity = "mesh" if hull_gap(e.mesh) > AUTO_HULL_TOLERANCE else "convex"
     if fidelity == "mesh":
         return LinkShape(e.link, bvh_model(e.mesh), e.position, rotation, "mesh", vertices_radius, convex(e.mesh),
                          ball)
@@ -127,6 +138,28 @@ def convex(mesh: trimesh.Trimesh) -> fcl.Convex:
     hull = mesh.convex_hull
     faces = np.hstack([np.full((len(hull.faces), 1), 3), hull.faces]).ravel()
     return fcl.Convex(np.asarray(hull.vertices, dtype=float), len(hull.faces), faces)
+
+
+def hull_gap(mesh: trimesh.Trimesh) -> float:
+    """The largest distance, in metres, from a point of ``mesh``'s convex hull to ``mesh`` itself (0 for a convex
+    mesh), over every hull vertex and ``HULL_GAP_SAMPLES`` seeded points on the hull's faces. Cached by content."""
+    vertices, faces = np.asarray(mesh.vertices, dtype=float), np.asarray(mesh.faces, dtype=np.int64)
+    return _hull_gap(vertices.tobytes(), faces.tobytes())
+
+
+@functools.lru_cache(maxsize=64)
+def _hull_gap(vertices: bytes, faces: bytes) -> float:
+    mesh = trimesh.Trimesh(np.frombuffer(vertices).reshape(-1, 3), np.frombuffer(faces, dtype=np.int64).reshape(-1, 3),
+                           process=False)
+    hull = mesh.convex_hull
+    samples, _ = trimesh.sample.sample_surface(hull, HULL_GAP_SAMPLES, seed=0)
+    surface = fcl.CollisionObject(bvh_model(mesh), fcl.Transform())
+    probe = fcl.CollisionObject(fcl.Sphere(1e-9), fcl.Transform())
+    request, gap = fcl.DistanceRequest(), 0.0
+    for point in np.vstack([hull.vertices, samples]):
+        probe.setTranslation(point)
+        gap = max(gap, fcl.distance(probe, surface, request, fcl.DistanceResult()))
+    return float(gap)
 
 
 def fitted_primitive(points: np.ndarray) -> tuple[str, tuple[float, ...], np.ndarray, np.ndarray]:
