@@ -13,6 +13,7 @@ on identical layouts.
 
     python -m benchmarks.baselines --run "PPO subgoal=out/learning/seed0/run" [--episodes 50] [--out docs/baselines]
     python -m benchmarks.baselines --env ClutterReach-v0 --run "PPO=runs/ClutterReach-v0/none-seed0"
+    python -m benchmarks.baselines --env ClutterReach-v0 --no-scripted --run "another row=RUN_DIR"
 """
 
 from __future__ import annotations
@@ -100,13 +101,15 @@ def main() -> None:
                         help="clutter levels (obstacle_density for ClutterNav, n_obstacles for ClutterReach)")
     parser.add_argument("--profiles", nargs="+", default=["none", "nominal", "harsh"])
     parser.add_argument("--out", default=None, help="folder for baselines.md and .json (default out/baselines/ENV)")
+    parser.add_argument("--no-scripted", action="store_true",
+                        help="only the --run rows (to add a row to a table: every row runs the same layouts)")
     args = parser.parse_args()
     table = TABLES[args.env]
     knob, kind = table["knob"], type(table["levels"][0])  # n_obstacles takes ints
     levels = [kind(level) for level in args.levels] if args.levels else table["levels"]
     rows: list[tuple[str, str, Any]] = [
         (name, "-", lambda c, p, extra=extra, make=make: scripted_cell(args.env, extra, make, c, p, args.episodes))
-        for name, extra, make in table["scripted"]
+        for name, extra, make in ([] if args.no_scripted else table["scripted"])
     ]
     for spec in args.run:
         name, _, run_dir = spec.partition("=")
