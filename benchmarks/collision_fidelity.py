@@ -44,6 +44,9 @@ from clutter_gym.collision import (
     CollisionChecker,
     RobotCollisionModel,
     UrdfKinematics,
+    build_link_shapes,
+    load_acm,
+    load_collision_elements,
     obstacle_object,
 )
 from clutter_gym.robots import DiffDriveRobot
@@ -61,6 +64,7 @@ FINGER_OPENING = 0.02  # the Panda's fingers, as in ClutterReach
 DIFFBOT_Z = 0.05  # base_link height on the floor
 SKIP_S = 20.0  # extrapolate a scaling method whose single query would take longer
 DOCS = Path(__file__).resolve().parents[1] / "docs"
+SPHERE_COUNTS = (8, 32, 64)  # spheres per Panda mesh element measured besides the spheres level's own
 LINES: list[str] = []
 
 
@@ -70,12 +74,19 @@ def emit(line: str = "") -> None:
 
 
 class Robot:
-    """One robot's checker at every fidelity level; link poses come from numpy FK, one row per URDF link."""
+    """One robot's checker at every fidelity level, and at ``spheres`` with each of ``sphere_counts`` spheres per
+    mesh element besides the level's own (named ``spheres (N)``); link poses come from numpy FK, one row per
+    URDF link."""
 
-    def __init__(self, urdf: Path, base: str, fixed: tuple[str, ...]) -> None:
+    def __init__(self, urdf: Path, base: str, fixed: tuple[str, ...], sphere_counts: tuple[int, ...] = ()) -> None:
         self.urdf, self.kin = urdf, UrdfKinematics(urdf)
-        self.checkers = {f: CollisionChecker(RobotCollisionModel.from_urdf(urdf, f, self.kin.links), base,
-                                             clearance_range=RANGE, fixed_links=fixed) for f in FIDELITY_LEVELS}
+        models = {f: RobotCollisionModel.from_urdf(urdf, f, self.kin.links) for f in FIDELITY_LEVELS}
+        for n in sphere_counts:
+            shapes = build_link_shapes(load_collision_elements(urdf), "spheres", n_spheres=n)
+            models[f"spheres ({n})"] = RobotCollisionModel(shapes, self.kin.links, acm=load_acm(urdf, "spheres"))
+        self.levels = tuple(models)
+        self.checkers = {f: CollisionChecker(m, base, clearance_range=RANGE, fixed_links=fixed)
+                         for f, m in models.items()}
 
     def poses(self, q: np.ndarray, base: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Link positions (n, L, 3) and rotations (n, L, 3, 3) for joints q (n, J) and base frames (n, 4, 4)."""
@@ -110,9 +121,9 @@ def near_configs(robot: Robot, scenes: list[tuple[Obstacle, ...]], per_scene: in
 
 def fidelity_table(name: str, robot: Robot, cases: list[dict], self_query: bool) -> dict[str, dict]:
     """Per level: env and self query times (us) and min clearances, levels interleaved scene by scene."""
-    res = {f: {"env": [], "self": [], "d": []} for f in FIDELITY_LEVELS}
+    res = {f: {"env": [], "self": [], "d": []} for f in robot.levels}
     for s, case in enumerate(cases):
-        for level in np.roll(FIDELITY_LEVELS, s):  # rotate the order: no level always runs first
+        for level in np.roll(robot.levels, s):  # rotate the order: no level always runs first
             r = res[level]
             robot.checkers[level].set_scene(case["obstacles"], [])
             for pos, rot in zip(case["pos"], case["rot"]):
@@ -129,7 +140,7 @@ def fidelity_table(name: str, robot: Robot, cases: list[dict], self_query: bool)
     emit(table_header("level", "env query (us)", "self query (us)", "speed vs mesh", "mean abs err (mm)", "p95 (mm)",
                       "max (mm)", "conservative"))
     mesh_us = 1e6 * np.mean(res["mesh"]["env"])
-    for level in FIDELITY_LEVELS:
+    for level in robot.levels:
         r = res[level]
         r["env_us"], err = 1e6 * float(np.mean(r["env"])), np.array(r["d"]) - mesh
         r["err_mm"] = 1e3 * float(np.abs(err).mean())
@@ -348,7 +359,7 @@ def main() -> None:
 
     emit(f"## Collision fidelity benchmark{' (--quick)' if quick else ''}\n\nClearance range {RANGE} m; "
          "times are means per query in one process, competitors interleaved; compare ratios.")
-    panda = Robot(PandaArm().urdf_path, "panda_link0", ("panda_link0",))
+    panda = Robot(PandaArm().urdf_path, "panda_link0", ("panda_link0",), SPHERE_COUNTS)
     lo, hi = panda.kin.lower, panda.kin.upper
 
     def draw_panda(n: int) -> tuple[np.ndarray, None]:

@@ -86,7 +86,7 @@ class ClutterReachEnv(ClutterEnv):
     ## Arguments
 
     ``render_mode``; ``control`` ("joint_velocity", "ee_position"); ``max_joint_speed`` (0, 1];
-    ``max_ee_step`` m; ``collision_fidelity`` ("sphere", "primitive", "convex", "mesh", "auto");
+    ``max_ee_step`` m; ``collision_fidelity`` (one of ``FIDELITY_LEVELS``: docs/collision.md);
     ``collision_padding`` m; ``self_collision``; ``n_obstacles`` [0, 20]; ``shelf``; ``noise`` (profile name
     or overrides; only action noise, timing and dynamics apply: the arm has no exteroceptive sensors);
     ``physics_hz``; ``control_hz``; ``solver_iterations``; ``success_radius`` m; ``clearance_margin`` m;

@@ -176,7 +176,7 @@ def _count_collisions(model, kinematics: UrdfKinematics, q: np.ndarray, candidat
         seen = set()
         for k in np.flatnonzero(gap <= 0.0):
             p, i, j = flat[k]
-            if p not in seen and fcl.collide(model.objects[i], model.objects[j], request, fcl.CollisionResult()):
+            if p not in seen and fcl.collide(model.object(i), model.object(j), request, fcl.CollisionResult()):
                 seen.add(p)
                 hits[p] += 1
     return hits
@@ -190,8 +190,9 @@ def _user_cache_dir() -> Path:
 def load_acm(urdf: str | Path, fidelity: str, samples: int = ACM_SAMPLES,
              seed: int = ACM_SEED) -> AllowedCollisionMatrix:
     """The cached ACM of ``urdf`` at ``fidelity`` (shipped or user cache), generating and caching it if absent.
-    ``auto`` shares ``mesh``'s: its shapes are the mesh's to within ``AUTO_HULL_TOLERANCE``."""
-    if fidelity == "auto":
+    ``auto`` and ``spheres`` share ``mesh``'s: which link pairs can touch is a property of the robot, which
+    ``auto`` models to within ``AUTO_HULL_TOLERANCE`` and ``spheres`` by a fitted enclosure."""
+    if fidelity in ("auto", "spheres"):
         fidelity = "mesh"
     key = acm_key(urdf, fidelity, samples, seed)
     name = f"{Path(urdf).stem}-{key}.json"

@@ -146,8 +146,11 @@ class CollisionChecker:
         self.swept_speed = swept_speed
         self.dt = dt
         self._moving = np.array(moving, dtype=int)
-        self._limits = (clearance_range + model.padding[self._moving]).tolist()  # unpadded range per moving shape
+        self._limits_array = clearance_range + model.padding[self._moving]  # unpadded range per moving shape
         self._radii = np.array([s.radius for s in model.shapes])  # about each shape's origin
+        exact = model.exact[self._moving]
+        #: rows (of the moving shapes) of the spheres, whose lower bounds are their exact distances, and the others
+        self._sphere_rows, self._other_rows = np.flatnonzero(exact), np.flatnonzero(~exact)
         self._sweepers = [fcl.CollisionObject(s.hull or s.geometry, fcl.Transform()) for s in model.shapes]
         self._obstacles: list[fcl.CollisionObject] = []
         self._bounds = ObstacleBounds(())
@@ -180,7 +183,9 @@ class CollisionChecker:
 
         Robot objects must be synced. Obstacles are measured nearest-bound first (:mod:`bounds`), and a shape
         stops at the first obstacle whose lower bound cannot beat its best exact distance: a shape with nothing
-        in range makes no FCL call.
+        in range makes no FCL call. A sphere's bound is its distance, so spheres make no FCL call for it; their
+        witness points are filled only where they are reported: the nearest shape of each link, and shapes within
+        the contact tolerance (zeros elsewhere).
         """
         return self._measure()[:3]
 
@@ -194,14 +199,38 @@ class CollisionChecker:
         if not self._obstacles:
             return np.full(n, NO_OBSTACLE_CLEARANCE), other, points, np.zeros(0, int), np.zeros((len(moving), 0))
         candidates, bound = self._lower_bounds(moving)
-        order = np.argsort(bound, axis=1, kind="stable")
-        limits = self._limits
-        rows = zip(moving.tolist(), candidates[order].tolist(), np.sort(bound, axis=1).tolist())
+        if bound.shape[1] and len(self._sphere_rows):
+            rows = self._sphere_rows
+            nearest = np.argmin(bound[rows], axis=1)
+            raw = bound[rows, nearest] + BOUND_SLACK
+            within = raw < self._limits_array[rows]
+            spheres = moving[rows[within]]
+            best[spheres], other[spheres] = raw[within] - model.padding[spheres], candidates[nearest[within]]
+            self._sphere_witnesses(spheres, best, other, points)
+        others = self._other_rows
+        order = np.argsort(bound[others], axis=1, kind="stable")
+        limits = self._limits_array[others].tolist()
+        rows = zip(moving[others].tolist(), candidates[order].tolist(), np.sort(bound[others], axis=1).tolist())
         for (i, nearest_first, lower), limit in zip(rows, limits):
             raw, j, p = self._nearest_obstacle(i, nearest_first, lower, limit)
             if j >= 0:
                 best[i], other[i], points[i] = raw - model.padding[i], j, p
         return best, other, points, candidates, bound
+
+    def _sphere_witnesses(self, spheres: np.ndarray, best: np.ndarray, other: np.ndarray, points: np.ndarray) -> None:
+        """Witness points, from FCL, of the spheres in range that are reported: the nearest shape of their link
+        (the first of equals, as :meth:`check` picks it) or within the contact tolerance. Call after every sphere's
+        ``best`` is set and before the other shapes' are: a link's nearest shape so far is then its nearest sphere,
+        and a link whose nearest shape is not a sphere gets a witness it does not report."""
+        model = self.model
+        reported = set(spheres[best[spheres] <= self.contact_tolerance].tolist())
+        for shapes in self._link_shapes:
+            i = shapes[int(np.argmin(best[shapes]))]
+            if model.exact[i] and other[i] >= 0:
+                reported.add(i)
+        for i in reported:
+            _, result = signed_distance(model.object(i), self._obstacles[other[i]])
+            points[i] = result.nearest_points
 
     def _lower_bounds(self, shapes: np.ndarray, grow: np.ndarray | float = 0.0) -> tuple[np.ndarray, np.ndarray]:
         """Candidate obstacles (indices) and lower bounds (shapes, candidates) on their unpadded distances.
@@ -227,7 +256,7 @@ class CollisionChecker:
 
         ``obstacles`` come in ascending order of their lower bounds ``lower``.
         """
-        shape, solid = self.model.objects[i], self.model.solid_objects[i]
+        shape, solid = self.model.object(i), self.model.solid_object(i)
         best, nearest, witness = limit, -1, None
         for j, bound in zip(obstacles, lower):
             if bound >= best:
@@ -287,7 +316,7 @@ class CollisionChecker:
         for row, i in enumerate(self._moving):
             if distance[i] > tol:
                 continue
-            obj = model.solid_objects[i]  # a BVH's contact depths are not meaningful; its hull's are
+            obj = model.solid_object(i)  # a BVH's contact depths are not meaningful; its hull's are
             for j in np.sort(candidates[bound[row] - model.padding[i] <= tol]):
                 d = self._pair_distance(i, j)
                 if d > tol:
@@ -303,7 +332,7 @@ class CollisionChecker:
 
     def _pair_distance(self, shape: int, obstacle: int) -> float:
         """Padded signed distance from a robot shape (its solid: a mesh's hull) to an obstacle, metres."""
-        d, _ = signed_distance(self.model.solid_objects[shape], self._obstacles[obstacle])
+        d, _ = signed_distance(self.model.solid_object(shape), self._obstacles[obstacle])
         return d - self.model.padding[shape]
 
     def _swept(self, candidates: np.ndarray, bound: np.ndarray) -> int:

@@ -3,6 +3,7 @@
 | level | a link becomes | a mesh element becomes | URDF primitives |
 |---|---|---|---|
 | ``sphere`` | one sphere enclosing all its elements | (part of the link sphere) | (part of the link sphere) |
+| ``spheres`` | its elements | ``SPHERES_PER_ELEMENT`` spheres fitted to it (:mod:`sphere_fit`) | as they are |
 | ``primitive`` | its elements | the enclosing capsule or oriented box, whichever has less volume | as they are |
 | ``convex`` | its elements | its convex hull (``fcl.Convex``) | as they are |
 | ``mesh`` | its elements | its triangles (``fcl.BVHModel``, OBBRSS tree; hull for depth) | as they are |
@@ -24,10 +25,13 @@ import fcl
 import numpy as np
 import trimesh
 
+from clutter_gym.collision.sphere_fit import fit_spheres
 from clutter_gym.collision.urdf_geometry import CollisionElement
 from clutter_gym.util.transforms import quat_to_matrix
 
-FIDELITY_LEVELS = ("sphere", "primitive", "convex", "mesh", "auto")
+FIDELITY_LEVELS = ("sphere", "spheres", "primitive", "convex", "mesh", "auto")
+#: Spheres fitted to each mesh element at the ``spheres`` level.
+SPHERES_PER_ELEMENT = 16
 #: ``auto`` keeps a mesh element's triangles when its convex hull strays further than this from it, metres.
 AUTO_HULL_TOLERANCE = 5e-4
 #: Points sampled on a hull's surface to measure its gap to the mesh (plus every hull vertex).
@@ -74,13 +78,38 @@ def check_fidelity(fidelity: str) -> str:
     return fidelity
 
 
-def build_link_shapes(elements: Sequence[CollisionElement], fidelity: str) -> list[LinkShape]:
-    """FCL shapes of ``elements`` at ``fidelity`` (one per element, or one sphere per link)."""
+def build_link_shapes(elements: Sequence[CollisionElement], fidelity: str,
+                      n_spheres: int = SPHERES_PER_ELEMENT) -> list[LinkShape]:
+    """FCL shapes of ``elements`` at ``fidelity`` (one per element, one sphere per link, or at ``spheres``
+    ``n_spheres`` per mesh element)."""
     check_fidelity(fidelity)
     if fidelity == "sphere":
         links = dict.fromkeys(e.link for e in elements)
         return [_link_sphere(link, [e for e in elements if e.link == link]) for link in links]
+    if fidelity == "spheres":
+        return [shape for e in elements for shape in _fitted_spheres(e, n_spheres)]
     return [_element_shape(e, fidelity) for e in elements]
+
+
+def _fitted_spheres(e: CollisionElement, n: int) -> list[LinkShape]:
+    """``n`` spheres fitted to a mesh element (at most), placed in the link frame; a primitive as it is."""
+    if e.kind != "mesh":
+        return [_element_shape(e, "convex")]
+    vertices, faces = np.asarray(e.mesh.vertices, dtype=float), np.asarray(e.mesh.faces, dtype=np.int64)
+    centres, radii = _fit(vertices.tobytes(), faces.tobytes(), n)
+    positions = e.position + centres @ quat_to_matrix(e.quaternion).T
+    return [LinkShape(e.link, fcl.Sphere(float(r)), p, np.eye(3), "sphere", float(r)) for p, r in zip(positions, radii)]
+
+
+@functools.lru_cache(maxsize=256)
+def _fit(vertices: bytes, faces: bytes, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`fit_spheres` cached by the mesh's content."""
+    return fit_spheres(_mesh(vertices, faces), n)
+
+
+def _mesh(vertices: bytes, faces: bytes) -> trimesh.Trimesh:
+    return trimesh.Trimesh(np.frombuffer(vertices).reshape(-1, 3), np.frombuffer(faces, dtype=np.int64).reshape(-1, 3),
+                           process=False)
 
 
 def _element_shape(e: CollisionElement, fidelity: str) -> LinkShape:
@@ -149,8 +178,7 @@ def hull_gap(mesh: trimesh.Trimesh) -> float:
 
 @functools.lru_cache(maxsize=64)
 def _hull_gap(vertices: bytes, faces: bytes) -> float:
-    mesh = trimesh.Trimesh(np.frombuffer(vertices).reshape(-1, 3), np.frombuffer(faces, dtype=np.int64).reshape(-1, 3),
-                           process=False)
+    mesh = _mesh(vertices, faces)
     hull = mesh.convex_hull
     samples, _ = trimesh.sample.sample_surface(hull, HULL_GAP_SAMPLES, seed=0)
     surface = fcl.CollisionObject(bvh_model(mesh), fcl.Transform())

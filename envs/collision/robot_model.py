@@ -68,6 +68,10 @@ class RobotCollisionModel:
             for s, o in zip(self.shapes, self.objects)
         ]
         self._hulls = [(o, h) for o, h in zip(self.objects, self.solid_objects) if o is not h]
+        #: per shape: its enclosing ball is the shape itself (a sphere), so ball distances are its exact distances
+        self.exact = np.array([s.kind == "sphere" and s.ball is None for s in self.shapes], dtype=bool)
+        # spheres' FCL objects are placed when asked for (:meth:`object`): most steps never ask
+        self._eager = [(o, i) for i, o in enumerate(self.objects) if not self.exact[i]]
         self.position = np.zeros((len(self.shapes), 3))
         self.rotation = np.broadcast_to(np.eye(3), (len(self.shapes), 3, 3)).copy()
         self._collide_request = fcl.CollisionRequest()
@@ -99,6 +103,8 @@ class RobotCollisionModel:
         first, second = np.array(self.self_pairs, dtype=int).reshape(-1, 2).T
         radius = self.ball_radius + self.padding
         self._pair_index = (first, second, radius[first] + radius[second])
+        spheres = self.exact[first] & self.exact[second]  # pairs of spheres: their ball bounds are their distances
+        self._sphere_pairs, self._other_pairs = np.flatnonzero(spheres), np.flatnonzero(~spheres)
 
     def _pair_bounds(self) -> np.ndarray:
         """Lower bounds on every enabled pair's padded distance, from the shapes' bounding balls."""
@@ -114,11 +120,23 @@ class RobotCollisionModel:
     def sync(self, positions: np.ndarray, rotations: np.ndarray) -> None:
         """Move every FCL object to its link's pose (``positions`` (L, 3), ``rotations`` (L, 3, 3) by row)."""
         self.position, self.rotation = self.world_poses(positions, rotations)
-        for obj, r, t in zip(self.objects, self.rotation, self.position):
-            obj.setRotation(r)
-            obj.setTranslation(t)
+        rotation, position = self.rotation, self.position
+        for obj, i in self._eager:
+            obj.setRotation(rotation[i])
+            obj.setTranslation(position[i])
         for obj, hull in self._hulls:
             hull.setTransform(obj.getTransform())
+
+    def object(self, i: int) -> fcl.CollisionObject:
+        """Shape ``i``'s FCL object at the synced pose."""
+        obj = self.objects[i]
+        if self.exact[i]:
+            obj.setTranslation(self.position[i])
+        return obj
+
+    def solid_object(self, i: int) -> fcl.CollisionObject:
+        """Shape ``i``'s object for depth and swept queries (a mesh's hull) at the synced pose."""
+        return self.object(i) if self.exact[i] else self.solid_objects[i]
 
     def ball_centres(self) -> np.ndarray:
         """(n, 3) world centres of the shapes' enclosing balls (radii :attr:`ball_radius`) at the synced poses."""
@@ -130,13 +148,15 @@ class RobotCollisionModel:
         """The first enabled link pair in collision (padding included), or None."""
         if not self.self_pairs:
             return None
-        request, objects, pad = self._collide_request, self.objects, self.padding
+        request, pad, exact = self._collide_request, self.padding, self.exact
         for k in np.flatnonzero(self._pair_bounds() <= 0.0):  # pairs whose balls are apart cannot touch
             i, j = self.self_pairs[k]
-            if pad[i] + pad[j] > 0.0:
+            if exact[i] and exact[j]:  # two spheres: overlapping balls are the collision
+                hit = True
+            elif pad[i] + pad[j] > 0.0:
                 hit = self._pair_distance(i, j) <= 0.0
             else:
-                hit = fcl.collide(objects[i], objects[j], request, fcl.CollisionResult()) > 0
+                hit = fcl.collide(self.object(i), self.object(j), request, fcl.CollisionResult()) > 0
             if hit:
                 return self.shapes[i].link, self.shapes[j].link
         return None
@@ -145,7 +165,12 @@ class RobotCollisionModel:
         """Smallest signed distance over the enabled link pairs, and that pair."""
         best, pair = np.inf, None
         bounds = self._pair_bounds()
-        for k in np.argsort(bounds, kind="stable"):
+        spheres, others = self._sphere_pairs, self._other_pairs
+        if len(spheres):
+            k = int(spheres[np.argmin(bounds[spheres])])
+            i, j = self.self_pairs[k]
+            best, pair = float(bounds[k]), (self.shapes[i].link, self.shapes[j].link)
+        for k in others[np.argsort(bounds[others], kind="stable")]:
             if bounds[k] >= best:
                 break
             i, j = self.self_pairs[k]
@@ -155,7 +180,7 @@ class RobotCollisionModel:
         return SelfClearance(float(best), pair)
 
     def _pair_distance(self, i: int, j: int) -> float:
-        d, _ = signed_distance(self.objects[i], self.objects[j])
+        d, _ = signed_distance(self.object(i), self.object(j))
         if d <= 0.0:  # overlap: the depth comes from the solid shapes (a BVH has none)
-            d, _ = signed_distance(self.solid_objects[i], self.solid_objects[j])
+            d, _ = signed_distance(self.solid_object(i), self.solid_object(j))
         return d - self.padding[i] - self.padding[j]

@@ -103,7 +103,7 @@ def brute_force(checker: CollisionChecker, obstacles: list[Obstacle]) -> tuple[n
     best, other, points = np.full(n, checker.clearance_range), np.full(n, -1), np.zeros((n, 2, 3))
     for i in checker._moving:
         for j, obstacle in enumerate(objects):
-            d, result = signed_distance(model.objects[i], obstacle, model.solid_objects[i])
+            d, result = signed_distance(model.object(i), obstacle, model.solid_object(i))
             if d - model.padding[i] < best[i]:
                 best[i], other[i], points[i] = d - model.padding[i], j, result.nearest_points
     return best, other, points
@@ -132,6 +132,34 @@ def test_pruned_clearance_equals_brute_force_on_random_panda_poses(fidelity, n_o
                 np.testing.assert_array_equal(g, e)
             near += int((expected[1] >= 0).sum())
     assert near > 100  # most poses have links within range of something
+
+
+@pytest.mark.parametrize("fidelity", ["sphere", "spheres"])
+def test_sphere_distances_come_from_their_bounds_and_equal_fcl(fidelity):
+    """Spheres make no FCL distance call: their ball bound is their distance. It must equal FCL's wherever FCL is
+    exact (separated spheres against boxes and cylinders), and the witness points a link reports must be FCL's."""
+    rng = np.random.default_rng(5)
+    model = RobotCollisionModel.from_urdf(URDF, fidelity, KIN.links, padding=0.01)
+    checker = CollisionChecker(model, "panda_link0", clearance_range=0.3, fixed_links=("panda_link0",))
+    assert model.exact[checker._moving].all()
+    limits = np.array([[-2.8, 2.8], [-1.7, 1.7], [-2.8, 2.8], [-3.0, -0.1], [-2.8, 2.8], [0.0, 3.7], [-2.8, 2.8]])
+    compared = 0
+    for _ in range(10):
+        obstacles = random_obstacles(rng, 12, spread=0.8)
+        checker.set_scene(obstacles, [])
+        for _ in range(4):
+            model.sync(*panda_state(rng.uniform(limits[:, 0], limits[:, 1])))
+            (got, got_other, got_points), (expected, other, points) = checker.clearance(), brute_force(checker,
+                                                                                                          obstacles)
+            separated = expected > 0.0
+            np.testing.assert_allclose(got[separated], expected[separated], rtol=0, atol=1e-12)
+            np.testing.assert_array_equal(got_other[separated], other[separated])
+            for shapes in checker._link_shapes:  # the shape each link reports carries FCL's witness points
+                i = shapes[int(np.argmin(got[shapes]))]
+                if got_other[i] >= 0 and separated[i]:
+                    np.testing.assert_allclose(got_points[i], points[i], rtol=0, atol=1e-9)
+                    compared += 1
+    assert compared > 50
 
 
 def test_pruned_self_collision_equals_every_pair():
