@@ -148,9 +148,10 @@ class CollisionChecker:
         self._moving = np.array(moving, dtype=int)
         self._limits_array = clearance_range + model.padding[self._moving]  # unpadded range per moving shape
         self._radii = np.array([s.radius for s in model.shapes])  # about each shape's origin
-        exact = model.exact[self._moving]
-        #: rows (of the moving shapes) of the spheres, whose lower bounds are their exact distances, and the others
-        self._sphere_rows, self._other_rows = np.flatnonzero(exact), np.flatnonzero(~exact)
+        lazy = model.lazy[self._moving]  # spheres of a sphere set: their lower bounds are their exact distances
+        #: rows (of the moving shapes) answered from their bounds in one numpy pass, and those answered by FCL
+        self._sphere_rows, self._other_rows = np.flatnonzero(lazy), np.flatnonzero(~lazy)
+        self._other_limits = self._limits_array[self._other_rows].tolist()
         self._sweepers = [fcl.CollisionObject(s.hull or s.geometry, fcl.Transform()) for s in model.shapes]
         self._obstacles: list[fcl.CollisionObject] = []
         self._bounds = ObstacleBounds(())
@@ -183,9 +184,9 @@ class CollisionChecker:
 
         Robot objects must be synced. Obstacles are measured nearest-bound first (:mod:`bounds`), and a shape
         stops at the first obstacle whose lower bound cannot beat its best exact distance: a shape with nothing
-        in range makes no FCL call. A sphere's bound is its distance, so spheres make no FCL call for it; their
-        witness points are filled only where they are reported: the nearest shape of each link, and shapes within
-        the contact tolerance (zeros elsewhere).
+        in range makes no FCL call. A sphere's bound is its distance, so the spheres of a sphere set make no FCL
+        call for it; their witness points are filled only where they are reported: the nearest shape of each link,
+        and shapes within the contact tolerance (zeros elsewhere).
         """
         return self._measure()[:3]
 
@@ -207,11 +208,12 @@ class CollisionChecker:
             spheres = moving[rows[within]]
             best[spheres], other[spheres] = raw[within] - model.padding[spheres], candidates[nearest[within]]
             self._sphere_witnesses(spheres, best, other, points)
-        others = self._other_rows
-        order = np.argsort(bound[others], axis=1, kind="stable")
-        limits = self._limits_array[others].tolist()
-        rows = zip(moving[others].tolist(), candidates[order].tolist(), np.sort(bound[others], axis=1).tolist())
-        for (i, nearest_first, lower), limit in zip(rows, limits):
+        shapes, lower_bounds = moving, bound
+        if len(self._other_rows) < len(moving):
+            shapes, lower_bounds = moving[self._other_rows], bound[self._other_rows]
+        order = np.argsort(lower_bounds, axis=1, kind="stable")
+        rows = zip(shapes.tolist(), candidates[order].tolist(), np.sort(lower_bounds, axis=1).tolist())
+        for (i, nearest_first, lower), limit in zip(rows, self._other_limits):
             raw, j, p = self._nearest_obstacle(i, nearest_first, lower, limit)
             if j >= 0:
                 best[i], other[i], points[i] = raw - model.padding[i], j, p
@@ -226,7 +228,7 @@ class CollisionChecker:
         reported = set(spheres[best[spheres] <= self.contact_tolerance].tolist())
         for shapes in self._link_shapes:
             i = shapes[int(np.argmin(best[shapes]))]
-            if model.exact[i] and other[i] >= 0:
+            if model.lazy[i] and other[i] >= 0:
                 reported.add(i)
         for i in reported:
             _, result = signed_distance(model.object(i), self._obstacles[other[i]])
@@ -256,7 +258,7 @@ class CollisionChecker:
 
         ``obstacles`` come in ascending order of their lower bounds ``lower``.
         """
-        shape, solid = self.model.object(i), self.model.solid_object(i)
+        shape, solid = self.model.objects[i], self.model.solid_objects[i]  # not a lazy sphere: placed by sync
         best, nearest, witness = limit, -1, None
         for j, bound in zip(obstacles, lower):
             if bound >= best:

@@ -14,6 +14,10 @@ from clutter_gym.collision.distance import signed_distance
 from clutter_gym.collision.fidelity import LinkShape, build_link_shapes
 from clutter_gym.collision.urdf_geometry import load_collision_elements
 
+#: Spheres from which a model's spheres are a sphere set: answered from their balls in numpy, placed in FCL only
+#: when asked. A few spheres among other shapes (a base's casters) cost less answered one by one by FCL.
+SPHERE_SET = 8
+
 
 @dataclass(frozen=True, slots=True)
 class SelfClearance:
@@ -70,8 +74,10 @@ class RobotCollisionModel:
         self._hulls = [(o, h) for o, h in zip(self.objects, self.solid_objects) if o is not h]
         #: per shape: its enclosing ball is the shape itself (a sphere), so ball distances are its exact distances
         self.exact = np.array([s.kind == "sphere" and s.ball is None for s in self.shapes], dtype=bool)
-        # spheres' FCL objects are placed when asked for (:meth:`object`): most steps never ask
-        self._eager = [(o, i) for i, o in enumerate(self.objects) if not self.exact[i]]
+        #: per shape: a sphere of a sphere set (at least ``SPHERE_SET`` spheres), answered in numpy from its ball;
+        #: its FCL object is placed only when asked for (:meth:`object`), which most steps never do
+        self.lazy = self.exact if self.exact.sum() >= SPHERE_SET else np.zeros(len(self.shapes), dtype=bool)
+        self._eager = [(o, i) for i, o in enumerate(self.objects) if not self.lazy[i]]
         self.position = np.zeros((len(self.shapes), 3))
         self.rotation = np.broadcast_to(np.eye(3), (len(self.shapes), 3, 3)).copy()
         self._collide_request = fcl.CollisionRequest()
@@ -130,13 +136,13 @@ class RobotCollisionModel:
     def object(self, i: int) -> fcl.CollisionObject:
         """Shape ``i``'s FCL object at the synced pose."""
         obj = self.objects[i]
-        if self.exact[i]:
+        if self.lazy[i]:
             obj.setTranslation(self.position[i])
         return obj
 
     def solid_object(self, i: int) -> fcl.CollisionObject:
         """Shape ``i``'s object for depth and swept queries (a mesh's hull) at the synced pose."""
-        return self.object(i) if self.exact[i] else self.solid_objects[i]
+        return self.object(i) if self.lazy[i] else self.solid_objects[i]
 
     def ball_centres(self) -> np.ndarray:
         """(n, 3) world centres of the shapes' enclosing balls (radii :attr:`ball_radius`) at the synced poses."""
