@@ -95,8 +95,7 @@ def _fitted_spheres(e: CollisionElement, n: int) -> list[LinkShape]:
     """``n`` spheres fitted to a mesh element (at most), placed in the link frame; a primitive as it is."""
     if e.kind != "mesh":
         return [_element_shape(e, "convex")]
-    vertices, faces = np.asarray(e.mesh.vertices, dtype=float), np.asarray(e.mesh.faces, dtype=np.int64)
-    centres, radii = _fit(vertices.tobytes(), faces.tobytes(), n)
+    centres, radii = _fit(*_content(e.mesh), n)
     positions = e.position + centres @ quat_to_matrix(e.quaternion).T
     return [LinkShape(e.link, fcl.Sphere(float(r)), p, np.eye(3), "sphere", float(r)) for p, r in zip(positions, radii)]
 
@@ -105,6 +104,11 @@ def _fitted_spheres(e: CollisionElement, n: int) -> list[LinkShape]:
 def _fit(vertices: bytes, faces: bytes, n: int) -> tuple[np.ndarray, np.ndarray]:
     """:func:`fit_spheres` cached by the mesh's content."""
     return fit_spheres(_mesh(vertices, faces), n)
+
+
+def _content(mesh: trimesh.Trimesh) -> tuple[bytes, bytes]:
+    """A mesh's vertices and faces as bytes: a cache key that holds the mesh (:func:`_mesh` rebuilds it)."""
+    return np.asarray(mesh.vertices, dtype=float).tobytes(), np.asarray(mesh.faces, dtype=np.int64).tobytes()
 
 
 def _mesh(vertices: bytes, faces: bytes) -> trimesh.Trimesh:
@@ -172,8 +176,7 @@ def convex(mesh: trimesh.Trimesh) -> fcl.Convex:
 def hull_gap(mesh: trimesh.Trimesh) -> float:
     """The largest distance, in metres, from a point of ``mesh``'s convex hull to ``mesh`` itself (0 for a convex
     mesh), over every hull vertex and ``HULL_GAP_SAMPLES`` seeded points on the hull's faces. Cached by content."""
-    vertices, faces = np.asarray(mesh.vertices, dtype=float), np.asarray(mesh.faces, dtype=np.int64)
-    return _hull_gap(vertices.tobytes(), faces.tobytes())
+    return _hull_gap(*_content(mesh))
 
 
 @functools.lru_cache(maxsize=64)
