@@ -6,7 +6,7 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
-from clutter_gym.core import ClutterEnv, check_env_settings, collision_checker
+from clutter_gym.core import ClutterEnv, check_env_settings, check_flags, collision_checker
 from clutter_gym.noise.profiles import NoiseProfile, resolve_noise
 from clutter_gym.planning.joint_space import ArmPlanner
 from clutter_gym.robots.panda import EE_ROW, LOWER, READY, TRACKED_LINKS, UPPER, PandaArm, PandaConfig
@@ -138,6 +138,8 @@ class ClutterReachEnv(ClutterEnv):
         subgoal_lookahead: float = 0.0,
     ) -> None:
         check_env_settings(render_mode, physics_hz, control_hz, solver_iterations, contact_tolerance)
+        check_flags(self_collision=self_collision, shelf=shelf, observe_directions=observe_directions,
+                    observe_target_offset=observe_target_offset, terminate_on_collision=terminate_on_collision)
         if not (math.isfinite(clearance_range) and 0.01 <= clearance_range <= 2.0):
             raise ValueError(f"clearance_range must be in [0.01, 2] metres, got {clearance_range!r}")
         if not (swept_speed > 0.0):  # inf allowed: no swept checks

@@ -96,7 +96,12 @@ class ClutterEnv(gym.Env):
         self, *, seed: int | None = None, options: Mapping[str, Any] | None = None
     ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
         """Start an episode on a new seeded layout, or on ``options["scene"]`` (format: docs/envs.md,
-        "Scene format")."""
+        "Scene format").
+
+        Raises:
+            RuntimeError: the env is closed.
+        """
+        self._check_open()
         super().reset(seed=seed)
         scene = self.arena.choose_scene(self.np_random, options)
         # Noise draws come from a generator seeded by one draw of np_random, taken whatever the profile: the
@@ -133,7 +138,9 @@ class ClutterEnv(gym.Env):
         Raises:
             ValueError: the action has the wrong shape or holds NaN/Inf. Finite values outside [-1, 1] are
                 clipped, not rejected.
+            RuntimeError: the env is closed, or was never reset.
         """
+        self._check_open()
         if self.scene is None:
             raise RuntimeError("call reset() before step()")
         a = self._checked_action(action)
@@ -206,6 +213,7 @@ class ClutterEnv(gym.Env):
     # ---------------------------------------------------------------------------------------- rendering
     def render(self) -> np.ndarray | None:
         """rgb_array: an overview of the arena (H, W, 3) uint8; human: points the GUI camera at the robot."""
+        self._check_open()
         if self.render_mode is None:
             gym.logger.warn("render() called without a render_mode; pass render_mode= to gym.make")
             return None
@@ -218,7 +226,13 @@ class ClutterEnv(gym.Env):
         return self.sim.render(width, height, eye=eye, target=target)
 
     def close(self) -> None:
+        """Disconnect the physics client; safe to call twice. The env cannot step, reset or render after it."""
         self.sim.close()
+
+    def _check_open(self) -> None:
+        if self.sim.client_id < 0:
+            name = self.spec.id if self.spec is not None else type(self).__name__
+            raise RuntimeError(f"{name} is closed: make a new env with gym.make")
 
 
 def check_env_settings(render_mode: str | None, physics_hz: float, control_hz: float, solver_iterations: int,
@@ -245,6 +259,14 @@ def collision_checker(robot: Robot, tracked_links: Sequence[str], fidelity: str,
     return CollisionChecker(model, base_link=robot.base_link, contact_tolerance=contact_tolerance,
                             clearance_range=clearance_range, swept_speed=swept_speed, dt=1.0 / control_hz,
                             fixed_links=fixed_links)
+
+
+def check_flags(**flags: Any) -> None:
+    """Raise at make time, naming the argument, for a switch that is not a bool: ``"no"`` or ``[1]`` would
+    otherwise switch by truthiness."""
+    for name, value in flags.items():
+        if not isinstance(value, (bool, np.bool_)):
+            raise ValueError(f"{name} must be True or False, got {value!r}")
 
 
 def check_render_mode(render_mode: str | None) -> None:

@@ -182,3 +182,14 @@ def test_close_frees_the_client_and_200_cycles_leak_nothing_measurable():
     growth_mb = (process.memory_info().rss - before) / 2**20
     # One leaked env (pybullet world, robot, walls, FCL trees) costs several MB; 200 leaks would be >> 25 MB.
     assert growth_mb < 25, f"RSS grew {growth_mb:.1f} MB over 200 make/close cycles"
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_a_closed_env_says_so_instead_of_failing_inside_pybullet(env_id):
+    env = gym.make(env_id, render_mode="rgb_array")
+    env.reset(seed=0)
+    env.close()
+    env.close()  # twice is fine
+    for call in (lambda: env.reset(seed=0), lambda: env.step(env.action_space.sample()), env.render):
+        with pytest.raises(RuntimeError, match=f"{env_id} is closed"):
+            call()

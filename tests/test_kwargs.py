@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 
 import gymnasium as gym
 import numpy as np
@@ -41,6 +42,25 @@ import pytest
 def test_invalid_kwargs_raise_at_make(kwargs, pattern):
     with pytest.raises(ValueError, match=pattern):
         gym.make("ClutterNav-v0", **kwargs)
+
+
+@pytest.mark.parametrize(("env_id", "name", "value"), [
+    ("ClutterNav-v0", "terminate_on_collision", [1]),
+    ("ClutterReach-v0", "shelf", "no"),
+    ("ClutterReach-v0", "self_collision", "no"),
+    ("ClutterReach-v0", "terminate_on_collision", 1),
+    ("ClutterReach-v0", "observe_directions", None),
+])
+def test_switches_take_booleans_only(env_id, name, value):
+    """A switch given "no" or [1] would otherwise switch by truthiness (on)."""
+    with pytest.raises(ValueError, match=re.escape(f"{name} must be True or False, got {value!r}")):
+        gym.make(env_id, **{name: value})
+
+
+def test_numpy_booleans_are_booleans():
+    env = gym.make("ClutterReach-v0", shelf=np.bool_(False), terminate_on_collision=np.True_)
+    assert env.unwrapped.arena.spec.shelf is False
+    env.close()
 
 
 def test_unknown_kwarg_is_named():
