@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from clutter_gym.collision.kinematics import UrdfKinematics
-from clutter_gym.core import ClutterEnv, check_env_settings, check_flags, collision_checker
+from clutter_gym.core import ClutterEnv, check_env_settings, check_flags, check_numbers, collision_checker
 from clutter_gym.noise.profiles import NoiseProfile, resolve_noise
 from clutter_gym.robots import DiffDriveConfig, DiffDriveRobot
 from clutter_gym.robots.diffdrive import TRACKED_LINKS
@@ -171,6 +171,7 @@ class ClutterNavEnv(ClutterEnv):
         safety_margin: float = 0.02,
         safety_recovery: float = 0.0,
     ) -> None:
+        check_numbers(ClutterNavEnv.__init__, locals())
         check_env_settings(render_mode, physics_hz, control_hz, solver_iterations, contact_tolerance)
         check_flags(terminate_on_collision=terminate_on_collision)
         robot = DiffDriveRobot(DiffDriveConfig(max_linear_speed=max_linear_speed, max_angular_speed=max_angular_speed))

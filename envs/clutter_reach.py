@@ -6,7 +6,7 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
-from clutter_gym.core import ClutterEnv, check_env_settings, check_flags, collision_checker
+from clutter_gym.core import ClutterEnv, check_env_settings, check_flags, check_numbers, collision_checker
 from clutter_gym.noise.profiles import NoiseProfile, resolve_noise
 from clutter_gym.planning.joint_space import ArmPlanner
 from clutter_gym.robots.panda import EE_ROW, LOWER, READY, TRACKED_LINKS, UPPER, PandaArm, PandaConfig
@@ -137,6 +137,7 @@ class ClutterReachEnv(ClutterEnv):
         control_weight: float = 0.005,
         subgoal_lookahead: float = 0.0,
     ) -> None:
+        check_numbers(ClutterReachEnv.__init__, locals())
         check_env_settings(render_mode, physics_hz, control_hz, solver_iterations, contact_tolerance)
         check_flags(self_collision=self_collision, shelf=shelf, observe_directions=observe_directions,
                     observe_target_offset=observe_target_offset, terminate_on_collision=terminate_on_collision)

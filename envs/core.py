@@ -6,10 +6,12 @@ sensing, collision or reward lives in the part that owns it, behind the contract
 
 from __future__ import annotations
 
+import inspect
 import math
+import numbers
 import os
 import sys
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import gymnasium as gym
@@ -259,6 +261,17 @@ def collision_checker(robot: Robot, tracked_links: Sequence[str], fidelity: str,
     return CollisionChecker(model, base_link=robot.base_link, contact_tolerance=contact_tolerance,
                             clearance_range=clearance_range, swept_speed=swept_speed, dt=1.0 / control_hz,
                             fixed_links=fixed_links)
+
+
+def check_numbers(init: Callable[..., None], arguments: Mapping[str, Any]) -> None:
+    """Raise at make time, naming the argument, for a number argument of ``init`` (annotated ``float`` or ``int``)
+    given something else, such as a string or None: the range checks after this would fail with Python's or
+    numpy's message, which names no argument. numpy scalars are numbers."""
+    for name, parameter in inspect.signature(init).parameters.items():
+        if parameter.annotation in ("float", "int") and name in arguments:
+            value = arguments[name]
+            if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+                raise ValueError(f"{name} must be a number, got {value!r}")
 
 
 def check_flags(**flags: Any) -> None:

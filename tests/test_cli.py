@@ -68,7 +68,7 @@ def _one_line_error(result: subprocess.CompletedProcess, *fragments: str) -> str
     (["train", "--resume", "no/such/run"], ["no/such/run is not a run folder"]),
     (["eval", "no/such/run"], ["no/such/run is not a run folder"]),
     (["eval", "no/such/run", "--noise", "loud"], ["--noise", "invalid choice"]),
-    (["sweep", "--env-kwargs", "n_rays=many"], ["n_rays must be an integer"]),
+    (["sweep", "--env-kwargs", "n_rays=many"], ["n_rays must be a number, got 'many'"]),
     (["report", "--seeds", "3"], ["unrecognized arguments: --seeds"]),
 ])
 def test_user_errors_are_one_line_with_exit_status_2(args, fragments):

@@ -57,6 +57,37 @@ def test_switches_take_booleans_only(env_id, name, value):
         gym.make(env_id, **{name: value})
 
 
+@pytest.mark.parametrize(("env_id", "name", "value"), [
+    ("ClutterNav-v0", "arena_size", "5"),
+    ("ClutterNav-v0", "arena_size", None),
+    ("ClutterNav-v0", "physics_hz", "120"),
+    ("ClutterNav-v0", "max_linear_speed", "fast"),
+    ("ClutterNav-v0", "collision_padding", "0.1"),
+    ("ClutterNav-v0", "contact_weight", True),
+    ("ClutterNav-v0", "n_rays", None),
+    ("ClutterReach-v0", "max_joint_speed", None),
+    ("ClutterReach-v0", "n_obstacles", "3"),
+])
+def test_number_arguments_given_something_else_name_the_argument(env_id, name, value):
+    with pytest.raises(ValueError, match=re.escape(f"{name} must be a number, got {value!r}")):
+        gym.make(env_id, **{name: value})
+
+
+def test_numpy_numbers_are_numbers(make_env):
+    env = make_env("ClutterNav-v0", arena_size=np.float32(5.0), n_rays=np.int64(32),
+                   noise={"lidar": {"range_sigma": np.float32(0.01), "latency_steps": np.int64(1)}})
+    assert env.unwrapped.observation_space["lidar"].shape == (32,)
+    assert env.unwrapped.noise.lidar.range_sigma == pytest.approx(0.01)
+    assert env.unwrapped.noise.timing["lidar"].latency_steps == 1
+
+
+@pytest.mark.parametrize("lidar", [{"min_range": 2.0, "max_range": 1.0}, {"min_range": 4.0}])
+def test_an_empty_lidar_window_is_refused_at_make(lidar):
+    """A window with nothing in it would read "no return" forever; 4 m is beyond the default 3.5 m lidar_range."""
+    with pytest.raises(ValueError, match="range window is empty"):
+        gym.make("ClutterNav-v0", noise={"lidar": lidar})
+
+
 def test_numpy_booleans_are_booleans():
     env = gym.make("ClutterReach-v0", shelf=np.bool_(False), terminate_on_collision=np.True_)
     assert env.unwrapped.arena.spec.shelf is False

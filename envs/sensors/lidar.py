@@ -94,6 +94,11 @@ class Lidar:
     def __init__(self, config: LidarConfig | None = None, noise: LidarNoise | None = None) -> None:
         self.config = c = config or LidarConfig()
         self.noise = noise or LidarNoise()
+        lo, hi = max(c.min_range, self.noise.min_range), min(c.max_range, self.noise.max_range)
+        if lo >= hi:  # every reading would be a no-return
+            raise ValueError(f"the LIDAR's range window is empty: it reads from max(lidar min {c.min_range}, "
+                             f"lidar.min_range {self.noise.min_range}) = {lo} m to min(lidar_range {c.max_range}, "
+                             f"lidar.max_range {self.noise.max_range}) = {hi} m")
         self.spaces = {"lidar": spaces.Box(0.0, 1.0, shape=c.shape, dtype=np.float32)}
         az = np.broadcast_to(c.angles, c.shape).reshape(-1)
         el = np.repeat(c.elevations, c.n_rays)
