@@ -9,6 +9,7 @@ height of the bottom face (0 = on the floor), sizes are full extents.
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, TypeVar
@@ -157,7 +158,10 @@ def check_scene_keys(spec: Any, keys: Sequence[str]) -> Mapping[str, Any]:
 
 
 def parse_numbers(value: Any, n: int, field: str, what: str) -> tuple[float, ...]:
-    """``value`` as a tuple of ``n`` finite floats; errors name ``field`` and say ``what`` the numbers are."""
+    """``value`` (a sequence or a 1-D array) as a tuple of ``n`` finite floats; errors name ``field`` and say
+    ``what`` the numbers are."""
+    if isinstance(value, np.ndarray) and value.ndim == 1:
+        value = value.tolist()
     if isinstance(value, (str, bytes)) or not isinstance(value, Sequence) or len(value) != n:
         raise ValueError(f"{field} must be a list of {n} numbers ({what}), got {value!r}")
     try:
@@ -203,7 +207,9 @@ def parse_obstacle(spec: Any, field: str, arena_size: float) -> Obstacle:
         raise ValueError(f"{field} is missing {sorted(missing)}")
     position = parse_numbers(spec["position"], 2, f"{field}.position", "x, y in metres")
     _inside(position, f"{field}.position", 0.5 * arena_size)
-    z = float(spec.get("z", 0.0)) if isinstance(spec.get("z", 0.0), (int, float)) else math.nan
+    z_given = spec.get("z", 0.0)
+    number = isinstance(z_given, numbers.Real) and not isinstance(z_given, (bool, np.bool_))  # numpy scalars too
+    z = float(z_given) if number else math.nan
     if not 0.0 <= z <= MAX_OBSTACLE_HEIGHT:
         raise ValueError(f"{field}.z (bottom height) must be in [0, {MAX_OBSTACLE_HEIGHT}] m, got {spec.get('z')!r}")
     if shape == "box":

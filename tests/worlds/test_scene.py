@@ -95,3 +95,23 @@ def test_malformed_scenes_raise_naming_the_field(scene, pattern, make_env):
 def test_unknown_reset_option_is_named(make_env):
     with pytest.raises(ValueError, match=r"unknown reset options \['layout'\]; allowed: \['scene'\]"):
         make_env().reset(options={"layout": {}})
+
+
+def test_numpy_numbers_and_arrays_are_accepted_in_scenes():
+    """A scene built with numpy (float32 heights, array positions, int64 sizes) parses as its plain-number twin."""
+    from clutter_gym.worlds.scene import parse_scene
+
+    plain = {"obstacles": [{"shape": "box", "size": [0.4, 0.4, 0.5], "position": [1.0, 1.0], "z": 0.0},
+                           {"shape": "cylinder", "radius": 0.2, "height": 1.0, "position": [-1.0, 1.0]}],
+             "start": [-2.0, -2.0, 0.0], "goal": [2.0, 2.0]}
+    with_numpy = {"obstacles": [{"shape": "box", "size": np.array([0.4, 0.4, 0.5]), "position": np.array([1.0, 1.0]),
+                                 "z": np.float32(0.0)},
+                                {"shape": "cylinder", "radius": np.float64(0.2), "height": np.int64(1),
+                                 "position": (np.float32(-1.0), np.float32(1.0))}],
+                  "start": np.array([-2.0, -2.0, 0.0]), "goal": np.array([2.0, 2.0])}
+    expected, got = parse_scene(plain, 6.0, CHASSIS_RADIUS), parse_scene(with_numpy, 6.0, CHASSIS_RADIUS)
+    assert got.obstacles == expected.obstacles
+    assert got.start == expected.start and got.goal == expected.goal
+    with pytest.raises(ValueError, match=r"scene.obstacles\[0\].position must be a list of 2 numbers"):
+        parse_scene({**plain, "obstacles": [{**plain["obstacles"][0], "position": np.zeros((2, 2))}]}, 6.0,
+                     CHASSIS_RADIUS)
