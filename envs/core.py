@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import inspect
 import math
-import numbers
 import os
 import sys
 from collections.abc import Callable, Mapping, Sequence
@@ -27,6 +26,7 @@ from clutter_gym.robots.safety import SafetyFilter
 from clutter_gym.robots.state import RobotState
 from clutter_gym.sensors.timing import SampleHoldDelay, timed_reading
 from clutter_gym.sim import Sim
+from clutter_gym.util.checks import check_integer, is_number
 from clutter_gym.util.transforms import yaw_quat
 
 RENDER_MODES = ("human", "rgb_array")
@@ -269,9 +269,8 @@ def check_numbers(init: Callable[..., None], arguments: Mapping[str, Any]) -> No
     numpy's message, which names no argument. numpy scalars are numbers."""
     for name, parameter in inspect.signature(init).parameters.items():
         if parameter.annotation in ("float", "int") and name in arguments:
-            value = arguments[name]
-            if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
-                raise ValueError(f"{name} must be a number, got {value!r}")
+            if not is_number(arguments[name]):
+                raise ValueError(f"{name} must be a number, got {arguments[name]!r}")
 
 
 def check_flags(**flags: Any) -> None:
@@ -304,6 +303,4 @@ def check_rates(physics_hz: float, control_hz: float, solver_iterations: int) ->
         raise ValueError(
             f"physics_hz must be an integer multiple of control_hz; {physics_hz} / {control_hz} = {ratio:.6g}"
         )
-    if (isinstance(solver_iterations, bool) or not isinstance(solver_iterations, int)
-            or not 1 <= solver_iterations <= 1000):
-        raise ValueError(f"solver_iterations must be an integer in [1, 1000], got {solver_iterations!r}")
+    check_integer("solver_iterations", solver_iterations, 1, 1000)

@@ -79,6 +79,8 @@ def test_numpy_numbers_are_numbers(make_env):
     assert env.unwrapped.observation_space["lidar"].shape == (32,)
     assert env.unwrapped.noise.lidar.range_sigma == pytest.approx(0.01)
     assert env.unwrapped.noise.timing["lidar"].latency_steps == 1
+    reach = make_env("ClutterReach-v0", n_obstacles=np.int64(3), solver_iterations=np.int64(10))
+    assert reach.unwrapped.arena.spec.n_obstacles == 3
 
 
 @pytest.mark.parametrize("lidar", [{"min_range": 2.0, "max_range": 1.0}, {"min_range": 4.0}])

@@ -10,11 +10,10 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-import numbers
 from collections.abc import Mapping
 from typing import Any, ClassVar, TypeVar
 
-import numpy as np
+from clutter_gym.util.checks import is_integer, is_number
 
 P = TypeVar("P", bound="NoiseParams")
 
@@ -45,13 +44,12 @@ class NoiseParams:
                 continue
             lo, hi = f.metadata["range"]
             unit = f" {f.metadata['unit']}" if f.metadata["unit"] else ""
-            number = not isinstance(value, (bool, np.bool_))  # numpy scalars count as numbers
             if f.metadata["int"]:
-                if not (number and isinstance(value, numbers.Integral) and lo <= value <= hi):
+                if not (is_integer(value) and lo <= value <= hi):
                     raise ValueError(f"{name} must be an integer in [{lo}, {hi}]{unit}, got {value!r}")
                 object.__setattr__(self, f.name, int(value))
                 continue
-            ok = number and isinstance(value, numbers.Real) and math.isfinite(value)
+            ok = is_number(value) and math.isfinite(value)
             if not (ok and lo <= value <= hi):
                 raise ValueError(f"{name} must be a number in [{lo}, {hi}]{unit}, got {value!r}")
             object.__setattr__(self, f.name, float(value))

@@ -12,6 +12,7 @@ from gymnasium import spaces
 from clutter_gym.noise.lidar import LidarEpisode, LidarNoise, angle_offsets, apply_lidar_noise, start_lidar_episode
 from clutter_gym.robots.state import RobotState
 from clutter_gym.sim import Sim
+from clutter_gym.util.checks import check_integer
 
 
 @dataclass(frozen=True)
@@ -43,9 +44,8 @@ class LidarConfig:
     link: str = "lidar_link"
 
     def __post_init__(self) -> None:
-        for name, value, hi in (("n_rays", self.n_rays, 4096), ("lidar_channels", self.n_channels, 128)):
-            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 1 <= value <= hi:
-                raise ValueError(f"{name} must be an integer in [1, {hi}], got {value!r}")
+        check_integer("n_rays", self.n_rays, 1, 4096)
+        check_integer("lidar_channels", self.n_channels, 1, 128)
         if self.n_rays * self.n_channels > 16384:
             raise ValueError(f"n_rays * lidar_channels must be <= 16384, got {self.n_rays * self.n_channels}")
         if not (math.isfinite(self.fov) and 0 < self.fov <= 2 * math.pi + 1e-9):

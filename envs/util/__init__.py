@@ -1,4 +1,5 @@
 """Helpers with no knowledge of envs, robots or tasks: atomic file writes (``atomic``), silencing C-level output
-(``quiet``), episode videos (``video``), numpy-built meshes (``meshes``) and rigid transforms on numpy arrays
-(``transforms``). They import nothing from clutter_gym outside this folder, so any part of the package can use them.
+(``quiet``), episode videos (``video``), numpy-built meshes (``meshes``), rigid transforms on numpy arrays
+(``transforms``), argument checks (``checks``) and view culling (``view_culling``). They import nothing from
+clutter_gym outside this folder, so any part of the package can use them.
 """

@@ -25,6 +25,7 @@ from functools import cached_property
 import numpy as np
 from scipy import ndimage
 
+from clutter_gym.util.checks import check_integer
 from clutter_gym.worlds.scene import Obstacle, Scene
 
 MAX_DENSITY = 0.3  # beyond this a walled arena cannot reliably keep a free path for the robot
@@ -72,9 +73,7 @@ class ClutterSpec:
                 f"obstacle_density must be in [0, {MAX_DENSITY}] (fraction of the floor covered), "
                 f"got {self.obstacle_density!r}"
             )
-        if (isinstance(self.size_levels, bool) or not isinstance(self.size_levels, int)
-                or not 1 <= self.size_levels <= 10):
-            raise ValueError(f"size_levels must be an integer in [1, 10], got {self.size_levels!r}")
+        check_integer("size_levels", self.size_levels, 1, 10)
         if not 0.0 < self.min_goal_distance < 1.0:
             raise ValueError(
                 f"min_goal_distance must be in (0, 1) (fraction of arena_size), got {self.min_goal_distance!r}"

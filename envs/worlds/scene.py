@@ -9,12 +9,13 @@ height of the bottom face (0 = on the floor), sizes are full extents.
 from __future__ import annotations
 
 import math
-import numbers
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
+
+from clutter_gym.util.checks import is_number
 
 if TYPE_CHECKING:
     from clutter_gym.worlds.clutter import ClearanceGrid
@@ -207,9 +208,7 @@ def parse_obstacle(spec: Any, field: str, arena_size: float) -> Obstacle:
         raise ValueError(f"{field} is missing {sorted(missing)}")
     position = parse_numbers(spec["position"], 2, f"{field}.position", "x, y in metres")
     _inside(position, f"{field}.position", 0.5 * arena_size)
-    z_given = spec.get("z", 0.0)
-    number = isinstance(z_given, numbers.Real) and not isinstance(z_given, (bool, np.bool_))  # numpy scalars too
-    z = float(z_given) if number else math.nan
+    z = float(spec.get("z", 0.0)) if is_number(spec.get("z", 0.0)) else math.nan
     if not 0.0 <= z <= MAX_OBSTACLE_HEIGHT:
         raise ValueError(f"{field}.z (bottom height) must be in [0, {MAX_OBSTACLE_HEIGHT}] m, got {spec.get('z')!r}")
     if shape == "box":

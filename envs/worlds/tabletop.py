@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from clutter_gym.sim import Sim
+from clutter_gym.util.checks import check_integer
 from clutter_gym.worlds.pool import ObstaclePool
 from clutter_gym.worlds.scene import Obstacle, check_scene_keys, parse_numbers, parse_obstacles, scene_from_options
 
@@ -45,9 +46,7 @@ class TableSpec:
     target_clearance: float = 0.06
 
     def __post_init__(self) -> None:
-        if (isinstance(self.n_obstacles, bool) or not isinstance(self.n_obstacles, int)
-                or not 0 <= self.n_obstacles <= 20):
-            raise ValueError(f"n_obstacles must be an integer in [0, 20], got {self.n_obstacles!r}")
+        check_integer("n_obstacles", self.n_obstacles, 0, 20)
         if not 0.0 <= self.shelf_target_probability <= 1.0:
             raise ValueError(f"shelf_target_probability must be in [0, 1], got {self.shelf_target_probability!r}")
         if not 0.0 <= self.start_noise <= 0.5:

@@ -1,0 +1,25 @@
+"""Argument checks the parts share: one message form, and numpy scalars accepted wherever Python numbers are."""
+
+from __future__ import annotations
+
+import numbers
+from typing import Any
+
+import numpy as np
+
+
+def is_number(value: Any) -> bool:
+    """An int, float or numpy number, not a bool."""
+    return isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
+
+
+def is_integer(value: Any) -> bool:
+    """An int or numpy integer, not a bool."""
+    return isinstance(value, numbers.Integral) and not isinstance(value, (bool, np.bool_))
+
+
+def check_integer(name: str, value: Any, lo: int, hi: int) -> int:
+    """``value`` as an int when it is an integer in [lo, hi]; else a ValueError naming ``name`` and the range."""
+    if not (is_integer(value) and lo <= value <= hi):
+        raise ValueError(f"{name} must be an integer in [{lo}, {hi}], got {value!r}")
+    return int(value)
