@@ -312,24 +312,24 @@ class CollisionChecker:
         """Contacts of the shapes whose nearest obstacle is within the tolerance.
 
         A shape can touch several obstacles at once: every candidate obstacle whose lower bound is within the
-        tolerance is measured, and those within it get their penetration depth from ``fcl.collide``.
+        tolerance is measured. A contact's depth is minus the padded signed distance, the same measure as the
+        clearance; ``fcl.collide`` gives only its position, as its own depth estimates run deep on convex shapes.
         """
         model, out, tol = self.model, [], self.contact_tolerance
         for row, i in enumerate(self._moving):
             if distance[i] > tol:
                 continue
-            obj = model.solid_object(i)  # a BVH's contact depths are not meaningful; its hull's are
+            obj = model.solid_object(i)  # a BVH's contacts are not meaningful; its hull's are
             for j in np.sort(candidates[bound[row] - model.padding[i] <= tol]):
                 d = self._pair_distance(i, j)
                 if d > tol:
                     continue
                 result = fcl.CollisionResult()
-                depth, where = max(0.0, -d), points[i].mean(axis=0)
+                where = points[i].mean(axis=0)
                 if fcl.collide(obj, self._obstacles[j], self._contact_request, result):
                     deepest = max(result.contacts, key=lambda c: c.penetration_depth)
-                    depth = max(depth, float(deepest.penetration_depth))
                     where = np.asarray(deepest.pos, dtype=float)
-                out.append(Contact(model.shapes[i].link, int(j), depth + model.padding[i], where))
+                out.append(Contact(model.shapes[i].link, int(j), max(0.0, -d), where))
         return tuple(out)
 
     def _pair_distance(self, shape: int, obstacle: int) -> float:
