@@ -82,9 +82,7 @@ class ClutterEnv(gym.Env):
         self.render_size = render_size
         self.metadata = {**self.metadata, "render_fps": control_hz}
         self.substeps = int(round(sim.physics_hz / control_hz))  # physics ticks per action
-        arena.load(sim)
-        robot.load(sim)
-        self._goal_marker = sim.add_marker("goal", task.success_radius, (0.1, 0.8, 0.2, 0.9))
+        self._build_world()
         self.action_space = robot.action_space
         self._action_low = self.action_space.low.astype(np.float64)
         self._action_high = self.action_space.high.astype(np.float64)
@@ -92,6 +90,12 @@ class ClutterEnv(gym.Env):
             {**{key: space for s in self.sensors for key, space in s.spaces.items()}, **task.spaces, **robot.spaces}
         )
         self.scene: Layout | None = None
+
+    def _build_world(self) -> None:
+        """Load the arena, the robot and the goal marker into the (empty) Sim."""
+        self.arena.load(self.sim)
+        self.robot.load(self.sim)
+        self._goal_marker = self.sim.add_marker("goal", self.task.success_radius, (0.1, 0.8, 0.2, 0.9))
 
     # ------------------------------------------------------------------------------------------ episode
     def reset(
@@ -106,6 +110,9 @@ class ClutterEnv(gym.Env):
         self._check_open()
         super().reset(seed=seed)
         scene = self.arena.choose_scene(self.np_random, options)
+        if self.sim.needs_rebuild:  # memory pybullet only frees by emptying the world: build it again
+            self.sim.clear()
+            self._build_world()
         # Noise draws come from a generator seeded by one draw of np_random, taken whatever the profile: the
         # layouts of a seed are then the same under every noise profile (paired sim-to-real comparisons).
         self._noise_rng = rng = np.random.default_rng(int(self.np_random.integers(2**63)))

@@ -40,7 +40,7 @@ class Layout(Protocol):
 
 
 class Robot(Protocol):
-    """A URDF robot: loads itself once, maps normalised actions to motor commands, reads its state.
+    """A URDF robot: loads itself into the world, maps normalised actions to motor commands, reads its state.
 
     Attributes:
         name: short name, used in asset and cache paths.
@@ -63,7 +63,8 @@ class Robot(Protocol):
     def body(self) -> int: ...
 
     def load(self, sim: Sim) -> int:
-        """Load the URDF into ``sim`` (once per env) and look up joints and links; returns the body id."""
+        """Load the URDF into ``sim`` and look up joints and links; returns the body id. Called whenever the env
+        builds its world: at construction, and again after :meth:`Sim.clear` (every earlier id is gone)."""
 
     def apply_dynamics(self, sample: DynamicsSample) -> None:
         """This episode's randomised masses, friction, restitution and motor strength."""
@@ -82,10 +83,11 @@ class Robot(Protocol):
 
 
 class Arena(Protocol):
-    """The world around the robot: fixed structure built once, clutter moved into place per episode."""
+    """The world around the robot: fixed structure built with the world, clutter moved into place per episode."""
 
     def load(self, sim: Sim) -> None:
-        """Build the fixed structure (walls, a table) once per env."""
+        """Build the fixed structure (walls, a table) in an empty world; like :meth:`Robot.load`, called again
+        after :meth:`Sim.clear`."""
 
     def choose_scene(self, rng: np.random.Generator, options: Mapping[str, Any] | None) -> Layout:
         """The user's ``options["scene"]`` (validated: errors name the field) or a layout drawn from ``rng``."""

@@ -36,6 +36,11 @@ _RAY_MASK = -1 ^ RAY_INVISIBLE_GROUP
 _INVISIBLE = (0.0, 0.0, 0.0, 0.0)
 
 _UNIT_PRISM = prism_mesh(1.0, 1.0, CYLINDER_SIDES)
+#: pybullet frees no shape a body has used (``removeCollisionShape`` then frees nothing) and keeps about a
+#: kilobyte of every removed body; only ``resetSimulation`` gives the memory back (docs/design-notes.md#memory).
+#: Past either limit :attr:`Sim.needs_rebuild` turns true, and the env rebuilds its world on the next reset.
+MAX_SHAPES = 256
+MAX_REMOVED_BODIES = 2_000
 _HIT_FRACTION = operator.itemgetter(2)  # field 2 of a rayTestBatch result row
 
 
@@ -89,21 +94,43 @@ class Sim:
             self._cid = pb.connect(pb.GUI if gui else pb.DIRECT)
         if self._cid < 0:
             raise RuntimeError("pybullet could not open a physics client")
+        self.physics_hz = float(physics_hz)
+        self._solver_iterations = int(solver_iterations)
+        self._gravity = float(gravity)
+        self._renderer = pb.ER_TINY_RENDERER
+        self._empty_world()
+        if gui:
+            pb.configureDebugVisualizer(pb.COV_ENABLE_GUI, 0, physicsClientId=self._cid)
+
+    def _empty_world(self) -> None:
+        """Set the physics parameters and forget every body and shape (the world is empty)."""
         self.bodies: dict[str, int] = {}
         self._filters: dict[int, tuple[int, int]] = {}  # body -> (collision group, mask) set by this Sim
-        self.physics_hz = float(physics_hz)
-        self._renderer = pb.ER_TINY_RENDERER
         self._visuals: dict[int, list[tuple[int, tuple]]] = {}
+        self._shapes: dict[tuple, tuple[int, int]] = {}  # (kind, sizes, rgba) -> (collision, visual) shape ids
+        self._removed_bodies = 0
         self.culler = ViewCuller()
         pb.setPhysicsEngineParameter(
             fixedTimeStep=1.0 / self.physics_hz,
-            numSolverIterations=int(solver_iterations),
+            numSolverIterations=self._solver_iterations,
             deterministicOverlappingPairs=1,
             physicsClientId=self._cid,
         )
-        pb.setGravity(0.0, 0.0, -float(gravity), physicsClientId=self._cid)
-        if gui:
-            pb.configureDebugVisualizer(pb.COV_ENABLE_GUI, 0, physicsClientId=self._cid)
+        pb.setGravity(0.0, 0.0, -self._gravity, physicsClientId=self._cid)
+
+    @property
+    def needs_rebuild(self) -> bool:
+        """True once the world holds more memory pybullet cannot free than :data:`MAX_SHAPES` distinct obstacle
+        shapes or :data:`MAX_REMOVED_BODIES` removed bodies: time to :meth:`clear` it and build it again."""
+        return len(self._shapes) > MAX_SHAPES or self._removed_bodies > MAX_REMOVED_BODIES
+
+    def clear(self) -> None:
+        """Remove every body and shape (``resetSimulation``, which frees their memory) and keep the parameters.
+
+        Body ids start again from 0, so a world built again in the same order has the ids it had the first time.
+        """
+        pb.resetSimulation(physicsClientId=self._cid)
+        self._empty_world()
 
     # ----------------------------------------------------------------------------------------- lifecycle
     @property
@@ -177,15 +204,19 @@ class Sim:
     def add_static_box(self, half_extents: Sequence[float], rgba: Sequence[float]) -> int:
         """Add a static (mass 0) box centred at the origin (move it with :meth:`move_static`); returns its body id.
 
+        Bodies of one size and colour share their shapes: pybullet could not free a second copy.
+
         Args:
             half_extents: half sizes along x, y and z in metres.
             rgba: colour, each channel in [0, 1].
         """
-        col = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=half_extents, physicsClientId=self._cid)
-        vis = pb.createVisualShape(
-            pb.GEOM_BOX, halfExtents=half_extents, rgbaColor=rgba, physicsClientId=self._cid
-        )
-        return self._static_body(col, vis, float(np.linalg.norm(half_extents)), rgba)
+        key = ("box", tuple(map(float, half_extents)), tuple(rgba))
+        if key not in self._shapes:
+            self._shapes[key] = (
+                pb.createCollisionShape(pb.GEOM_BOX, halfExtents=half_extents, physicsClientId=self._cid),
+                pb.createVisualShape(pb.GEOM_BOX, halfExtents=half_extents, rgbaColor=rgba, physicsClientId=self._cid),
+            )
+        return self._static_body(*self._shapes[key], float(np.linalg.norm(half_extents)), rgba)
 
     def add_static_cylinder(self, radius: float, height: float, rgba: Sequence[float]) -> int:
         """Add a static (mass 0) upright cylinder centred at the origin, like :meth:`add_static_box`.
@@ -202,19 +233,23 @@ class Sim:
             height: height in metres.
             rgba: colour, each channel in [0, 1].
         """
-        vertices, indices = _UNIT_PRISM  # one shared list: pybullet keeps a reference to every list it is given
-        col = pb.createCollisionShape(
-            pb.GEOM_MESH,
-            vertices=vertices,
-            indices=indices,
-            meshScale=[radius, radius, height],
-            flags=pb.GEOM_FORCE_CONCAVE_TRIMESH,
-            physicsClientId=self._cid,
-        )
-        vis = pb.createVisualShape(
-            pb.GEOM_CYLINDER, radius=radius, length=height, rgbaColor=rgba, physicsClientId=self._cid
-        )
-        body = self._static_body(col, vis, float(np.hypot(radius, 0.5 * height)), rgba)
+        key = ("cylinder", (float(radius), float(height)), tuple(rgba))
+        if key not in self._shapes:
+            vertices, indices = _UNIT_PRISM  # one shared list: pybullet keeps a reference to every list it is given
+            self._shapes[key] = (
+                pb.createCollisionShape(
+                    pb.GEOM_MESH,
+                    vertices=vertices,
+                    indices=indices,
+                    meshScale=[radius, radius, height],
+                    flags=pb.GEOM_FORCE_CONCAVE_TRIMESH,
+                    physicsClientId=self._cid,
+                ),
+                pb.createVisualShape(
+                    pb.GEOM_CYLINDER, radius=radius, length=height, rgbaColor=rgba, physicsClientId=self._cid
+                ),
+            )
+        body = self._static_body(*self._shapes[key], float(np.hypot(radius, 0.5 * height)), rgba)
         pb.changeDynamics(body, -1, collisionMargin=0.0, physicsClientId=self._cid)
         return body
 
@@ -243,6 +278,8 @@ class Sim:
         """Delete a body from the world (its collision and visual shapes stay cached for reuse)."""
         pb.removeBody(body, physicsClientId=self._cid)
         self.culler.remove(body)
+        self._visuals.pop(body, None)
+        self._removed_bodies += 1
 
     def set_visible(self, body: int, visible: bool, rgba: Sequence[float]) -> None:
         """Show a single-shape body in colour ``rgba`` (channels in [0, 1]), or hide it from every renderer (fully

@@ -1,6 +1,6 @@
 """Robot-vs-scene clearance, contacts, self-collision and swept checks with FCL, cross-checked against pybullet.
 
-The obstacles' FCL objects and their arrays for bounds (:mod:`bounds`) are rebuilt on reset only. Each step
+The obstacles' FCL objects are placed, and their arrays for bounds (:mod:`bounds`) rebuilt, on reset only. Each step
 moves the robot's FCL objects to the link poses the robot read in one batched call, bounds every (shape,
 obstacle) pair from below in one numpy pass, then:
 
@@ -18,6 +18,7 @@ obstacle) pair from below in one numpy pass, then:
 
 from __future__ import annotations
 
+from collections import defaultdict
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -37,6 +38,8 @@ NO_OBSTACLE_CLEARANCE = 1e3
 SMALL_SCENE = 64
 #: metres taken off every bound, so that rounding in its arithmetic cannot lift it above an exact distance
 BOUND_SLACK = 1e-9
+#: obstacle FCL objects kept for reuse; past this many the cache starts again (see :class:`ObstacleObjects`)
+MAX_CACHED_OBJECTS = 4096
 
 
 @dataclass(frozen=True, slots=True)
@@ -100,12 +103,48 @@ def obstacle_shape(o: Obstacle) -> fcl.CollisionGeometry:
     return fcl.Cylinder(o.radius, o.size[2]) if o.shape == "cylinder" else fcl.Box(*o.size)
 
 
-def obstacle_object(o: Obstacle) -> fcl.CollisionObject:
-    """FCL object for an obstacle (its bottom face at height ``o.z``)."""
+def obstacle_transform(o: Obstacle) -> fcl.Transform:
+    """The pose of an obstacle's FCL object (its bottom face at height ``o.z``)."""
     # a rotation matrix, not a quaternion: FCL's are (w, x, y, z), ours (x, y, z, w); bit for bit the matrix FCL
     # would build from the quaternion
-    rotation = quat_to_matrix(np.array(yaw_quat(o.yaw)))
-    return fcl.CollisionObject(obstacle_shape(o), fcl.Transform(rotation, list(o.centre)))
+    return fcl.Transform(quat_to_matrix(np.array(yaw_quat(o.yaw))), list(o.centre))
+
+
+def obstacle_object(o: Obstacle) -> fcl.CollisionObject:
+    """A new FCL object for an obstacle (an env reuses them instead: :class:`ObstacleObjects`)."""
+    return fcl.CollisionObject(obstacle_shape(o), obstacle_transform(o))
+
+
+class ObstacleObjects:
+    """FCL objects for the obstacles of each scene, reused across scenes like the pybullet bodies of the pool.
+
+    python-fcl loses part of every ``CollisionObject`` it frees (its deallocator ``free``s the C++ object without
+    running its destructor), so building a scene's objects anew on every reset grows memory without end
+    (docs/design-notes.md#memory). Objects are kept per exact shape and moved into place; past
+    :data:`MAX_CACHED_OBJECTS` (user scenes of ever new sizes) the cache starts again, leaving that loss behind.
+    """
+
+    def __init__(self) -> None:
+        self._kept: dict[tuple, list[fcl.CollisionObject]] = defaultdict(list)
+        self._count = 0
+
+    def place(self, obstacles: Sequence[Obstacle]) -> list[fcl.CollisionObject]:
+        """One object per obstacle, in order, each at its obstacle's pose."""
+        if self._count > MAX_CACHED_OBJECTS:
+            self._kept.clear()
+            self._count = 0
+        used: dict[tuple, int] = defaultdict(int)
+        objects = []
+        for o in obstacles:
+            key = (o.shape, o.size)
+            kept, i = self._kept[key], used[key]
+            used[key] += 1
+            if i == len(kept):
+                kept.append(fcl.CollisionObject(obstacle_shape(o), fcl.Transform()))
+                self._count += 1
+            kept[i].setTransform(obstacle_transform(o))
+            objects.append(kept[i])
+        return objects
 
 
 class CollisionChecker:
@@ -154,6 +193,7 @@ class CollisionChecker:
         self._other_limits = self._limits_array[self._other_rows].tolist()
         self._sweepers = [fcl.CollisionObject(s.hull or s.geometry, fcl.Transform()) for s in model.shapes]
         self._obstacles: list[fcl.CollisionObject] = []
+        self._obstacle_objects = ObstacleObjects()
         self._bounds = ObstacleBounds(())
         self._obstacle_bodies: frozenset[int] = frozenset()
         self._contact_request = fcl.CollisionRequest(num_max_contacts=4, enable_contact=True)
@@ -164,7 +204,7 @@ class CollisionChecker:
     # ------------------------------------------------------------------------------------------- scene
     def set_scene(self, obstacles: Sequence[Obstacle], bodies: Sequence[int]) -> None:
         """Rebuild the obstacle broad phase (call on reset). ``bodies`` are the matching pybullet body ids."""
-        self._obstacles = [obstacle_object(o) for o in obstacles]
+        self._obstacles = self._obstacle_objects.place(obstacles)
         self._bounds = ObstacleBounds(obstacles)
         self._obstacle_bodies = frozenset(bodies)
         self._previous = None  # a reset teleports the robot: nothing to sweep from

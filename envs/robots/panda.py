@@ -99,7 +99,7 @@ class PandaArm:
         return self._body
 
     def load(self, sim: Sim) -> int:
-        """Load the URDF with a fixed base at the origin (once per env) and look up joint and link indices."""
+        """Load the URDF with a fixed base at the origin and look up joint and link indices."""
         self._sim = sim
         self._body = sim.load_urdf("robot", self.urdf_path, fixed_base=True)
         sim.hide_from_rays(self._body)
@@ -113,6 +113,7 @@ class PandaArm:
         links = sorted(i for i in self.link_index.values() if i >= 0)
         self._nominal = dict(zip(links, sim.inertial_properties(self._body, links)))
         self._dynamics = DynamicsSample()
+        self._forces = EFFORT_LIMIT.copy()
         self._all_movable = sorted(self._arm + self._fingers)
         return self._body
 
