@@ -42,6 +42,7 @@ _UNIT_PRISM = prism_mesh(1.0, 1.0, CYLINDER_SIDES)
 MAX_SHAPES = 256
 MAX_REMOVED_BODIES = 2_000
 _HIT_FRACTION = operator.itemgetter(2)  # field 2 of a rayTestBatch result row
+MAX_RAY_BATCH = 16383  # rays one rayTestBatch call answers (16,384 silently return nothing, more raise)
 
 
 @dataclass(frozen=True, slots=True)
@@ -501,8 +502,14 @@ class Sim:
             body, link: when ``body`` >= 0 the rays are given in that link's frame and pybullet moves them with it,
                 so a sensor can keep constant ray lists.
 
-        Bodies hidden with :meth:`hide_from_rays` are not hit.
+        Bodies hidden with :meth:`hide_from_rays` are not hit. More than :data:`MAX_RAY_BATCH` rays go in several
+        calls.
         """
+        if len(starts) > MAX_RAY_BATCH:
+            return np.concatenate([
+                self.ray_hit_fractions(starts[i:i + MAX_RAY_BATCH], ends[i:i + MAX_RAY_BATCH], body, link)
+                for i in range(0, len(starts), MAX_RAY_BATCH)
+            ])
         hits = pb.rayTestBatch(
             starts, ends, parentObjectUniqueId=body, parentLinkIndex=link, numThreads=1,
             collisionFilterMask=_RAY_MASK, physicsClientId=self._cid,

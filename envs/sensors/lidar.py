@@ -28,7 +28,7 @@ class LidarConfig:
         max_range: metres, in (min_range, 100]; a beam with no return reads ``max_range``.
         min_range: metres, in [0, 1); beams start this far from the mount so they never hit the robot itself.
         mount_height: offset of the scan origin above the mount link origin along its z axis, metres, [-0.5, 2].
-        n_channels: vertical channels (1 = a 2D scanner), in [1, 128]; n_rays * n_channels <= 16384.
+        n_channels: vertical channels (1 = a 2D scanner), in [1, 128].
         vertical_fov: spread of the channels' elevation angles in radians, [0, pi/2]; channels are evenly spaced
             and centred on the horizontal plane (a VLP-16 is 16 channels over 30 degrees).
         link: URDF link the LIDAR is mounted on.
@@ -46,8 +46,6 @@ class LidarConfig:
     def __post_init__(self) -> None:
         check_integer("n_rays", self.n_rays, 1, 4096)
         check_integer("lidar_channels", self.n_channels, 1, 128)
-        if self.n_rays * self.n_channels > 16384:
-            raise ValueError(f"n_rays * lidar_channels must be <= 16384, got {self.n_rays * self.n_channels}")
         if not (math.isfinite(self.fov) and 0 < self.fov <= 2 * math.pi + 1e-9):
             raise ValueError(f"lidar_fov must be in (0, 2*pi] radians, got {self.fov!r}")
         if not (math.isfinite(self.vertical_fov) and 0 <= self.vertical_fov <= math.pi / 2):

@@ -9,6 +9,7 @@ import pytest
 from helpers import empty_scene
 
 from clutter_gym.sensors import LidarConfig
+from clutter_gym.sim import MAX_RAY_BATCH, Sim
 
 G = 9.81
 
@@ -75,6 +76,35 @@ def test_accelerometer_integrates_to_the_speed_gained(make_env):
     speed = obs["velocity"][0]
     assert speed == pytest.approx(0.5, rel=0.01)  # commanded max_linear_speed
     assert np.sum(fx) * dt == pytest.approx(speed, rel=5e-3)
+
+
+@pytest.mark.parametrize("n", [MAX_RAY_BATCH, MAX_RAY_BATCH + 1, 2 * MAX_RAY_BATCH + 1])
+def test_ray_batches_of_any_size_answer_every_ray(n):
+    """pybullet answers 16,384 rays in one call with an empty list; the Sim splits batches so none is lost."""
+    sim = Sim()
+    box = sim.add_static_box([0.5, 0.5, 0.5], (1.0, 1.0, 1.0, 1.0))
+    sim.move_static(box, (2.0, 0.0, 0.5), (0.0, 0.0, 0.0, 1.0))
+    starts = np.zeros((n, 3)) + [0.0, 0.0, 0.5]
+    ends = starts + [4.0, 0.0, 0.0]
+    ends[1::2, 0] = -4.0  # every other ray points away and hits nothing
+    fractions = sim.ray_hit_fractions(starts, ends)
+    sim.close()
+    assert fractions.shape == (n,)
+    np.testing.assert_allclose(fractions[0::2], 1.5 / 4.0, atol=1e-6)
+    np.testing.assert_array_equal(fractions[1::2], 1.0)
+
+
+def test_lidar_larger_than_one_ray_batch_reads_every_channel(make_env):
+    """4,096 x 5 = 20,480 beams, more than one rayTestBatch call takes: with no vertical spread every channel is the
+    same scan, so every channel, the ones past the first 16,384 beams too, must read the 2D scanner's scan."""
+    multi = make_env(lidar_range=5.0, n_rays=4096, lidar_channels=5, lidar_vertical_fov=0.0)
+    flat = make_env(lidar_range=5.0, n_rays=4096)
+    scene = {"scene": empty_scene(obstacles=[{"shape": "box", "size": [0.4, 0.4, 0.5], "position": [1.0, 0.3]}])}
+    ranges = multi.reset(options=scene)[1]["lidar_ranges"]
+    scan = flat.reset(options=scene)[1]["lidar_ranges"]
+    assert ranges.shape == (5, 4096) and np.all(np.isfinite(ranges))
+    for channel in ranges:
+        np.testing.assert_array_equal(channel, scan)
 
 
 def test_multichannel_lidar_middle_channel_is_the_2d_scan(make_env):
