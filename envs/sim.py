@@ -465,6 +465,13 @@ class Sim:
             physicsClientId=self._cid,
         )
 
+    def set_friction_anchors(self, body: int, links: Sequence[int], on: bool) -> None:
+        """Turn Bullet's friction anchors on or off for ``links``: with them on, a contact keeps the point where it
+        began and static friction pulls it back there, instead of re-anchoring every tick and letting solver
+        residue creep (docs/design-notes.md#standing-still)."""
+        for link in links:
+            pb.changeDynamics(body, link, frictionAnchor=int(on), physicsClientId=self._cid)
+        self.forget_contacts(body)  # a contact keeps the kind it began with: begin them again
     def base_state(self, body: int) -> tuple[tuple, np.ndarray, tuple, tuple]:
         """(centre-of-mass position, rotation matrix, linear velocity, angular velocity), world frame."""
         pos, quat = pb.getBasePositionAndOrientation(body, physicsClientId=self._cid)

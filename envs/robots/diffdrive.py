@@ -53,7 +53,10 @@ class DiffDriveRobot:
     Action: Box(-1, 1, (2,)) = (linear, angular) velocity command normalised by the configured maxima. Values
     outside [-1, 1] are clipped by the env before they reach :meth:`apply_action`. The command becomes wheel
     speeds through the unicycle model ``w_l = (v - w L/2) / r``, ``w_r = (v + w L/2) / r`` and is tracked by
-    pybullet's velocity motors under the torque limit, so the robot accelerates and slips realistically.
+    pybullet's velocity motors under the torque limit, so the robot accelerates and slips realistically. A zero
+    command holds the wheels at their angles with the same torque limit, as a real base's wheel-speed loop does
+    at standstill, and anchors their contacts: pybullet's velocity motors and re-anchored friction alone let a
+    still robot creep (docs/design-notes.md#standing-still).
     """
 
     name = "diffbot"
@@ -69,6 +72,7 @@ class DiffDriveRobot:
         self._velocity_limits = (float(self.velocity_bound[0]), float(self.velocity_bound[1]))
         self._sim: Sim | None = None
         self._body = -1
+        self._hold: list[float] | None = None  # wheel angles held while the command is zero
 
     @property
     def urdf_path(self) -> Path:
@@ -89,9 +93,10 @@ class DiffDriveRobot:
         return list(self._tracked)
 
     def load(self, sim: Sim) -> int:
-        """Load the URDF into ``sim`` (once per env) and look up joint and link indices."""
+        """Load the URDF into ``sim`` and look up joint and link indices."""
         self._sim = sim
         self._body = sim.load_urdf("robot", self.urdf_path)
+        self._hold = None
         sim.hide_from_rays(self._body)
         joints = sim.joint_indices(self._body)
         self._wheels = [joints["left_wheel_joint"], joints["right_wheel_joint"]]
@@ -126,13 +131,27 @@ class DiffDriveRobot:
         self._sim.set_pose(self._body, com, q)
         self._sim.forget_contacts(self._body)  # the same seed must not warm-start from the last episode
         self._sim.reset_joints(self._body, self._wheels)
+        self._release()
         self._sim.set_joint_velocities(self._body, self._wheels, [0.0, 0.0], self._torques)
+
+    def _release(self) -> None:
+        """End a standstill hold (if any): the wheels go back to velocity control with re-anchored friction."""
+        if self._hold is not None:
+            self._hold = None
+            self._sim.set_friction_anchors(self._body, self._wheels, False)
 
     def apply_action(self, action: np.ndarray) -> None:
         """Command wheel speeds from a clipped, normalised (linear, angular) action."""
         c = self.config
         v = float(action[0]) * c.max_linear_speed
         w = float(action[1]) * c.max_angular_speed
+        if v == 0.0 and w == 0.0:
+            if self._hold is None:
+                self._hold = self._sim.joint_states(self._body, self._wheels)[0].tolist()
+                self._sim.set_friction_anchors(self._body, self._wheels, True)
+            self._sim.set_joint_positions(self._body, self._wheels, self._hold, [0.0, 0.0], self._torques)
+            return
+        self._release()
         half = 0.5 * c.wheel_separation
         left = (v - w * half) / c.wheel_radius
         right = (v + w * half) / c.wheel_radius
