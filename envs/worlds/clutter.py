@@ -14,6 +14,12 @@ Sampling, per attempt:
    means reachable.
 4. Start and goal come from free cells with the extra ``spawn_clearance``, in one component and at least
    ``min_goal_distance`` apart. No such pair: a new attempt.
+
+Dense clutter in a large arena leaves no free component that spans it (at density 0.3 in a 30 m arena the
+largest one holds a few percent of the free cells), so after ``PLAIN_ATTEMPTS`` failed attempts the generator
+keeps a corridor clear: it draws start, goal and one waypoint first and refuses obstacles whose enclosing circle
+comes within ``r + spawn_clearance + resolution`` of the polyline through them. Every cell the polyline crosses is
+then free, the steps above find start and goal in one component, and the density is still met elsewhere.
 """
 
 from __future__ import annotations
@@ -29,6 +35,8 @@ from clutter_gym.util.checks import check_integer
 from clutter_gym.worlds.scene import Obstacle, Scene
 
 MAX_DENSITY = 0.3  # beyond this a walled arena cannot reliably keep a free path for the robot
+PLAIN_ATTEMPTS = 5  # attempts at unconstrained clutter before the generator keeps a corridor clear
+_MAX_REFUSED_BATCHES = 50  # a corridor that leaves too little floor for the density ends the sampling early
 
 
 @dataclass(frozen=True)
@@ -104,13 +112,40 @@ def _level_values(rng: np.random.Generator, choices: np.ndarray, n: int) -> np.n
     return choices[rng.integers(0, len(choices), size=n)]
 
 
-def _sample_obstacles(rng: np.random.Generator, spec: ClutterSpec) -> tuple[Obstacle, ...]:
-    """Obstacles drawn in batches until their footprints cover ``obstacle_density`` of the floor."""
+def _segment_distances(points: np.ndarray, polyline: np.ndarray) -> np.ndarray:
+    """(n,) distance from each of ``points`` (n, 2) to the polyline through ``polyline`` (k, 2)."""
+    a, b = polyline[:-1], polyline[1:]
+    ab = b - a
+    rel = points[:, None, :] - a[None]
+    t = np.clip(np.einsum("nsd,sd->ns", rel, ab) / np.maximum(np.einsum("sd,sd->s", ab, ab), 1e-12), 0.0, 1.0)
+    nearest = a[None] + t[..., None] * ab[None]
+    return np.linalg.norm(points[:, None, :] - nearest, axis=2).min(axis=1)
+
+
+def _corridor(rng: np.random.Generator, spec: ClutterSpec, keep: float) -> np.ndarray | None:
+    """(3, 2) start, waypoint and goal, each ``keep`` inside the walls, start and goal ``min_goal_distance``
+    apart; None when the arena is too small for such a pair."""
+    half = 0.5 * spec.arena_size - keep
+    if half <= 0:
+        return None
+    ends = rng.uniform(-half, half, size=(64, 2, 2))
+    far = np.flatnonzero(np.hypot(*(ends[:, 0] - ends[:, 1]).T) >= spec.min_goal_distance * spec.arena_size)
+    if far.size == 0:
+        return None
+    start, goal = ends[far[0]]
+    return np.array([start, rng.uniform(-half, half, size=2), goal])
+
+
+def _sample_obstacles(
+    rng: np.random.Generator, spec: ClutterSpec, corridor: np.ndarray | None = None, keep: float = 0.0
+) -> tuple[Obstacle, ...]:
+    """Obstacles drawn in batches until their footprints cover ``obstacle_density`` of the floor; with a
+    ``corridor`` polyline, none whose enclosing circle comes within ``keep`` metres of it."""
     target = spec.obstacle_density * spec.arena_size**2
     obstacles: list[Obstacle] = []
     covered, half, h = 0.0, 0.5 * spec.arena_size, spec.obstacle_height
-    batch = 32
-    while covered < target:
+    batch, refused = 32, 0
+    while covered < target and refused < _MAX_REFUSED_BATCHES:
         kind = rng.choice(3, size=batch, p=spec.shape_probs)
         sizes = spec.size_values
         side_a, side_b = _level_values(rng, sizes["box_side"], batch), _level_values(rng, sizes["box_side"], batch)
@@ -118,7 +153,12 @@ def _sample_obstacles(rng: np.random.Generator, spec: ClutterSpec) -> tuple[Obst
         length = _level_values(rng, sizes["wall_length"], batch)
         yaw = rng.uniform(-math.pi, math.pi, size=batch)
         xy = rng.uniform(-half, half, size=(batch, 2))
-        for i in range(batch):
+        allowed = np.ones(batch, dtype=bool)
+        if corridor is not None:
+            reach = np.choose(kind, [np.hypot(side_a, side_b) / 2, radius, np.hypot(length, spec.wall_thickness) / 2])
+            allowed = _segment_distances(xy, corridor) - reach >= keep
+            refused = refused + 1 if not allowed.any() else 0
+        for i in np.flatnonzero(allowed):
             if covered >= target:
                 break
             if kind[i] == 0:
@@ -196,6 +236,13 @@ def _merge_windows(field: np.ndarray, obstacles: tuple[Obstacle, ...], spec: Clu
         np.minimum(window, d[k], out=window)
 
 
+def _cell(point: np.ndarray, spec: ClutterSpec) -> int:
+    """Flat index of the grid cell holding ``point`` (x, y)."""
+    n = len(spec.cell_centres)
+    ix, iy = np.clip(((point + 0.5 * spec.arena_size) * n / spec.arena_size).astype(int), 0, n - 1)
+    return int(ix * n + iy)
+
+
 def sample_scene(rng: np.random.Generator, spec: ClutterSpec, robot_radius: float) -> Scene:
     """A random layout whose goal is reachable for a disc of ``robot_radius`` (see the module docstring).
 
@@ -206,20 +253,24 @@ def sample_scene(rng: np.random.Generator, spec: ClutterSpec, robot_radius: floa
     spawn_margin = robot_radius + spec.spawn_clearance
     c = spec.cell_centres
     cap = spawn_margin + spec.resolution
-    for _ in range(spec.max_attempts):
-        obstacles = _sample_obstacles(rng, spec)
+    for attempt in range(spec.max_attempts):
+        corridor = _corridor(rng, spec, cap) if attempt >= PLAIN_ATTEMPTS else None
+        obstacles = _sample_obstacles(rng, spec, corridor, cap)
         field = clearance_field(obstacles, spec, cap)
         labels, _ = ndimage.label(field > free_margin)
         spawn = np.flatnonzero((field > spawn_margin).ravel())
         if spawn.size < 2:
             continue
-        start_cell = int(rng.choice(spawn))
+        start_cell = int(rng.choice(spawn)) if corridor is None else _cell(corridor[0], spec)
         component = labels.ravel()[start_cell]
         ix, iy = np.unravel_index(spawn, field.shape)
         sx, sy = c[start_cell // len(c)], c[start_cell % len(c)]
         far = np.hypot(c[ix] - sx, c[iy] - sy) >= spec.min_goal_distance * spec.arena_size
         goals = spawn[far & (labels.ravel()[spawn] == component)]
-        if goals.size == 0:
+        if corridor is not None:  # the far end of the corridor when its cell qualifies, as it does by construction
+            end = _cell(corridor[2], spec)
+            goals = goals[goals == end] if np.any(goals == end) else goals
+        if goals.size == 0 or field.ravel()[start_cell] <= spawn_margin:
             continue
         goal_cell = int(rng.choice(goals))
         gx, gy = c[goal_cell // len(c)], c[goal_cell % len(c)]

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
+import clutter_gym.worlds.clutter
 from clutter_gym.worlds import ClutterSpec, sample_scene
 from clutter_gym.worlds.clutter import clearance_field
 
@@ -36,17 +37,46 @@ def test_goal_is_reachable_on_an_independent_fine_grid(density):
         assert start != 0 and start == goal
 
 
+def test_corridor_layouts_are_reachable_on_an_independent_fine_grid(monkeypatch):
+    """The corridor the generator keeps clear at high density (forced from the first attempt here) joins start and
+    goal, and the density is still met."""
+    monkeypatch.setattr(clutter_gym.worlds.clutter, "PLAIN_ATTEMPTS", 0)
+    spec = ClutterSpec(obstacle_density=0.3)
+    rng = np.random.default_rng(7)
+    step = 0.02
+    xs = np.arange(-0.5 * spec.arena_size + step / 2, 0.5 * spec.arena_size, step)
+    for _ in range(15):
+        scene = sample_scene(rng, spec, ROBOT_RADIUS)
+        assert_valid(scene, spec)
+        labels, _ = ndimage.label(exact_clearance(scene, spec, xs) > ROBOT_RADIUS)
+        start = labels[np.abs(xs - scene.start[0]).argmin(), np.abs(xs - scene.start[1]).argmin()]
+        goal = labels[np.abs(xs - scene.goal[0]).argmin(), np.abs(xs - scene.goal[1]).argmin()]
+        assert start != 0 and start == goal
+
+
+def assert_valid(scene, spec: ClutterSpec) -> None:
+    """Density met, start and goal clear by the spawn clearance and far enough apart."""
+    assert sum(o.area for o in scene.obstacles) >= spec.obstacle_density * spec.arena_size**2
+    for point in (scene.start[:2], scene.goal):
+        assert scene.clearance(*point, spec.arena_size) > ROBOT_RADIUS + spec.spawn_clearance
+    distance = np.hypot(scene.goal[0] - scene.start[0], scene.goal[1] - scene.start[1])
+    assert distance >= spec.min_goal_distance * spec.arena_size
+
+
 def test_layouts_meet_density_spawn_clearance_and_goal_distance():
     spec = ClutterSpec(obstacle_density=0.15)
     rng = np.random.default_rng(5)
     for _ in range(30):
-        scene = sample_scene(rng, spec, ROBOT_RADIUS)
-        covered = sum(o.area for o in scene.obstacles)
-        assert covered >= 0.15 * spec.arena_size**2
-        for point in (scene.start[:2], scene.goal):
-            assert scene.clearance(*point, spec.arena_size) > ROBOT_RADIUS + spec.spawn_clearance
-        distance = np.hypot(scene.goal[0] - scene.start[0], scene.goal[1] - scene.start[1])
-        assert distance >= spec.min_goal_distance * spec.arena_size
+        assert_valid(sample_scene(rng, spec, ROBOT_RADIUS), spec)
+
+
+@pytest.mark.parametrize("arena", [2.0, 15.0, 30.0])
+def test_the_densest_clutter_builds_in_every_arena_size(arena):
+    """At density 0.3 no free component spans a 15 or 30 m arena: only the kept corridor makes these work."""
+    spec = ClutterSpec(arena_size=arena, obstacle_density=0.3)
+    rng = np.random.default_rng(0)
+    for _ in range(2):
+        assert_valid(sample_scene(rng, spec, ROBOT_RADIUS), spec)
 
 
 def test_generated_shapes_come_from_a_small_catalogue():
