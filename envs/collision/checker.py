@@ -38,6 +38,8 @@ NO_OBSTACLE_CLEARANCE = 1e3
 SMALL_SCENE = 64
 #: metres taken off every bound, so that rounding in its arithmetic cannot lift it above an exact distance
 BOUND_SLACK = 1e-9
+#: in a scene larger than ``SMALL_SCENE``, a shape's candidates are sorted this many at a time (nearest first)
+NEAREST_FIRST = 16
 #: obstacle FCL objects kept for reuse; past this many the cache starts again (see :class:`ObstacleObjects`)
 MAX_CACHED_OBJECTS = 4096
 
@@ -251,13 +253,34 @@ class CollisionChecker:
         shapes, lower_bounds = moving, bound
         if len(self._other_rows) < len(moving):
             shapes, lower_bounds = moving[self._other_rows], bound[self._other_rows]
-        order = np.argsort(lower_bounds, axis=1, kind="stable")
-        rows = zip(shapes.tolist(), candidates[order].tolist(), np.sort(lower_bounds, axis=1).tolist())
-        for (i, nearest_first, lower), limit in zip(rows, self._other_limits):
-            raw, j, p = self._nearest_obstacle(i, nearest_first, lower, limit)
+        if lower_bounds.shape[1] > SMALL_SCENE:
+            found = [self._nearest_in_order(i, candidates, lower, limit)
+                     for i, lower, limit in zip(shapes.tolist(), lower_bounds, self._other_limits)]
+        else:
+            order = np.argsort(lower_bounds, axis=1, kind="stable")
+            rows = zip(shapes.tolist(), candidates[order].tolist(), np.sort(lower_bounds, axis=1).tolist())
+            found = [self._nearest_obstacle(i, nearest_first, lower, limit)
+                     for (i, nearest_first, lower), limit in zip(rows, self._other_limits)]
+        for i, (raw, j, p) in zip(shapes.tolist(), found):
             if j >= 0:
                 best[i], other[i], points[i] = raw - model.padding[i], j, p
         return best, other, points, candidates, bound
+
+    def _nearest_in_order(self, i: int, candidates: np.ndarray, lower: np.ndarray, limit: float
+                          ) -> tuple[float, int, np.ndarray | None]:
+        """:meth:`_nearest_obstacle` over ``candidates`` in ascending (stable) order of their bounds ``lower``,
+        sorting only as far as it needs: the ``NEAREST_FIRST`` lowest bounds (and their ties) first, the rest only
+        when those leave a bound that could still beat the best distance."""
+        threshold = np.partition(lower, NEAREST_FIRST - 1)[NEAREST_FIRST - 1]
+        result = (limit, -1, None)
+        for part in (np.flatnonzero(lower <= threshold), np.flatnonzero(lower > threshold)):
+            if part.size == 0 or lower[part].min() >= result[0]:
+                break
+            part = part[np.argsort(lower[part], kind="stable")]
+            found = self._nearest_obstacle(i, candidates[part].tolist(), lower[part].tolist(), result[0])
+            if found[1] >= 0:
+                result = found
+        return result
 
     def _sphere_witnesses(self, spheres: np.ndarray, best: np.ndarray, other: np.ndarray, points: np.ndarray) -> None:
         """Witness points, from FCL, of the spheres in range that are reported: the nearest shape of their link

@@ -12,12 +12,14 @@ scenes with new sizes create bodies as needed, a one-off cost per new shape.
 from __future__ import annotations
 
 from collections import OrderedDict, defaultdict
+from itertools import islice
 
 from clutter_gym.sim import Sim
 from clutter_gym.util.transforms import yaw_quat
 from clutter_gym.worlds.scene import Obstacle
 
-PARK_POSITION = (0.0, 0.0, -10.0)
+PARK_DEPTH = -10.0  # parked bodies wait this far below the floor (metres)
+PARK_SPACING = 2.0  # metres between parked bodies: piled at one point, moving each one costs more the more there are
 _COLOURS = {"box": (0.62, 0.52, 0.40, 1.0), "cylinder": (0.45, 0.55, 0.45, 1.0), "wall": (0.35, 0.35, 0.38, 1.0)}
 
 
@@ -64,47 +66,61 @@ class ObstaclePool:
         """Obstacle bodies in the world (active and parked)."""
         return len(self._active) + len(self._parked)
 
-    def _create(self, o: Obstacle) -> int:
+    def _create(self, obstacles: list[Obstacle]) -> list[int]:
+        """New bodies for ``obstacles``, all of one shape and size."""
+        o, centres = obstacles[0], [ob.centre for ob in obstacles]
         if o.shape == "box":
-            return self._sim.add_static_box([0.5 * s for s in o.size], _COLOURS["box"])
-        return self._sim.add_static_cylinder(o.radius, o.size[2], _COLOURS["cylinder"])
-
-    def _take(self, key: tuple, o: Obstacle, shown: set[int]) -> int:
-        """A body for ``o``: a parked one if the pool has one (made visible unless in ``shown``), else a new one."""
-        if self._free[key]:
-            body = self._free[key].pop()
-            del self._parked[body]
-            if body not in shown:
-                self._sim.set_visible(body, True, _COLOURS[key[0]])
-            return body
-        return self._create(o)
+            return self._sim.add_static_boxes([0.5 * s for s in o.size], _COLOURS["box"], centres)
+        return self._sim.add_static_cylinders(o.radius, o.size[2], _COLOURS["cylinder"], centres)
 
     def place(self, obstacles: tuple[Obstacle, ...]) -> list[int]:
         """Show exactly ``obstacles`` (in order) and park the bodies they no longer need; returns body ids.
 
         The last scene's bodies are reused first (each shape's free list is last in, first out), and those are
-        still visible."""
+        still visible. Bodies beyond ``max_parked`` are deleted before they would be parked, so a large scene
+        followed by a small one costs one removal each."""
         released = self._active
         for key, body in released:
             self._free[key].append(body)
             self._parked[body] = key
         shown = {body for _, body in released}
-        self._active = []
-        bodies = []
-        for o in obstacles:
+        bodies: list[int | None] = [None] * len(obstacles)
+        missing: dict[tuple, list[int]] = defaultdict(list)  # shape -> indices of obstacles without a body
+        for i, o in enumerate(obstacles):
             key = _key(o)
-            body = self._take(key, o, shown)
+            if not self._free[key]:
+                missing[key].append(i)
+                continue
+            body = bodies[i] = self._free[key].pop()
+            del self._parked[body]
+            if body not in shown:
+                self._sim.set_visible(body, True, _COLOURS[key[0]])
+        for indices in missing.values():
+            for i, body in zip(indices, self._create([obstacles[i] for i in indices])):
+                bodies[i] = body
+        self._active = []
+        for o, body in zip(obstacles, bodies):
             self._sim.move_static(body, o.centre, yaw_quat(o.yaw))
             self._sim.sleep(body)
-            self._active.append((key, body))
-            bodies.append(body)
+            self._active.append((_key(o), body))
+        self._evict()
         for _, body in released:
             if body in self._parked:
-                self._sim.move_static(body, PARK_POSITION, (0.0, 0.0, 0.0, 1.0))
+                position = (PARK_SPACING * (body % 64), PARK_SPACING * (body // 64), PARK_DEPTH)
+                self._sim.move_static(body, position, (0.0, 0.0, 0.0, 1.0))
                 self._sim.sleep(body)
                 self._sim.set_visible(body, False, _COLOURS[self._parked[body][0]])
-        while len(self._parked) > self.max_parked:
-            body, key = self._parked.popitem(last=False)
-            self._free[key].remove(body)
-            self._sim.remove_body(body)
         return bodies
+
+    def _evict(self) -> None:
+        """Delete the least recently parked bodies beyond ``max_parked``."""
+        excess = len(self._parked) - self.max_parked
+        if excess <= 0:
+            return
+        gone = list(islice(self._parked, excess))
+        for body in gone:
+            self._sim.remove_body(body)
+            del self._parked[body]
+        gone_set = set(gone)
+        for key, free in self._free.items():
+            self._free[key] = [b for b in free if b not in gone_set]

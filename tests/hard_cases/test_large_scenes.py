@@ -1,0 +1,73 @@
+"""Thousands of obstacles: placed exactly, torn down without parking what is deleted, and measured exactly."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from helpers import empty_scene
+
+import clutter_gym.collision.checker
+from clutter_gym.sim import pb
+from clutter_gym.worlds.pool import PARK_DEPTH
+
+
+def grid_scene(n: int, arena: float = 30.0) -> dict:
+    """``n`` small boxes and cylinders of three sizes on a jittered grid, the start corner kept clear."""
+    rng = np.random.default_rng(n)
+    side = int(np.ceil(np.sqrt(n)))
+    cells = (np.arange(side) + 0.5) / side * (arena - 1.0) - 0.5 * (arena - 1.0)
+    xy = np.stack(np.meshgrid(cells, cells), -1).reshape(-1, 2)[:n] + rng.uniform(-0.1, 0.1, (n, 2))
+    obstacles = []
+    for k, (x, y) in enumerate(xy):
+        if np.hypot(x + 14.0, y) < 1.0:
+            continue
+        if k % 2:
+            obstacles.append({"shape": "cylinder", "radius": (0.05, 0.08, 0.1)[k % 3], "height": 0.5,
+                              "position": [float(x), float(y)]})
+        else:
+            obstacles.append({"shape": "box", "size": [0.1, 0.2, (0.3, 0.5)[k % 4 // 2]],
+                              "position": [float(x), float(y)], "yaw": float(k)})
+    return empty_scene(start=(-14.0, 0.0, 0.0), goal=(-12.0, 0.0), obstacles=obstacles)
+
+
+@pytest.fixture(scope="module")
+def env():
+    env = gym.make("ClutterNav-v0", arena_size=30.0)
+    yield env
+    env.close()
+
+
+def test_a_large_layout_is_placed_exactly_and_torn_down_to_the_cap(env):
+    big = grid_scene(2000)
+    env.reset(seed=0, options={"scene": big})
+    unwrapped = env.unwrapped
+    cid = unwrapped.sim.client_id
+    for o, body in zip(big["obstacles"], unwrapped.arena._pool._active):
+        position, quaternion = pb.getBasePositionAndOrientation(body[1], physicsClientId=cid)
+        np.testing.assert_allclose(position[:2], o["position"], atol=1e-9)
+        yaw = o.get("yaw", 0.0)
+        assert pb.getEulerFromQuaternion(quaternion)[2] == pytest.approx(np.arctan2(np.sin(yaw), np.cos(yaw)))
+    env.reset(options={"scene": grid_scene(10)})
+    pool = unwrapped.arena._pool
+    assert pool.size == len(unwrapped.scene.obstacles) + pool.max_parked
+    parked = [pb.getBasePositionAndOrientation(b, physicsClientId=cid)[0] for b in pool._parked]
+    assert all(p[2] == PARK_DEPTH for p in parked)
+    assert len({p[:2] for p in parked}) == len(parked)  # spread out: moving one into a pile costs per pile size
+
+
+def test_nearest_obstacles_are_found_exactly_without_sorting_every_bound(env, monkeypatch):
+    """The partial ordering of a large scene's candidates gives what a full sort gives, on 100 random poses."""
+    env.reset(seed=0, options={"scene": grid_scene(2000)})
+    unwrapped, rng = env.unwrapped, np.random.default_rng(1)
+    checker = unwrapped.checker
+    for _ in range(100):
+        x, y = rng.uniform(-14.0, 14.0, 2)
+        unwrapped.robot.reset_pose(float(x), float(y), float(rng.uniform(-np.pi, np.pi)))
+        checker.sync(unwrapped.robot.state())
+        partial = checker.clearance()
+        with monkeypatch.context() as m:
+            m.setattr(clutter_gym.collision.checker, "SMALL_SCENE", 10**9)  # every bound sorted
+            full = checker.clearance()
+        for a, b in zip(partial, full):
+            np.testing.assert_array_equal(a, b)
