@@ -18,7 +18,7 @@ import pytest
 from helpers import empty_scene
 
 import clutter_gym.sim
-from clutter_gym.collision.checker import ObstacleObjects, obstacle_object
+from clutter_gym.collision.obstacles import ObstacleObjects, obstacle_object
 from clutter_gym.worlds import ClutterSpec, sample_scene
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc/self/statm")
