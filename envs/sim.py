@@ -168,8 +168,7 @@ class Sim:
             pb.GEOM_BOX, halfExtents=(half, half, 0.0005), visualFramePosition=(0.0, 0.0, -0.0005),
             rgbaColor=(0.85, 0.85, 0.8, 1.0), physicsClientId=self._cid,
         )
-        ground = pb.createMultiBody(0.0, shape, visual, useMaximalCoordinates=True, physicsClientId=self._cid)
-        return self._register(name, ground)  # a static body (see _static_bodies), never culled
+        return self._register(name, self._static_body(shape, visual))
 
     def load_urdf(
         self, name: str, path: str | Path, position: Sequence[float] = (0.0, 0.0, 0.0), fixed_base: bool = False
@@ -206,18 +205,11 @@ class Sim:
     def add_static_box(self, half_extents: Sequence[float], rgba: Sequence[float]) -> int:
         """Add a static (mass 0) box centred at the origin (move it with :meth:`move_static`); returns its body id.
 
+        Bodies of one size and colour share their shapes: pybullet could not free a second copy.
+
         Args:
             half_extents: half sizes along x, y and z in metres.
             rgba: colour, each channel in [0, 1].
-        """
-        return self.add_static_boxes(half_extents, rgba, [(0.0, 0.0, 0.0)])[0]
-
-    def add_static_boxes(
-        self, half_extents: Sequence[float], rgba: Sequence[float], positions: Sequence[Sequence[float]]
-    ) -> list[int]:
-        """Like :meth:`add_static_box`, one box centred at each of ``positions`` (metres).
-
-        Bodies of one size and colour share their shapes: pybullet could not free a second copy.
         """
         key = ("box", tuple(map(float, half_extents)), tuple(rgba))
         if key not in self._shapes:
@@ -225,7 +217,7 @@ class Sim:
                 pb.createCollisionShape(pb.GEOM_BOX, halfExtents=half_extents, physicsClientId=self._cid),
                 pb.createVisualShape(pb.GEOM_BOX, halfExtents=half_extents, rgbaColor=rgba, physicsClientId=self._cid),
             )
-        return self._static_bodies(*self._shapes[key], positions, float(np.linalg.norm(half_extents)), rgba)
+        return self._static_body(*self._shapes[key], float(np.linalg.norm(half_extents)), rgba)
 
     def add_static_cylinder(self, radius: float, height: float, rgba: Sequence[float]) -> int:
         """Add a static (mass 0) upright cylinder centred at the origin, like :meth:`add_static_box`.
@@ -242,12 +234,6 @@ class Sim:
             height: height in metres.
             rgba: colour, each channel in [0, 1].
         """
-        return self.add_static_cylinders(radius, height, rgba, [(0.0, 0.0, 0.0)])[0]
-
-    def add_static_cylinders(
-        self, radius: float, height: float, rgba: Sequence[float], positions: Sequence[Sequence[float]]
-    ) -> list[int]:
-        """Like :meth:`add_static_cylinder`, one cylinder centred at each of ``positions`` (metres)."""
         key = ("cylinder", (float(radius), float(height)), tuple(rgba))
         if key not in self._shapes:
             vertices, indices = _UNIT_PRISM  # one shared list: pybullet keeps a reference to every list it is given
@@ -264,41 +250,31 @@ class Sim:
                     pb.GEOM_CYLINDER, radius=radius, length=height, rgbaColor=rgba, physicsClientId=self._cid
                 ),
             )
-        bodies = self._static_bodies(*self._shapes[key], positions, float(np.hypot(radius, 0.5 * height)), rgba)
-        for body in bodies:
-            pb.changeDynamics(body, -1, collisionMargin=0.0, physicsClientId=self._cid)
-        return bodies
+        body = self._static_body(*self._shapes[key], float(np.hypot(radius, 0.5 * height)), rgba)
+        pb.changeDynamics(body, -1, collisionMargin=0.0, physicsClientId=self._cid)
+        return body
 
-    def _static_bodies(
-        self,
-        collision: int,
-        visual: int,
-        positions: Sequence[Sequence[float]],
-        radius: float,
-        rgba: Sequence[float],
-    ) -> list[int]:
-        """Add mass-0 bodies as plain (maximal-coordinate) rigid bodies, not Featherstone multibodies, one centred at
-        each of ``positions``; returns their ids.
+    def _static_body(
+        self, collision: int, visual: int, radius: float | None = None, rgba: Sequence[float] = ()
+    ) -> int:
+        """Add a mass-0 body as a plain (maximal-coordinate) rigid body, not a Featherstone multibody; returns its id.
 
         Every body in the world costs each physics tick, even fixed and far away, and a multibody costs more than a
-        static rigid body, a sleeping one less again (docs/design-notes.md#static-bodies).
+        static rigid body, a sleeping one less again (docs/design-notes.md#static-bodies). Bodies are made one
+        call each: a ``batchPositions`` call returns wrong ids once any body was removed (pybullet 3.2.7).
 
         Args:
             collision: collision shape id (-1: visual only).
             visual: visual shape id.
-            positions: where each body's origin goes, metres; the caller still places each with
-                :meth:`move_static`, which tells :attr:`culler` where it is.
-            radius: radius in metres of a sphere about the body's origin that holds its visual: the bodies join
-                :attr:`culler` and are culled from the camera frames they cannot appear in.
-            rgba: the visual's colour, each channel in [0, 1].
+            radius: radius in metres of a sphere about the body's origin that holds its visual. A body given one
+                joins :attr:`culler` and is culled from the camera frames it cannot appear in.
+            rgba: the visual's colour, each channel in [0, 1] (needed with ``radius``).
         """
-        # one call per body: a batchPositions call returns wrong ids once a body was removed (pybullet 3.2.7)
-        bodies = [pb.createMultiBody(0.0, collision, visual, basePosition=p, useMaximalCoordinates=True,
-                                     physicsClientId=self._cid) for p in positions]
-        colour = tuple(np.float32(rgba).tolist())  # as pybullet stores it: createVisualShape keeps single precision
-        for body in bodies:
-            self.culler.add(body, radius, colour)
-        return bodies
+        body = pb.createMultiBody(0.0, collision, visual, useMaximalCoordinates=True, physicsClientId=self._cid)
+        if radius is not None:
+            # the colour as pybullet stores it: createVisualShape keeps single precision
+            self.culler.add(body, radius, tuple(np.float32(rgba).tolist()))
+        return body
 
     def remove_body(self, body: int) -> None:
         """Delete a body from the world (its collision and visual shapes stay cached for reuse)."""
@@ -326,8 +302,7 @@ class Sim:
         vis = pb.createVisualShape(
             pb.GEOM_CYLINDER, radius=radius, length=0.01, rgbaColor=rgba, physicsClientId=self._cid
         )
-        marker = self._static_bodies(-1, vis, [(0.0, 0.0, 0.0)], float(np.hypot(radius, 0.005)), rgba)[0]
-        return self._register(name, marker)
+        return self._register(name, self._static_body(-1, vis, float(np.hypot(radius, 0.005)), rgba))
 
     def _register(self, name: str, body: int) -> int:
         if name in self.bodies:

@@ -66,12 +66,20 @@ class ObstaclePool:
         """Obstacle bodies in the world (active and parked)."""
         return len(self._active) + len(self._parked)
 
-    def _create(self, obstacles: list[Obstacle]) -> list[int]:
-        """New bodies for ``obstacles``, all of one shape and size."""
-        o, centres = obstacles[0], [ob.centre for ob in obstacles]
+    def _create(self, o: Obstacle) -> int:
         if o.shape == "box":
-            return self._sim.add_static_boxes([0.5 * s for s in o.size], _COLOURS["box"], centres)
-        return self._sim.add_static_cylinders(o.radius, o.size[2], _COLOURS["cylinder"], centres)
+            return self._sim.add_static_box([0.5 * s for s in o.size], _COLOURS["box"])
+        return self._sim.add_static_cylinder(o.radius, o.size[2], _COLOURS["cylinder"])
+
+    def _take(self, key: tuple, o: Obstacle, shown: set[int]) -> int:
+        """A body for ``o``: a parked one if the pool has one (made visible unless in ``shown``), else a new one."""
+        if self._free[key]:
+            body = self._free[key].pop()
+            del self._parked[body]
+            if body not in shown:
+                self._sim.set_visible(body, True, _COLOURS[key[0]])
+            return body
+        return self._create(o)
 
     def place(self, obstacles: tuple[Obstacle, ...]) -> list[int]:
         """Show exactly ``obstacles`` (in order) and park the bodies they no longer need; returns body ids.
@@ -84,25 +92,15 @@ class ObstaclePool:
             self._free[key].append(body)
             self._parked[body] = key
         shown = {body for _, body in released}
-        bodies: list[int | None] = [None] * len(obstacles)
-        missing: dict[tuple, list[int]] = defaultdict(list)  # shape -> indices of obstacles without a body
-        for i, o in enumerate(obstacles):
-            key = _key(o)
-            if not self._free[key]:
-                missing[key].append(i)
-                continue
-            body = bodies[i] = self._free[key].pop()
-            del self._parked[body]
-            if body not in shown:
-                self._sim.set_visible(body, True, _COLOURS[key[0]])
-        for indices in missing.values():
-            for i, body in zip(indices, self._create([obstacles[i] for i in indices])):
-                bodies[i] = body
         self._active = []
-        for o, body in zip(obstacles, bodies):
+        bodies = []
+        for o in obstacles:
+            key = _key(o)
+            body = self._take(key, o, shown)
             self._sim.move_static(body, o.centre, yaw_quat(o.yaw))
             self._sim.sleep(body)
-            self._active.append((_key(o), body))
+            self._active.append((key, body))
+            bodies.append(body)
         self._evict()
         for _, body in released:
             if body in self._parked:
