@@ -187,8 +187,16 @@ class ClutterEnv(gym.Env):
         return obs, float(outcome.reward), outcome.terminated, False, info
 
     def _checked_action(self, action: Any) -> np.ndarray:
-        a = np.asarray(action, dtype=np.float64)
+        """``action`` as float64 within the bounds: any real dtype and container of the right shape, clipped;
+        anything else (strings, None, bools, complex numbers, NaN, Inf) is a ``ValueError`` naming the action."""
         shape = self.action_space.shape
+        try:
+            a = np.asarray(action)
+        except ValueError:  # ragged nesting
+            a = np.empty(0, dtype=object)
+        if a.dtype.kind not in "fiu":
+            raise ValueError(f"action must be {shape[0]} real numbers (floats or integers), got {repr(action)[:200]}")
+        a = a.astype(np.float64, copy=False)
         if a.shape != shape:
             raise ValueError(f"action must have shape {shape}, got {a.shape}")
         if not np.isfinite(a).all():

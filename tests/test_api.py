@@ -138,6 +138,29 @@ def test_bad_actions_raise(action, message, make_env):
         env.step(np.array(action))
 
 
+@pytest.mark.parametrize("env_id", ["ClutterNav-v0", "ClutterReach-v0"])
+@pytest.mark.parametrize(
+    "action", ["ab", None, {"v": 1.0}, [object(), object()], [1.0, "a"], [[0.0], [0.0, 1.0]], True, [True, False],
+               [1j, 0.0]],
+    ids=["str", "None", "dict", "objects", "mixed", "ragged", "bool", "bools", "complex"],
+)
+def test_actions_that_are_not_real_numbers_name_the_action(env_id, action, make_env):
+    env = make_env(env_id)
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match="action must be .* real numbers"):
+        env.step(action)
+
+
+@pytest.mark.parametrize("dtype", [np.float16, np.float32, np.float64, np.int8, np.int64, np.uint8, list, tuple])
+def test_every_real_dtype_and_container_steps_as_float64(dtype, make_env):
+    a, b = make_env(), make_env()
+    a.reset(seed=4)
+    b.reset(seed=4)
+    action = [1, 0]
+    given = dtype(action) if dtype in (list, tuple) else np.array(action, dtype=dtype)
+    np.testing.assert_array_equal(a.step(given)[0]["lidar"], b.step(np.array([1.0, 0.0]))[0]["lidar"])
+
+
 def test_out_of_range_actions_are_clipped(make_env):
     a, b = make_env(), make_env()
     a.reset(seed=4)
