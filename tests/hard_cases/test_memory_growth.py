@@ -115,3 +115,16 @@ def test_a_rebuilt_world_runs_as_a_fresh_one(monkeypatch):
     env.close()
     for a, b in zip(expected, got):
         np.testing.assert_array_equal(a, b)
+
+
+def test_make_and_close_cycles_give_their_memory_back():
+    """The target is under 50 MB over 1,000 cycles; 200 cycles measured 0.9 MiB, the bound is that target's share."""
+    for _ in range(20):  # warm-up: imports, caches and the allocator's first arenas
+        gym.make("ClutterNav-v0").close()
+    before = resident()
+    for seed in range(200):
+        env = gym.make("ClutterNav-v0")
+        env.reset(seed=seed)
+        env.close()
+    growth = resident() - before
+    assert growth < 10 * MIB, f"{growth / MIB:.1f} MiB over 200 make/close cycles"
