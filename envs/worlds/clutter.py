@@ -32,7 +32,7 @@ import numpy as np
 from scipy import ndimage
 
 from clutter_gym.util.checks import check_integer
-from clutter_gym.worlds.scene import Obstacle, Scene
+from clutter_gym.worlds.scene import Obstacle, Scene, polyline_distances
 
 MAX_DENSITY = 0.3  # beyond this a walled arena cannot reliably keep a free path for the robot
 PLAIN_ATTEMPTS = 5  # attempts at unconstrained clutter before the generator keeps a corridor clear
@@ -112,16 +112,6 @@ def _level_values(rng: np.random.Generator, choices: np.ndarray, n: int) -> np.n
     return choices[rng.integers(0, len(choices), size=n)]
 
 
-def _segment_distances(points: np.ndarray, polyline: np.ndarray) -> np.ndarray:
-    """(n,) distance from each of ``points`` (n, 2) to the polyline through ``polyline`` (k, 2)."""
-    a, b = polyline[:-1], polyline[1:]
-    ab = b - a
-    rel = points[:, None, :] - a[None]
-    t = np.clip(np.einsum("nsd,sd->ns", rel, ab) / np.maximum(np.einsum("sd,sd->s", ab, ab), 1e-12), 0.0, 1.0)
-    nearest = a[None] + t[..., None] * ab[None]
-    return np.linalg.norm(points[:, None, :] - nearest, axis=2).min(axis=1)
-
-
 def _corridor(rng: np.random.Generator, spec: ClutterSpec, keep: float) -> np.ndarray | None:
     """(3, 2) start, waypoint and goal, each ``keep`` inside the walls, start and goal ``min_goal_distance``
     apart; None when the arena is too small for such a pair."""
@@ -153,12 +143,9 @@ def _sample_obstacles(
         length = _level_values(rng, sizes["wall_length"], batch)
         yaw = rng.uniform(-math.pi, math.pi, size=batch)
         xy = rng.uniform(-half, half, size=(batch, 2))
-        allowed = np.ones(batch, dtype=bool)
-        if corridor is not None:
-            reach = np.choose(kind, [np.hypot(side_a, side_b) / 2, radius, np.hypot(length, spec.wall_thickness) / 2])
-            allowed = _segment_distances(xy, corridor) - reach >= keep
-            refused = refused + 1 if not allowed.any() else 0
-        for i in np.flatnonzero(allowed):
+        gap = polyline_distances(xy, corridor) - keep if corridor is not None else np.full(batch, np.inf)
+        placed = len(obstacles)
+        for i in range(batch):
             if covered >= target:
                 break
             if kind[i] == 0:
@@ -168,8 +155,11 @@ def _sample_obstacles(
                 o = Obstacle("cylinder", (2 * radius[i], 2 * radius[i], h), (xy[i, 0], xy[i, 1]), 0.0)
             else:
                 o = Obstacle("box", (length[i], spec.wall_thickness, h), (xy[i, 0], xy[i, 1]), float(yaw[i]))
+            if o.radius > gap[i]:  # its enclosing circle reaches into the corridor
+                continue
             obstacles.append(o)
             covered += o.area
+        refused = refused + 1 if len(obstacles) == placed else 0
     return tuple(obstacles)
 
 

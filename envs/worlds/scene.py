@@ -92,6 +92,15 @@ class Obstacle:
         return {**out, "z": self.z} if self.z else out
 
 
+def polyline_distances(points: np.ndarray, polyline: np.ndarray) -> np.ndarray:
+    """(n,) distance from each of ``points`` (n, 2) to the polyline through ``polyline`` (k, 2), k >= 2."""
+    a, b = polyline[:-1], polyline[1:]
+    ab = b - a
+    t = np.einsum("nsd,sd->ns", points[:, None, :] - a[None], ab) / np.maximum(np.einsum("sd,sd->s", ab, ab), 1e-12)
+    nearest = a[None] + np.clip(t, 0.0, 1.0)[..., None] * ab[None]
+    return np.linalg.norm(points[:, None, :] - nearest, axis=2).min(axis=1)
+
+
 @dataclass(frozen=True)
 class Scene:
     """One layout: obstacles, robot start (x, y, yaw) and goal (x, y).

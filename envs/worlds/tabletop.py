@@ -17,7 +17,14 @@ import numpy as np
 from clutter_gym.sim import Sim
 from clutter_gym.util.checks import check_integer
 from clutter_gym.worlds.pool import ObstaclePool
-from clutter_gym.worlds.scene import Obstacle, check_scene_keys, parse_numbers, parse_obstacles, scene_from_options
+from clutter_gym.worlds.scene import (
+    Obstacle,
+    check_scene_keys,
+    parse_numbers,
+    parse_obstacles,
+    polyline_distances,
+    scene_from_options,
+)
 
 TABLE_GAP = 0.005
 TABLE = Obstacle("box", (1.6, 1.8, 0.05), (0.4, 0.0), 0.0, -0.05 - TABLE_GAP)
@@ -90,16 +97,11 @@ def point_clearance(point: np.ndarray, obstacles: Sequence[Obstacle]) -> float:
     return min((o.distance3d(point) for o in obstacles), default=math.inf)
 
 
-def _segment_distance(xy: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
-    t = float(np.clip((xy - a) @ (b - a) / ((b - a) @ (b - a)), 0.0, 1.0))
-    return float(np.linalg.norm(xy - (a + t * (b - a))))
-
-
 def sample_reach_scene(rng: np.random.Generator, spec: TableSpec, ready: Sequence[float]) -> ReachScene:
     """A seeded layout: shelf, clutter clear of the start pose's arm, start pose and target."""
     obstacles: list[Obstacle] = []
     footprints: list[tuple[np.ndarray, float]] = []  # (centre, radius) of every placed footprint
-    arm = (np.zeros(2), np.array([0.45, 0.0]))
+    arm = np.array([[0.0, 0.0], [0.45, 0.0]])
     shelf_compartments: list[tuple[np.ndarray, float]] = []
     if spec.shelf:
         angle = rng.uniform(-1.1, 1.1)
@@ -126,7 +128,7 @@ def sample_reach_scene(rng: np.random.Generator, spec: TableSpec, ready: Sequenc
             height = float(rng.choice([0.1, 0.2, 0.3]))
             candidate = Obstacle("cylinder", (2 * radius, 2 * radius, height), (float(xy[0]), float(xy[1])))
         reach = candidate.radius
-        if _segment_distance(xy, *arm) < reach + ARM_KEEP_OUT:
+        if polyline_distances(xy[None], arm)[0] < reach + ARM_KEEP_OUT:
             continue
         if any(np.linalg.norm(xy - c) < reach + rc + 0.02 for c, rc in footprints):
             continue
