@@ -29,14 +29,16 @@ CHECKPOINTS = 10
 
 
 def resident_mib() -> float:
+    """Resident memory of this process in MiB (Linux: /proc/self/statm)."""
     with open("/proc/self/statm") as f:
         return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2**20
 
 
 def new_sizes_scene(rng: np.random.Generator) -> dict:
+    """A ClutterNav scene of five cylinders of sizes no earlier scene had (in the reset-options format)."""
     obstacles = [{"shape": "cylinder", "radius": float(rng.uniform(0.1, 0.3)), "height": 0.5,
                   "position": [float(rng.uniform(0.5, 1.5)), float(rng.uniform(-1.5, 1.5))]} for _ in range(5)]
-    return {"scene": {"obstacles": obstacles, "start": [-2.0, 0.0, 0.0], "goal": [2.5, 0.0]}}
+    return {"obstacles": obstacles, "start": [-2.0, 0.0, 0.0], "goal": [2.5, 0.0]}
 
 
 def run(env_id: str, user_scenes: bool, resets: int, queue: multiprocessing.Queue) -> None:
@@ -45,7 +47,7 @@ def run(env_id: str, user_scenes: bool, resets: int, queue: multiprocessing.Queu
     rng = np.random.default_rng(0)
     rows, t0 = [], time.perf_counter()
     for i in range(1, resets + 1):
-        env.reset(options=new_sizes_scene(rng) if user_scenes else None)
+        env.reset(options={"scene": new_sizes_scene(rng)} if user_scenes else None)
         if i % (resets // CHECKPOINTS) == 0:
             rows.append((i, resident_mib(), time.perf_counter() - t0))
     env.close()

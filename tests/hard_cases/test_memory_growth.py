@@ -9,33 +9,18 @@ ClutterNav reset with five new cylinder sizes) and far above the allocator's noi
 
 from __future__ import annotations
 
-import os
 import sys
 
 import gymnasium as gym
 import numpy as np
 import pytest
-from helpers import empty_scene
 
 import clutter_gym.sim
+from benchmarks.memory import new_sizes_scene, resident_mib
 from clutter_gym.collision.obstacles import ObstacleObjects, obstacle_object
 from clutter_gym.worlds import ClutterSpec, sample_scene
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc/self/statm")
-MIB = 2**20
-
-
-def resident() -> float:
-    """Resident memory of this process in bytes."""
-    with open("/proc/self/statm") as f:
-        return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
-
-
-def new_sizes_scene(rng: np.random.Generator) -> dict:
-    """Five cylinders of sizes no earlier scene had."""
-    obstacles = [{"shape": "cylinder", "radius": float(rng.uniform(0.1, 0.3)), "height": 0.5,
-                  "position": [float(rng.uniform(0.5, 1.5)), float(rng.uniform(-1.5, 1.5))]} for _ in range(5)]
-    return empty_scene(start=(-2.0, 0.0, 0.0), goal=(2.5, 0.0), obstacles=obstacles)
 
 
 def test_obstacle_objects_are_reused_and_placed_as_new_ones_would_be():
@@ -59,13 +44,13 @@ def test_generated_layouts_share_shapes_and_hold_memory_flat():
     sim = env.unwrapped.sim
     for _ in range(300):  # warm up: the pool and the shape cache fill
         env.reset()
-    shapes, before = len(sim._shapes), resident()
+    shapes, before = len(sim._shapes), resident_mib()
     for _ in range(1000):
         env.reset()
-    growth = resident() - before
+    growth = resident_mib() - before
     env.close()
     assert len(sim._shapes) <= shapes + 2  # 27 box and 9 cylinder sizes, the table: a few late first draws
-    assert growth < 2 * MIB, f"{growth / MIB:.1f} MiB over 1,000 resets"
+    assert growth < 2, f"{growth:.1f} MiB over 1,000 resets"
 
 
 def test_new_sizes_every_reset_rebuild_the_world_and_hold_memory_flat(monkeypatch):
@@ -75,13 +60,13 @@ def test_new_sizes_every_reset_rebuild_the_world_and_hold_memory_flat(monkeypatc
     rng = np.random.default_rng(0)
     for _ in range(100):
         env.reset(options={"scene": new_sizes_scene(rng)})
-    before = resident()
+    before = resident_mib()
     for _ in range(300):
         env.reset(options={"scene": new_sizes_scene(rng)})
-    growth = resident() - before
+    growth = resident_mib() - before
     assert len(env.unwrapped.sim._shapes) <= 60 + 5
     env.close()
-    assert growth < 8 * MIB, f"{growth / MIB:.1f} MiB over 300 resets"
+    assert growth < 8, f"{growth:.1f} MiB over 300 resets"
 
 
 def rollout(env: gym.Env, scene: dict, seed: int) -> list[np.ndarray]:
@@ -121,10 +106,10 @@ def test_make_and_close_cycles_give_their_memory_back():
     """The target is under 50 MB over 1,000 cycles; 200 cycles measured 0.9 MiB, the bound is that target's share."""
     for _ in range(20):  # warm-up: imports, caches and the allocator's first arenas
         gym.make("ClutterNav-v0").close()
-    before = resident()
+    before = resident_mib()
     for seed in range(200):
         env = gym.make("ClutterNav-v0")
         env.reset(seed=seed)
         env.close()
-    growth = resident() - before
-    assert growth < 10 * MIB, f"{growth / MIB:.1f} MiB over 200 make/close cycles"
+    growth = resident_mib() - before
+    assert growth < 10, f"{growth:.1f} MiB over 200 make/close cycles"
