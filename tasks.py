@@ -61,7 +61,7 @@ def main(argv: list[str]) -> int:
         "main": [str(BIN / "clutter-gym"), "report"],
         "demo": [str(BIN / "clutter-gym"), "demo"],
         "test": [str(PY), "-m", "pytest"],
-        "bench": [str(PY), "-m", "benchmarks.throughput"],  # run from ROOT, like every command here
+        "bench": [str(PY), "-m", "benchmarks.speed_vs_error"],  # run from ROOT, like every command here
     }
     if not argv or argv[0] not in commands:
         print(f"usage: python3 tasks.py {{{'|'.join(commands)}}} [extra arguments]", file=sys.stderr)

@@ -1,11 +1,13 @@
 """Speed and accuracy benchmarks of clutter-gym; results and what they led to are in docs/benchmarks.md.
 
-Every module but ``harness`` is a benchmark script; run one from the repository root, with clutter-gym and its
-``bench`` extra installed (``python3 tasks.py bench`` runs ``throughput``)::
+Every module but ``harness`` and ``choice`` is a benchmark script; run one from the repository root, with
+clutter-gym and its ``bench`` extra installed (``python3 tasks.py bench`` runs ``speed_vs_error``, which gathers
+the speed-against-error sections of the others into docs/speed-vs-error.md)::
 
     python -m benchmarks.throughput            # --help lists a benchmark's options
     python -m benchmarks.collision_fidelity --quick
 
 ``harness`` holds what the timing scripts share (random-walk actions, step timers, alternating rounds, table
-headers); ``peers`` holds other projects' envs rebuilt here so that they can be timed side by side.
+headers); ``choice`` the report's rows, Pareto fronts and plots; ``peers`` other projects' envs rebuilt here so
+that they can be timed side by side.
 """

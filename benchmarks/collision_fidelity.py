@@ -119,6 +119,38 @@ def near_configs(robot: Robot, scenes: list[tuple[Obstacle, ...]], per_scene: in
     return out
 
 
+def sample_panda(panda: Robot, rng: np.random.Generator, n_scenes: int, per_scene: int) -> list[dict]:
+    """Panda configurations near obstacles: q uniform within the joint limits, seeded tabletop scenes + the table."""
+    lo, hi = panda.kin.lower, panda.kin.upper
+
+    def draw(n: int) -> tuple[np.ndarray, None]:
+        q = rng.uniform(lo, hi, size=(n, len(lo)))
+        q[:, 7:] = FINGER_OPENING
+        return q, None
+
+    scenes = [(*sample_reach_scene(rng, TableSpec(), READY).obstacles, TABLE) for _ in range(n_scenes)]
+    return near_configs(panda, scenes, per_scene, draw)
+
+
+def diffbot_robot() -> Robot:
+    return Robot(DiffDriveRobot().urdf_path, "base_link", ())
+
+
+def sample_diffbot(diffbot: Robot, rng: np.random.Generator, n_scenes: int, per_scene: int) -> list[dict]:
+    """Diffbot floor poses near obstacles in seeded clutter scenes plus the arena walls."""
+    walls, half = arena_walls(6.0, 0.5, 0.1), 3.0
+
+    def draw(n: int) -> tuple[np.ndarray, np.ndarray]:
+        x, y, yaw = rng.uniform(-half, half, n), rng.uniform(-half, half, n), rng.uniform(-np.pi, np.pi, n)
+        base = np.broadcast_to(np.eye(4), (n, 4, 4)).copy()
+        base[:, 0, 0], base[:, 0, 1], base[:, 1, 0], base[:, 1, 1] = np.cos(yaw), -np.sin(yaw), np.sin(yaw), np.cos(yaw)
+        base[:, :3, 3] = np.stack([x, y, np.full(n, DIFFBOT_Z)], axis=1)
+        return np.zeros((n, len(diffbot.kin.joints))), base
+
+    scenes = [(*sample_scene(rng, ClutterSpec(), robot_radius=0.17).obstacles, *walls) for _ in range(n_scenes)]
+    return near_configs(diffbot, scenes, per_scene, draw)
+
+
 def fidelity_table(name: str, robot: Robot, cases: list[dict], self_query: bool) -> dict[str, dict]:
     """Per level: env and self query times (us) and min clearances, levels interleaved scene by scene."""
     res = {f: {"env": [], "self": [], "d": []} for f in robot.levels}
@@ -359,29 +391,9 @@ def main() -> None:
 
     emit(f"## Collision fidelity benchmark{' (--quick)' if quick else ''}\n\nClearance range {RANGE} m; "
          "times are means per query in one process, competitors interleaved; compare ratios.")
-    panda = Robot(PandaArm().urdf_path, "panda_link0", ("panda_link0",), SPHERE_COUNTS)
-    lo, hi = panda.kin.lower, panda.kin.upper
-
-    def draw_panda(n: int) -> tuple[np.ndarray, None]:
-        q = rng.uniform(lo, hi, size=(n, len(lo)))
-        q[:, 7:] = FINGER_OPENING
-        return q, None
-
-    scenes = [(*sample_reach_scene(rng, TableSpec(), READY).obstacles, TABLE) for _ in range(n_scenes)]
-    panda_cases = near_configs(panda, scenes, per_scene, draw_panda)
-
-    diffbot = Robot(DiffDriveRobot().urdf_path, "base_link", ())
-    walls, half = arena_walls(6.0, 0.5, 0.1), 3.0
-
-    def draw_diffbot(n: int) -> tuple[np.ndarray, np.ndarray]:
-        x, y, yaw = rng.uniform(-half, half, n), rng.uniform(-half, half, n), rng.uniform(-np.pi, np.pi, n)
-        base = np.broadcast_to(np.eye(4), (n, 4, 4)).copy()
-        base[:, 0, 0], base[:, 0, 1], base[:, 1, 0], base[:, 1, 1] = np.cos(yaw), -np.sin(yaw), np.sin(yaw), np.cos(yaw)
-        base[:, :3, 3] = np.stack([x, y, np.full(n, DIFFBOT_Z)], axis=1)
-        return np.zeros((n, len(diffbot.kin.joints))), base
-
-    scenes = [(*sample_scene(rng, ClutterSpec(), robot_radius=0.17).obstacles, *walls) for _ in range(n_scenes)]
-    diffbot_cases = near_configs(diffbot, scenes, per_scene, draw_diffbot)
+    panda, diffbot = Robot(PandaArm().urdf_path, "panda_link0", ("panda_link0",), SPHERE_COUNTS), diffbot_robot()
+    panda_cases, diffbot_cases = sample_panda(panda, rng, n_scenes, per_scene), sample_diffbot(diffbot, rng, n_scenes,
+                                                                                                 per_scene)
     emit(f"\n(sampling the configurations: {time.perf_counter() - t_start:.0f} s)")
 
     results = {"Panda": fidelity_table("Panda", panda, panda_cases, self_query=True),

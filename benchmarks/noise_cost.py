@@ -88,26 +88,22 @@ def configs() -> dict[str, dict]:
     return out
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--rounds", type=int, default=8)
-    parser.add_argument("--steps", type=int, default=1000)
-    parser.add_argument("--seed", type=int, default=0)
-    args = parser.parse_args()
-
-    runners = {label: EnvRunner(gym.make("ClutterNav-v0", noise=spec), args.seed) for label, spec in configs().items()}
+def measure(rounds: int, steps: int, seed: int) -> tuple[dict[str, float], dict[str, float]]:
+    """Median steps/s per config (:func:`configs`), and the noise code's median share of the step for the
+    "sensor noise only" configs."""
+    runners = {label: EnvRunner(gym.make("ClutterNav-v0", noise=spec), seed) for label, spec in configs().items()}
     rates: dict[str, list[float]] = {label: [] for label in runners}
     shares: dict[str, list[float]] = {label: [] for label in runners if label.endswith("sensor noise only")}
-    rng = np.random.default_rng(args.seed)
+    rng = np.random.default_rng(seed)
     labels = list(runners)
     with Stopwatch().wrapping(NOISE_CODE) as watch:
-        for _ in range(args.rounds):
-            walk = smooth_actions(rng, args.steps)
+        for _ in range(rounds):
+            walk = smooth_actions(rng, steps)
             for k in rng.permutation(len(labels)):  # a new order each round: no env always follows the same one
                 label = labels[k]
                 watch.seconds, watch.active = 0.0, label in shares
-                seconds, _, _ = runners[label].run(lambda obs, i, walk=walk: walk[i], args.steps)
-                rates[label].append(args.steps / seconds)
+                seconds, _, _ = runners[label].run(lambda obs, i, walk=walk: walk[i], steps)
+                rates[label].append(steps / seconds)
                 if label in shares:
                     shares[label].append(watch.seconds / seconds)
     clean_position = runners["none"].env.unwrapped.robot.state().position
@@ -115,16 +111,45 @@ def main() -> None:
         if label.endswith("sensor noise only"):
             same = np.array_equal(runner.env.unwrapped.robot.state().position, clean_position)
             assert same, f"{label} left the clean trajectory: the comparison would not isolate the noise"
-    base = statistics.median(rates["none"])
+        runner.env.close()
+    return ({label: statistics.median(v) for label, v in rates.items()},
+            {label: statistics.median(v) for label, v in shares.items()})
+
+
+def lidar_deviation_m(profile: str, steps: int = 300, seed: int = 0) -> float:
+    """Mean absolute difference (m) between the LIDAR observation under ``profile``'s sensor noise and the clean
+    one, on the same trajectory (the "sensor noise only" settings keep it the clean env's); dropouts and spurious
+    returns count in full."""
+    spec = {"profile": profile, **SENSOR_NOISE_ONLY} if profile != "none" else "none"
+    clean, noisy = gym.make("ClutterNav-v0"), gym.make("ClutterNav-v0", noise=spec)
+    scale = next(s for s in clean.unwrapped.sensors if s.name == "lidar").config.max_range  # obs = range / scale
+    clean.reset(seed=seed)
+    noisy.reset(seed=seed)
+    deviations = []
+    for a in smooth_actions(np.random.default_rng(seed), steps):
+        a_obs, *_ = clean.step(a)
+        b_obs, *_ = noisy.step(a)
+        deviations.append(scale * float(np.abs(a_obs["lidar"] - b_obs["lidar"]).mean()))
+    clean.close()
+    noisy.close()
+    return float(np.mean(deviations))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--rounds", type=int, default=8)
+    parser.add_argument("--steps", type=int, default=1000)
+    parser.add_argument("--seed", type=int, default=0)
+    args = parser.parse_args()
+
+    rates, shares = measure(args.rounds, args.steps, args.seed)
+    base = rates["none"]
     print(f"ClutterNav-v0 defaults (64-beam LIDAR + IMU), {args.rounds} alternating blocks of {args.steps} "
           "random-walk steps\n")
     print(table_header("noise", "steps/s", "us/step", "step time vs none", "noise code, share of the step"))
-    for label, values in rates.items():
-        rate = statistics.median(values)
-        share = f"{statistics.median(shares[label]):.1%}" if label in shares else ""
+    for label, rate in rates.items():
+        share = f"{shares[label]:.1%}" if label in shares else ""
         print(f"| {label} | {rate:,.0f} | {1e6 / rate:.0f} | {base / rate - 1:+.1%} | {share} |")
-    for runner in runners.values():
-        runner.env.close()
 
 
 if __name__ == "__main__":
