@@ -41,12 +41,15 @@ class ObstacleBounds:
                                np.stack([zero, zero, one], -1)], axis=1)  # (n, 3, 3): rows of R^T
         offset = -np.einsum("nij,nj->ni", rotation_t, centres)
         self._to_local = np.concatenate([rotation_t.transpose(2, 1, 0).reshape(3, -1), offset.T.reshape(1, -1)])
-        self._half = 0.5 * np.array([o.size for o in ordered], dtype=float).reshape(-1, 3).T.copy()  # (3, n)
+        half = 0.5 * np.array([o.size for o in ordered], dtype=float).reshape(-1, 3).T.copy()  # (3, n)
         self._split = len(boxes)
-        self._radius = self._half[0, self._split:].copy()  # cylinders: the x half extent is the radius
+        self._radius = half[0, self._split:].copy()  # cylinders: the x half extent is the radius
         #: per column: the radius of the ball about the obstacle's centre that encloses it, and that centre
-        self.enclosing = np.linalg.norm(self._half, axis=0)
+        self.enclosing = np.linalg.norm(half, axis=0)
         self.centres = centres
+        # a cylinder is a box in (radial distance, nothing, z): an infinite y half extent takes its y out of play
+        half[1, self._split:] = np.inf
+        self._half = half
 
     def __len__(self) -> int:
         return len(self.index)
@@ -67,14 +70,15 @@ class ObstacleBounds:
             split = int(np.searchsorted(columns, self._split))
             to_local = to_local.reshape(4, 3, n)[:, :, columns].reshape(4, -1)
             half, radius, n = half[:, columns], self._radius[columns[split:] - self._split], len(columns)
-        local = (np.hstack([points, np.ones((len(points), 1))]) @ to_local).reshape(len(points), 3, n)
+        homogeneous = np.ones((len(points), 4))
+        homogeneous[:, :3] = points
+        local = (homogeneous @ to_local).reshape(len(points), 3, n)
         q = np.abs(local)
         q -= half
-        if split < n:  # a cylinder is a box in (radial distance, nothing, z)
+        if split < n:  # the radial distance of a cylinder (its y is out of play through its half extent)
             q[:, 0, split:] = np.hypot(local[:, 0, split:], local[:, 1, split:]) - radius
-            q[:, 1, split:] = -np.inf
         out = np.maximum(q, 0.0)
         out *= out
         outside = np.sqrt(out[:, 0] + out[:, 1] + out[:, 2])
-        inside = np.minimum(np.maximum(np.maximum(q[:, 0], q[:, 1]), q[:, 2]), 0.0)
+        inside = np.minimum(q.max(axis=1), 0.0)
         return outside + inside

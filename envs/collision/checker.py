@@ -137,6 +137,8 @@ class CollisionChecker:
         self._moving = np.array(moving, dtype=int)
         self._limits_array = clearance_range + model.padding[self._moving]  # unpadded range per moving shape
         self._radii = np.array([s.radius for s in model.shapes])  # about each shape's origin
+        #: (moving shapes, 1) radii of their enclosing balls, widened by the slack (:meth:`_lower_bounds`)
+        self._slack_radii = (model.ball_radius[self._moving] + BOUND_SLACK)[:, None]
         lazy = model.lazy[self._moving]  # spheres of a sphere set: their lower bounds are their exact distances
         #: rows (of the moving shapes) answered from their bounds in one numpy pass, and those answered by FCL
         self._sphere_rows, self._other_rows = np.flatnonzero(lazy), np.flatnonzero(~lazy)
@@ -189,7 +191,7 @@ class CollisionChecker:
         points = np.zeros((n, 2, 3))
         if not self._obstacles:
             return np.full(n, NO_OBSTACLE_CLEARANCE), other, points, np.zeros(0, int), np.zeros((len(moving), 0))
-        candidates, bound = self._lower_bounds(moving)
+        candidates, bound = self._lower_bounds()
         if bound.shape[1] and len(self._sphere_rows):
             rows = self._sphere_rows
             nearest = np.argmin(bound[rows], axis=1)
@@ -245,23 +247,22 @@ class CollisionChecker:
             _, result = signed_distance(model.object(i), self._obstacles[other[i]])
             points[i] = result.nearest_points
 
-    def _lower_bounds(self, shapes: np.ndarray, grow: np.ndarray | float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-        """Candidate obstacles (indices) and lower bounds (shapes, candidates) on their unpadded distances.
+    def _lower_bounds(self, grow: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Candidate obstacles (indices) and lower bounds (moving shapes, candidates) on their unpadded distances.
 
-        The balls are the shapes' enclosing balls, their radii grown by ``grow`` (per shape) if given. In a large
-        scene, obstacles farther than the clearance range (or the contact tolerance) plus padding from every ball
-        are left out.
+        The balls are the moving shapes' enclosing balls, their radii grown by ``grow`` (per moving shape) if given.
+        In a large scene, obstacles farther than the clearance range (or the contact tolerance) plus padding from
+        every ball are left out.
         """
-        bounds = self._bounds
-        centres = self.model.ball_centres()[shapes]
-        radii = self.model.ball_radius[shapes] + grow
-        radii = radii + BOUND_SLACK
+        bounds, model, moving = self._bounds, self.model, self._moving
+        centres = model.ball_centres()[moving]
+        radii = self._slack_radii if grow is None else (model.ball_radius[moving] + grow + BOUND_SLACK)[:, None]
         if len(bounds) <= SMALL_SCENE:
-            return bounds.index, bounds.signed_distance(centres) - radii[:, None]
+            return bounds.index, bounds.signed_distance(centres) - radii
         middle = 0.5 * (centres.min(axis=0) + centres.max(axis=0))
-        reach = float((np.linalg.norm(centres - middle, axis=1) + radii + self.model.padding[shapes]).max())
+        reach = float((np.linalg.norm(centres - middle, axis=1) + radii[:, 0] + model.padding[moving]).max())
         columns = bounds.near(middle, reach + max(self.clearance_range, self.contact_tolerance))
-        return bounds.index[columns], bounds.signed_distance(centres, columns) - radii[:, None]
+        return bounds.index[columns], bounds.signed_distance(centres, columns) - radii
 
     def _nearest_obstacle(self, i: int, obstacles: list[int], lower: list[float], limit: float
                           ) -> tuple[float, int, np.ndarray | None]:
@@ -294,11 +295,11 @@ class CollisionChecker:
         if nearest is None:
             nearest = np.array([s[int(np.argmin(distance[s]))] for s in self._link_shapes])
         link_clearance = np.minimum(distance[nearest], min(self.clearance_range, NO_OBSTACLE_CLEARANCE))
-        gap = points[nearest, 1] - points[nearest, 0]
-        norms = np.linalg.norm(gap, axis=1)
+        witnesses = points[nearest]
+        gap = witnesses[:, 1] - witnesses[:, 0]
+        norms = np.sqrt(np.add.reduce(gap * gap, axis=1))  # np.linalg.norm(gap, axis=1) without its dispatch
         pointing = (other[nearest] >= 0) & (link_clearance > 0.0) & (norms > 0.0)
-        directions = np.zeros((len(self.links), 3))
-        directions[pointing] = gap[pointing] / norms[pointing, None]
+        directions = np.divide(gap, norms[:, None], out=np.zeros_like(gap), where=pointing[:, None])
         k = int(np.argmin(distance))
         found = other[k] >= 0
         contacts = self._contacts(distance, points, candidates, bound)
@@ -372,7 +373,7 @@ class CollisionChecker:
         tol = self.contact_tolerance
         if len(candidates) < len(self._obstacles) and travel[rows].max() + tol > self.clearance_range:
             # obstacles left out of the end-of-step bounds may be in the way: bound the whole sweeps instead
-            candidates, bound = self._lower_bounds(moving, grow=travel)
+            candidates, bound = self._lower_bounds(grow=travel)
             reach = bound[rows]
         hits = 0
         for row, k in zip(*np.nonzero(reach <= tol)):

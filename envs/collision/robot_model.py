@@ -62,7 +62,8 @@ class RobotCollisionModel:
         self._rows = np.array([self.link_names.index(s.link) for s in self.shapes])  # shape -> pose row
         self._local_pos = np.array([s.position for s in self.shapes])
         self._local_rot = np.array([s.rotation for s in self.shapes])
-        self._ball_offset = np.array([s.bounding_ball[0] for s in self.shapes]).reshape(-1, 3)
+        ball_offset = np.array([s.bounding_ball[0] for s in self.shapes]).reshape(-1, 3)
+        self._ball_offset = ball_offset if ball_offset.any() else None  # None: every ball is about its origin
         #: radius of every shape's enclosing ball (:meth:`ball_centres`), metres
         self.ball_radius = np.array([s.bounding_ball[1] for s in self.shapes])
         self.objects = [fcl.CollisionObject(s.geometry, fcl.Transform()) for s in self.shapes]
@@ -146,7 +147,7 @@ class RobotCollisionModel:
 
     def ball_centres(self) -> np.ndarray:
         """(n, 3) world centres of the shapes' enclosing balls (radii :attr:`ball_radius`) at the synced poses."""
-        if not self._ball_offset.any():
+        if self._ball_offset is None:
             return self.position
         return self.position + np.einsum("nij,nj->ni", self.rotation, self._ball_offset)
 
