@@ -7,8 +7,8 @@ module that owns the measurement (``collision_fidelity``, ``physics_rate``, ``li
 ``cylinder_rays``, ``camera_resolution``, ``noise_cost``), and a headline from ``throughput`` opens the report.
 Writes ``docs/speed-vs-error.md`` and one plot per choice in ``docs/speed-vs-error/``.
 
-    python -m benchmarks.speed_vs_error            # or: python3 tasks.py bench (about 8 min on 2 cores)
-    python -m benchmarks.speed_vs_error --quick    # fewer samples (about 3 min)
+    python -m benchmarks.speed_vs_error            # or: python3 tasks.py bench (about 3 min on 2 cores)
+    python -m benchmarks.speed_vs_error --quick    # fewer samples (under a minute)
 """
 
 from __future__ import annotations
@@ -37,7 +37,7 @@ NAV_MARGIN_MM = 100.0  # ClutterNav-v0's clearance_margin
 def fidelity_choices(quick: bool, seed: int) -> list[Choice]:
     """Panda and diffbot: env clearance query time against the min-clearance error against ``mesh``."""
     rng = np.random.default_rng(seed)
-    n_scenes, per_scene = (4, 40) if quick else (12, 60)
+    n_scenes, per_scene = (4, 40) if quick else (30, 100)
     cf = collision_fidelity
     panda = cf.Robot(cf.PandaArm().urdf_path, "panda_link0", ("panda_link0",), cf.SPHERE_COUNTS)
     diffbot = cf.diffbot_robot()
@@ -108,7 +108,7 @@ def physics_choice() -> Choice:
 
 
 def lidar_choice(quick: bool, seed: int) -> Choice:
-    measured = lidar_resolution.rows(200 if quick else 600, seed)
+    measured = lidar_resolution.rows(200 if quick else 2000, seed)
     rows = [Row(f"{r['rays']} rays", r["scan_us"], r["mean_mm"], r["default"], {"p95 (mm)": r["p95_mm"]})
             for r in measured]
     d = next(r for r in rows if r.default)
@@ -139,7 +139,7 @@ def cylinder_choice() -> Choice:
 
 
 def camera_choice(quick: bool, seed: int) -> Choice:
-    measured = camera_resolution.rows(50 if quick else 150, seed)
+    measured = camera_resolution.rows(50 if quick else 400, seed)
     rows = [Row(f"{r['size']}x{r['size']}", r["frame_us"], r["mean_mm"], r["default"], {}) for r in measured]
     d = next(r for r in rows if r.default)
     ref = camera_resolution.REFERENCE_SIZE
@@ -154,7 +154,7 @@ def camera_choice(quick: bool, seed: int) -> Choice:
 
 
 def noise_choice(quick: bool, seed: int) -> Choice:
-    rates, shares = noise_cost.measure(2 if quick else 4, 500 if quick else 1000, seed)
+    rates, shares = noise_cost.measure(2 if quick else 8, 500 if quick else 1000, seed)
     rows = []
     for name in PROFILE_NAMES:
         extra = {"step time vs none (%)": 100 * (rates["none"] / rates[name] - 1)}
@@ -178,9 +178,9 @@ def headline(quick: bool, seed: int) -> list[str]:
     from benchmarks import throughput
 
     peer = throughput.make_peer()
-    rounds = 2 if quick else 4
+    rounds = 2 if quick else 6
     nav = throughput.scenario("navigator", seed, rounds, 1000, peer)
-    resets = 1e3 * throughput.reset_times(throughput.gym.make("ClutterNav-v0"), 100 if quick else 300, warmup=100)
+    resets = 1e3 * throughput.reset_times(throughput.gym.make("ClutterNav-v0"), 100 if quick else 500, warmup=200)
     lines = [f"ClutterNav-v0 at its defaults (64-beam LIDAR, IMU, FCL clearance, contacts and swept checks), "
              f"scripted navigator, {rounds} alternating blocks of 1,000 steps (`python -m benchmarks.throughput`):",
              "", f"- {nav['env']:,.0f} steps/s, {nav['ratio']:.2f}x the time of the raw pybullet work a step needs "
@@ -216,7 +216,7 @@ def _cell(value: float) -> str:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--quick", action="store_true", help="fewer samples per section (about 3 min)")
+    parser.add_argument("--quick", action="store_true", help="fewer samples per section (under a minute)")
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
     t0 = time.perf_counter()
@@ -240,7 +240,8 @@ def main() -> None:
              f"{platform.python_implementation()} {platform.python_version()}. Every speed figure is measured in "
              "one process beside the error it costs; "
              "compare ratios, as absolute times follow the machine. A choice's Pareto front is the settings no other "
-             "is both faster and more accurate than.", "", "## Where a step's time goes", "", *top, ""]
+             "is both faster and more accurate than.", "",
+             "## The default step against its floor and a peer", "", *top, ""]
     PLOTS.mkdir(parents=True, exist_ok=True)
     for choice in choices:
         plot_choice(choice, PLOTS / f"{choice.key}.png")
