@@ -18,9 +18,8 @@ import gymnasium as gym
 import numpy as np
 
 import clutter_gym  # noqa: F401  (registers the envs)
-from benchmarks.harness import table_header
+from benchmarks.harness import navigator_states, table_header
 from clutter_gym.sensors.camera import Camera, CameraConfig
-from clutter_gym.training.baselines import PotentialFieldNavigator
 
 SIZES = (32, 48, 64, 84, 128)
 REFERENCE_SIZE = 256
@@ -36,16 +35,11 @@ def resample(depth: np.ndarray, size: int) -> np.ndarray:
 def rows(steps: int = 200, seed: int = 0) -> list[dict]:
     """Per size: RGB-D frame time (us), mean absolute depth error (mm) against the reference, default flag."""
     env = gym.make("ClutterNav-v0", sensors=("lidar", "imu", "camera"))
-    obs, _ = env.reset(seed=seed)
-    u, navigator = env.unwrapped, PotentialFieldNavigator.for_env(env)
+    u = env.unwrapped
     cameras = {n: Camera(CameraConfig(width=n, height=n)) for n in (*SIZES, REFERENCE_SIZE)}
     seconds = dict.fromkeys(SIZES, 0.0)
     errors: dict[int, list[float]] = {n: [] for n in SIZES}
-    for _ in range(steps):
-        obs, _, terminated, truncated, _ = env.step(navigator(obs))
-        if terminated or truncated:
-            obs, _ = env.reset()
-        state = u.robot.state()
+    for state in navigator_states(env, steps, seed):
         reference = cameras[REFERENCE_SIZE].render(u.sim, state)["depth"]
         for n in SIZES:
             t0 = time.perf_counter()

@@ -7,17 +7,19 @@ them alike; figures are medians over blocks. ``pb`` is pybullet, imported withou
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 
 import gymnasium as gym
 import numpy as np
 
+from clutter_gym.robots.state import RobotState
+from clutter_gym.training.baselines import PotentialFieldNavigator
 from clutter_gym.util.quiet import quiet_c_output
 
 with quiet_c_output():  # pybullet prints its build banner on import
     import pybullet as pb
 
-__all__ = ["EnvRunner", "alternating_rounds", "pb", "run_block", "smooth_actions", "table_header"]
+__all__ = ["EnvRunner", "alternating_rounds", "navigator_states", "pb", "run_block", "smooth_actions", "table_header"]
 
 
 def smooth_actions(rng: np.random.Generator, n: int) -> np.ndarray:
@@ -64,6 +66,18 @@ class EnvRunner:
                 ends.append(i)
                 self.obs, _ = self.env.reset()
         return total, actions, ends
+
+
+def navigator_states(env: gym.Env, steps: int, seed: int) -> Iterator[RobotState]:
+    """Drive ClutterNav-v0 ``env`` with the scripted navigator from ``seed`` (resetting where episodes end) and
+    yield the robot's state after each of ``steps`` steps: poses among clutter, as a policy meets them."""
+    obs, _ = env.reset(seed=seed)
+    navigator = PotentialFieldNavigator.for_env(env)
+    for _ in range(steps):
+        obs, _, terminated, truncated, _ = env.step(navigator(obs))
+        if terminated or truncated:
+            obs, _ = env.reset()
+        yield env.unwrapped.robot.state()
 
 
 def alternating_rounds(measures: dict[str, Callable[[], float]], rounds: int) -> dict[str, list[float]]:

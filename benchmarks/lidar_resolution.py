@@ -17,9 +17,8 @@ import gymnasium as gym
 import numpy as np
 
 import clutter_gym  # noqa: F401  (registers the envs)
-from benchmarks.harness import table_header
+from benchmarks.harness import navigator_states, table_header
 from clutter_gym.sensors.lidar import Lidar, LidarConfig
-from clutter_gym.training.baselines import PotentialFieldNavigator
 
 RAY_COUNTS = (16, 32, 64, 128, 256, 512)
 REFERENCE_RAYS = 4096
@@ -29,16 +28,11 @@ DEFAULT_RAYS = LidarConfig.n_rays
 def rows(steps: int = 600, seed: int = 0) -> list[dict]:
     """Per ray count: scan time (us), mean and p95 nearest-return error (mm), and whether it is the default."""
     env = gym.make("ClutterNav-v0")
-    obs, _ = env.reset(seed=seed)
-    u, navigator = env.unwrapped, PotentialFieldNavigator.for_env(env)
+    u = env.unwrapped
     scanners = {n: Lidar(LidarConfig(n_rays=n)) for n in (*RAY_COUNTS, REFERENCE_RAYS)}
     seconds = dict.fromkeys(RAY_COUNTS, 0.0)
     errors: dict[int, list[float]] = {n: [] for n in RAY_COUNTS}
-    for _ in range(steps):
-        obs, _, terminated, truncated, _ = env.step(navigator(obs))
-        if terminated or truncated:
-            obs, _ = env.reset()
-        state = u.robot.state()
+    for state in navigator_states(env, steps, seed):
         nearest = float(scanners[REFERENCE_RAYS].read_clean(u.sim, state).min())
         for n in RAY_COUNTS:
             t0 = time.perf_counter()
