@@ -20,9 +20,18 @@ import platform
 import time
 from pathlib import Path
 
+import gymnasium as gym
 import numpy as np
 
-from benchmarks import camera_resolution, collision_fidelity, cylinder_rays, lidar_resolution, noise_cost, physics_rate
+from benchmarks import (
+    camera_resolution,
+    collision_fidelity,
+    cylinder_rays,
+    lidar_resolution,
+    noise_cost,
+    physics_rate,
+    throughput,
+)
 from benchmarks.choice import Choice, Row, plot_choice
 from benchmarks.harness import table_header
 from clutter_gym.noise.profiles import PROFILE_NAMES
@@ -175,12 +184,12 @@ def noise_choice(quick: bool, seed: int) -> Choice:
 
 def headline(quick: bool, seed: int) -> list[str]:
     """The ClutterNav-v0 step against its raw pybullet floor and panda-gym's PandaReach-v3, and the reset time."""
-    from benchmarks import throughput
-
     peer = throughput.make_peer()
     rounds = 2 if quick else 6
     nav = throughput.scenario("navigator", seed, rounds, 1000, peer)
-    resets = 1e3 * throughput.reset_times(throughput.gym.make("ClutterNav-v0"), 100 if quick else 500, warmup=200)
+    env = gym.make("ClutterNav-v0")
+    resets = 1e3 * throughput.reset_times(env, 100 if quick else 500, warmup=200)
+    env.close()
     lines = [f"ClutterNav-v0 at its defaults (64-beam LIDAR, IMU, FCL clearance, contacts and swept checks), "
              f"scripted navigator, {rounds} alternating blocks of 1,000 steps (`python -m benchmarks.throughput`):",
              "", f"- {nav['env']:,.0f} steps/s, {nav['ratio']:.2f}x the time of the raw pybullet work a step needs "
