@@ -104,7 +104,8 @@ class ClutterNavEnv(ClutterEnv):
 
     ``render_mode`` (None, "rgb_array", "human"); ``sensors`` (subset of ("lidar", "imu", "camera"));
     ``noise`` (profile name, override mapping or NoiseProfile); ``arena_size`` m [2, 30]; ``obstacle_density``
-    floor fraction [0, 0.3]; ``n_rays`` [1, 4096]; ``lidar_fov`` rad (0, 2 pi]; ``lidar_range`` m;
+    floor fraction [0, 0.3]; ``movable_obstacles`` fraction [0, 1] of the generated obstacles that the robot can
+    push (see "Movable obstacles"); ``n_rays`` [1, 4096]; ``lidar_fov`` rad (0, 2 pi]; ``lidar_range`` m;
     ``lidar_mount_height`` m above the lidar link; ``lidar_channels`` [1, 128] and ``lidar_vertical_fov`` rad
     [0, pi/2] (a multi-channel 3D LIDAR); ``camera_size`` (width, height) px; ``camera_modes`` (subset of
     ("rgb", "depth", "segmentation")); ``camera_fov`` vertical, rad; ``camera_far`` m; ``camera_renderer``
@@ -122,12 +123,21 @@ class ClutterNavEnv(ClutterEnv):
 
     Defaults are in the signature.
 
+    ## Movable obstacles
+
+    ``movable_obstacles`` makes that fraction of each generated layout movable, at the density of empty cardboard
+    boxes (``ClutterSpec.movable_density``); a user scene gives any obstacle a ``mass``. The layout is the same
+    whatever the fraction. Touching a movable obstacle is a contact like any other (it costs and, with
+    ``terminate_on_collision``, ends the episode); the collision checker and the camera follow where the physics
+    moves it. The path distance behind the progress reward is computed on the layout as placed at reset.
+
     ## Version history
 
     * v0: initial release; camera sensor, noise profiles, sensor timing, action noise and dynamics randomisation
       added without changing the clean defaults. The progress term follows the path distance around the
       clutter instead of the straight-line distance (PPO stalled behind obstacles with the latter). The collision
-      monitor (``safety_horizon``) and its recovery spin (``safety_recovery``) added, off by default.
+      monitor (``safety_horizon``) and its recovery spin (``safety_recovery``) added, off by default. Movable
+      obstacles (``movable_obstacles``, a scene's ``mass``) added, off by default.
     """
 
     def __init__(
@@ -137,6 +147,7 @@ class ClutterNavEnv(ClutterEnv):
         noise: str | Mapping[str, Any] | NoiseProfile | None = "none",
         arena_size: float = 6.0,
         obstacle_density: float = 0.12,
+        movable_obstacles: float = 0.0,
         n_rays: int = 64,
         lidar_fov: float = 2 * math.pi,
         lidar_range: float = LidarConfig.max_range,
@@ -175,7 +186,8 @@ class ClutterNavEnv(ClutterEnv):
         check_env_settings(render_mode, physics_hz, control_hz, solver_iterations, contact_tolerance)
         check_flags(terminate_on_collision=terminate_on_collision)
         robot = DiffDriveRobot(DiffDriveConfig(max_linear_speed=max_linear_speed, max_angular_speed=max_angular_speed))
-        spec = ClutterSpec(arena_size=arena_size, obstacle_density=obstacle_density)
+        spec = ClutterSpec(arena_size=arena_size, obstacle_density=obstacle_density,
+                           movable_fraction=movable_obstacles)
         lidar = LidarConfig(n_rays=n_rays, fov=lidar_fov, max_range=lidar_range, mount_height=lidar_mount_height,
                             n_channels=lidar_channels, vertical_fov=lidar_vertical_fov)
         camera = _camera_config(camera_size, camera_modes, camera_fov, camera_far, camera_renderer)

@@ -87,7 +87,11 @@ class ClutterReachEnv(ClutterEnv):
 
     ``render_mode``; ``control`` ("joint_velocity", "ee_position"); ``max_joint_speed`` (0, 1];
     ``max_ee_step`` m; ``collision_fidelity`` (one of ``FIDELITY_LEVELS``: docs/collision.md);
-    ``collision_padding`` m; ``self_collision``; ``n_obstacles`` [0, 20]; ``shelf``; ``noise`` (profile name
+    ``collision_padding`` m; ``self_collision``; ``n_obstacles`` [0, 20]; ``movable_obstacles`` fraction [0, 1]
+    of them that the arm can push (at the density of packed groceries, ``TableSpec.movable_density``; a user
+    scene gives any obstacle a ``mass``; the shelf stays put; movable clutter starts 5 mm above the table, as
+    static clutter stands, and settles onto it in its first ticks; the planner behind ``subgoal`` plans on the layout
+    as placed); ``shelf``; ``noise`` (profile name
     or overrides; only action noise, timing and dynamics apply: the arm has no exteroceptive sensors);
     ``physics_hz``; ``control_hz``; ``solver_iterations``; ``success_radius`` m; ``clearance_margin`` m;
     ``clearance_range`` m; ``observe_directions``; ``observe_target_offset``; ``terminate_on_collision``;
@@ -102,7 +106,7 @@ class ClutterReachEnv(ClutterEnv):
 
     ## Version history
 
-    * v0: initial release.
+    * v0: initial release; movable obstacles (``movable_obstacles``, a scene's ``mass``) added, off by default.
     """
 
     def __init__(
@@ -115,6 +119,7 @@ class ClutterReachEnv(ClutterEnv):
         collision_padding: float = 0.0,
         self_collision: bool = True,
         n_obstacles: int = 6,
+        movable_obstacles: float = 0.0,
         shelf: bool = True,
         noise: str | Mapping[str, Any] | NoiseProfile | None = "none",
         physics_hz: float = 240.0,
@@ -167,7 +172,8 @@ class ClutterReachEnv(ClutterEnv):
             physics_hz=physics_hz,
             solver_iterations=solver_iterations,
             robot=robot,
-            arena=TabletopArena(TableSpec(n_obstacles=n_obstacles, shelf=bool(shelf)), READY, LOWER, UPPER),
+            arena=TabletopArena(TableSpec(n_obstacles=n_obstacles, shelf=bool(shelf), movable_fraction=movable_obstacles),
+                                READY, LOWER, UPPER),
             sensors=(),
             checker=checker,
             task=task,

@@ -90,6 +90,12 @@ class ClutterEnv(gym.Env):
             {**{key: space for s in self.sensors for key, space in s.spaces.items()}, **task.spaces, **robot.spaces}
         )
         self.scene: Layout | None = None
+        self._movable: tuple[np.ndarray, list[int]] = (np.zeros(0, dtype=int), [])  # scene indices and bodies
+
+    @property
+    def movable_bodies(self) -> list[int]:
+        """pybullet body ids of this episode's movable obstacles, in scene order."""
+        return self._movable[1]
 
     def _build_world(self) -> None:
         """Load the arena, the robot and the goal marker into the (empty) Sim."""
@@ -119,6 +125,8 @@ class ClutterEnv(gym.Env):
         self.robot.apply_dynamics(sample_dynamics(rng, self.noise.dynamics))
         obstacles, bodies = self.arena.place(scene)
         self.checker.set_scene(obstacles, bodies)
+        movable = [i for i, o in enumerate(obstacles) if o.movable]
+        self._movable = (np.array(movable, dtype=int), [bodies[i] for i in movable])
         self.robot.reset_to(scene.start)
         self.sim.move_static(self._goal_marker, self.task.marker_position(scene), yaw_quat(0.0))
         self.scene = scene
@@ -159,6 +167,8 @@ class ClutterEnv(gym.Env):
             command = np.minimum(np.maximum(command, self._action_low), self._action_high)
         self.robot.apply_action(command)
         self.sim.step(self.substeps)
+        if self._movable[1]:  # the checker follows what the physics pushed
+            self.checker.move_obstacles(self._movable[0], *self.sim.body_poses(self._movable[1]))
         state = self.robot.state()
         report = self.checker.check(state, self.sim.contact_distances(self.robot.body))
         obs, info = self._observe(state, report)

@@ -32,6 +32,7 @@ CYLINDER_SIDES = 64
 #: pybullet applies the ray mask after the narrow phase, so this is about correctness, not speed.
 RAY_INVISIBLE_GROUP = 4
 _RAY_MASK = -1 ^ RAY_INVISIBLE_GROUP
+_DYNAMIC_GROUP = 1  # Bullet's collision group of dynamic bodies
 
 _INVISIBLE = (0.0, 0.0, 0.0, 0.0)
 
@@ -253,6 +254,67 @@ class Sim:
         body = self._static_body(*self._shapes[key], float(np.hypot(radius, 0.5 * height)), rgba)
         pb.changeDynamics(body, -1, collisionMargin=0.0, physicsClientId=self._cid)
         return body
+
+    def add_movable_box(self, half_extents: Sequence[float], rgba: Sequence[float]) -> int:
+        """Add a dynamic box centred at the origin, parked (mass 0) until :meth:`set_mass` gives it a mass; returns
+        its body id. Shapes are shared like :meth:`add_static_box`'s."""
+        key = ("movable box", tuple(map(float, half_extents)), tuple(rgba))
+        if key not in self._shapes:
+            self._shapes[key] = (
+                pb.createCollisionShape(pb.GEOM_BOX, halfExtents=half_extents, physicsClientId=self._cid),
+                pb.createVisualShape(pb.GEOM_BOX, halfExtents=half_extents, rgbaColor=rgba, physicsClientId=self._cid),
+            )
+        return self._movable_body(*self._shapes[key], float(np.linalg.norm(half_extents)), rgba)
+
+    def add_movable_cylinder(self, radius: float, height: float, rgba: Sequence[float]) -> int:
+        """Add a dynamic upright cylinder centred at the origin, like :meth:`add_movable_box`.
+
+        Its collision shape is the convex hull of the prism :meth:`add_static_cylinder` uses (Bullet cannot move a
+        concave triangle mesh), without collision margin, so rays and contacts see the same shape either way.
+        """
+        key = ("movable cylinder", (float(radius), float(height)), tuple(rgba))
+        if key not in self._shapes:
+            vertices, _ = _UNIT_PRISM
+            self._shapes[key] = (
+                pb.createCollisionShape(pb.GEOM_MESH, vertices=vertices, meshScale=[radius, radius, height],
+                                        physicsClientId=self._cid),
+                pb.createVisualShape(
+                    pb.GEOM_CYLINDER, radius=radius, length=height, rgbaColor=rgba, physicsClientId=self._cid
+                ),
+            )
+        body = self._movable_body(*self._shapes[key], float(np.hypot(radius, 0.5 * height)), rgba)
+        pb.changeDynamics(body, -1, collisionMargin=0.0, physicsClientId=self._cid)
+        return body
+
+    def _movable_body(self, collision: int, visual: int, radius: float, rgba: Sequence[float]) -> int:
+        """A rigid body made with a mass, so that it is dynamic (a body made with mass 0 stays static for good),
+        then parked at mass 0; its collision filter is recorded so that :meth:`forget_contacts` can reset it."""
+        body = pb.createMultiBody(1.0, collision, visual, useMaximalCoordinates=True, physicsClientId=self._cid)
+        pb.changeDynamics(body, -1, mass=0.0, physicsClientId=self._cid)
+        self._filters[body] = (_DYNAMIC_GROUP, -1)
+        self.culler.add(body, radius, tuple(np.float32(rgba).tolist()))
+        return body
+
+    def set_mass(self, body: int, mass: float, inertia: Sequence[float] = (0.0, 0.0, 0.0)) -> None:
+        """Give a body made by :meth:`add_movable_box` or :meth:`add_movable_cylinder` its mass (kg) and principal
+        moments of inertia (kg m^2, about its centre); mass 0 holds it where it is. Its velocity is zeroed and its
+        contact history forgotten, so that a body placed again starts as if new (same seed, same trajectory). It falls
+        asleep once it has rested a while, as Bullet's bodies can (pybullet turns that off by default): a resting
+        body then stays exactly where it is until something touches it."""
+        pb.changeDynamics(body, -1, mass=mass, localInertiaDiagonal=inertia,
+                          activationState=pb.ACTIVATION_STATE_ENABLE_SLEEPING, physicsClientId=self._cid)
+        pb.resetBaseVelocity(body, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), physicsClientId=self._cid)
+        self.forget_contacts(body)
+
+    def body_poses(self, bodies: Sequence[int]) -> tuple[np.ndarray, np.ndarray]:
+        """(n, 3) positions (metres) and (n, 3, 3) rotation matrices of ``bodies``' base frames; the view culler
+        follows them (call it after the physics moved them)."""
+        poses = [pb.getBasePositionAndOrientation(b, physicsClientId=self._cid) for b in bodies]
+        positions = np.array([p for p, _ in poses], dtype=float).reshape(-1, 3)
+        rotations = np.array([pb.getMatrixFromQuaternion(q) for _, q in poses], dtype=float).reshape(-1, 3, 3)
+        for body, position in zip(bodies, positions):
+            self.culler.move(body, position)
+        return positions, rotations
 
     def _static_body(
         self, collision: int, visual: int, radius: float | None = None, rgba: Sequence[float] = ()

@@ -1,11 +1,11 @@
 """Closed-form lower bounds on robot-shape-to-obstacle distances, vectorised over every pair.
 
-Every robot shape lies inside a ball about its origin (``LinkShape.radius``), and every obstacle is an upright
-box or cylinder. The signed distance from the ball's centre to the obstacle (negative inside: minus the depth to
-the nearest face), less the ball's radius, is a lower bound on the shape's signed distance to the obstacle: on
-the separated side because the shape is inside the ball, and in overlap because any motion that separates the
-ball separates the shape. One numpy pass per step gives all of them, so FCL is asked only about pairs whose
-bound can still beat the best exact answer.
+Every robot shape lies inside a ball about its origin (``LinkShape.radius``), and every obstacle is a box or a
+cylinder (upright, unless a movable one has been tipped over). The signed distance from the ball's centre to the
+obstacle (negative inside: minus the depth to the nearest face), less the ball's radius, is a lower bound on the
+shape's signed distance to the obstacle: on the separated side because the shape is inside the ball, and in
+overlap because any motion that separates the ball separates the shape. One numpy pass per step gives all of
+them, so FCL is asked only about pairs whose bound can still beat the best exact answer.
 """
 
 from __future__ import annotations
@@ -50,6 +50,16 @@ class ObstacleBounds:
         # a cylinder is a box in (radial distance, nothing, z): an infinite y half extent takes its y out of play
         half[1, self._split:] = np.inf
         self._half = half
+        self._column = np.argsort(self.index)  # obstacle index -> column
+
+    def move(self, obstacles: np.ndarray, centres: np.ndarray, rotations: np.ndarray) -> None:
+        """Put ``obstacles`` (indices) at ``centres`` (k, 3) with ``rotations`` (k, 3, 3), world frame: any
+        orientation, for movable obstacles that the physics has pushed or tipped over."""
+        columns = self._column[obstacles]
+        to_local = self._to_local.reshape(4, 3, len(self.index))  # [j, i, column]: R[j, i], then -R^T centre
+        to_local[:3, :, columns] = rotations.transpose(1, 2, 0)
+        to_local[3, :, columns] = -np.einsum("kji,kj->ki", rotations, centres)
+        self.centres[columns] = centres
 
     def __len__(self) -> int:
         return len(self.index)

@@ -161,6 +161,13 @@ class CollisionChecker:
         self._obstacle_bodies = frozenset(bodies)
         self._previous = None  # a reset teleports the robot: nothing to sweep from
 
+    def move_obstacles(self, obstacles: np.ndarray, positions: np.ndarray, rotations: np.ndarray) -> None:
+        """Put movable ``obstacles`` (indices into the scene's) where the physics moved them: centres (k, 3) and
+        rotation matrices (k, 3, 3), world frame."""
+        self._bounds.move(obstacles, positions, rotations)
+        for j, position, rotation in zip(obstacles, positions, rotations):
+            self._obstacles[j].setTransform(fcl.Transform(rotation, position))
+
     # ------------------------------------------------------------------------------------------- queries
     def sync(self, state: RobotState) -> None:
         """Move the robot's FCL objects to the link poses in ``state``."""

@@ -23,3 +23,10 @@ def check_integer(name: str, value: Any, lo: int, hi: int) -> int:
     if not (is_integer(value) and lo <= value <= hi):
         raise ValueError(f"{name} must be an integer in [{lo}, {hi}], got {value!r}")
     return int(value)
+
+
+def check_fraction(name: str, value: Any) -> float:
+    """``value`` as a float when it is a number in [0, 1]; else a ValueError naming ``name`` and the range."""
+    if not (is_number(value) and 0.0 <= value <= 1.0):
+        raise ValueError(f"{name} must be a number in [0, 1], got {value!r}")
+    return float(value)

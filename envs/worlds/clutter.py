@@ -31,8 +31,8 @@ from functools import cached_property
 import numpy as np
 from scipy import ndimage
 
-from clutter_gym.util.checks import check_integer
-from clutter_gym.worlds.scene import Obstacle, Scene, polyline_distances
+from clutter_gym.util.checks import check_fraction, check_integer
+from clutter_gym.worlds.scene import Obstacle, Scene, polyline_distances, with_masses
 
 MAX_DENSITY = 0.3  # beyond this a walled arena cannot reliably keep a free path for the robot
 PLAIN_ATTEMPTS = 5  # attempts at unconstrained clutter before the generator keeps a corridor clear
@@ -57,6 +57,10 @@ class ClutterSpec:
         spawn_clearance: extra free space around start and goal beyond the footprint, metres.
         min_goal_distance: straight-line start-goal distance as a fraction of ``arena_size``.
         max_attempts: layouts tried before giving up.
+        movable_fraction: fraction of the obstacles that are movable, in [0, 1] (a random subset; the layout is
+            the same whatever the fraction).
+        movable_density: kg/m^3 of movable obstacles: light enough for the robot to push, as empty cardboard
+            boxes and plastic bins are.
     """
 
     arena_size: float = 6.0
@@ -72,6 +76,8 @@ class ClutterSpec:
     spawn_clearance: float = 0.15
     min_goal_distance: float = 0.4
     max_attempts: int = 50
+    movable_fraction: float = 0.0
+    movable_density: float = 30.0
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.arena_size) and 2.0 <= self.arena_size <= 30.0):
@@ -82,6 +88,7 @@ class ClutterSpec:
                 f"got {self.obstacle_density!r}"
             )
         check_integer("size_levels", self.size_levels, 1, 10)
+        check_fraction("movable_obstacles", self.movable_fraction)
         if not 0.0 < self.min_goal_distance < 1.0:
             raise ValueError(
                 f"min_goal_distance must be in (0, 1) (fraction of arena_size), got {self.min_goal_distance!r}"
@@ -266,6 +273,7 @@ def sample_scene(rng: np.random.Generator, spec: ClutterSpec, robot_radius: floa
         gx, gy = c[goal_cell // len(c)], c[goal_cell % len(c)]
         yaw = float(rng.uniform(-math.pi, math.pi))
         field.flags.writeable = False
+        obstacles = with_masses(obstacles, range(len(obstacles)), spec.movable_fraction, spec.movable_density)
         return Scene(obstacles, (float(sx), float(sy), yaw), (float(gx), float(gy)), ClearanceGrid(spec, cap, field))
     raise RuntimeError(
         f"no layout with a reachable goal in {spec.max_attempts} attempts at obstacle_density="

@@ -7,6 +7,10 @@ tick, so the pool keeps at most ``max_parked`` of them and deletes the least rec
 (docs/design-notes.md#parked-bodies). Generated layouts draw their sizes from a few levels per range
 (``ClutterSpec.size_levels``), so a small pool covers every layout and resets rarely create anything; user
 scenes with new sizes create bodies as needed, a one-off cost per new shape.
+
+Movable obstacles (those with a mass) are pooled apart from static ones: Bullet fixes whether a body is dynamic when
+it is made. A parked movable body has mass 0, so it hangs where it is parked; placed, it gets its obstacle's mass and
+the closed-form inertia of its shape, and starts at rest.
 """
 
 from __future__ import annotations
@@ -20,11 +24,23 @@ from clutter_gym.worlds.scene import Obstacle
 
 PARK_DEPTH = -10.0  # parked bodies wait this far below the floor (metres)
 PARK_SPACING = 2.0  # metres between parked bodies: piled at one point, moving each one costs more the more there are
-_COLOURS = {"box": (0.62, 0.52, 0.40, 1.0), "cylinder": (0.45, 0.55, 0.45, 1.0), "wall": (0.35, 0.35, 0.38, 1.0)}
+_COLOURS = {"box": (0.62, 0.52, 0.40, 1.0), "cylinder": (0.45, 0.55, 0.45, 1.0), "wall": (0.35, 0.35, 0.38, 1.0),
+            "movable box": (0.85, 0.55, 0.25, 1.0), "movable cylinder": (0.80, 0.45, 0.30, 1.0)}
 
 
 def _key(o: Obstacle) -> tuple:
-    return (o.shape, o.size)
+    return (f"movable {o.shape}" if o.movable else o.shape, o.size)
+
+
+def inertia(o: Obstacle) -> tuple[float, float, float]:
+    """Principal moments of inertia (kg m^2) of a movable obstacle as a solid of uniform density, about its centre."""
+    sx, sy, sz = o.size
+    if o.shape == "cylinder":
+        r = 0.5 * sx
+        side = o.mass * (3 * r * r + sz * sz) / 12.0
+        return (side, side, 0.5 * o.mass * r * r)
+    return (o.mass * (sy * sy + sz * sz) / 12.0, o.mass * (sx * sx + sz * sz) / 12.0,
+            o.mass * (sx * sx + sy * sy) / 12.0)
 
 
 def arena_walls(arena: float, height: float, thick: float) -> tuple[Obstacle, ...]:
@@ -67,9 +83,12 @@ class ObstaclePool:
         return len(self._active) + len(self._parked)
 
     def _create(self, o: Obstacle) -> int:
+        colour = _COLOURS[_key(o)[0]]
         if o.shape == "box":
-            return self._sim.add_static_box([0.5 * s for s in o.size], _COLOURS["box"])
-        return self._sim.add_static_cylinder(o.radius, o.size[2], _COLOURS["cylinder"])
+            add = self._sim.add_movable_box if o.movable else self._sim.add_static_box
+            return add([0.5 * s for s in o.size], colour)
+        add = self._sim.add_movable_cylinder if o.movable else self._sim.add_static_cylinder
+        return add(o.radius, o.size[2], colour)
 
     def _take(self, key: tuple, o: Obstacle, shown: set[int]) -> int:
         """A body for ``o``: a parked one if the pool has one (made visible unless in ``shown``), else a new one."""
@@ -98,13 +117,18 @@ class ObstaclePool:
             key = _key(o)
             body = self._take(key, o, shown)
             self._sim.move_static(body, o.centre, yaw_quat(o.yaw))
-            self._sim.sleep(body)
+            if o.movable:  # awake, so that it settles where it was put and stays put by its own contacts
+                self._sim.set_mass(body, o.mass, inertia(o))
+            else:
+                self._sim.sleep(body)
             self._active.append((key, body))
             bodies.append(body)
         self._evict()
         for _, body in released:
             if body in self._parked:
                 position = (PARK_SPACING * (body % 64), PARK_SPACING * (body // 64), PARK_DEPTH)
+                if self._parked[body][0].startswith("movable"):
+                    self._sim.set_mass(body, 0.0)
                 self._sim.move_static(body, position, (0.0, 0.0, 0.0, 1.0))
                 self._sim.sleep(body)
                 self._sim.set_visible(body, False, _COLOURS[self._parked[body][0]])

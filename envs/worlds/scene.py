@@ -3,11 +3,13 @@ helpers every world's parser and ``choose_scene`` share (``worlds/tabletop.py`` 
 
 Coordinates are metres in the world frame: the arena is the square [-L/2, L/2]^2 on the floor (z = 0), walled on
 all four sides. Obstacles are upright boxes and cylinders; ``position`` is the centre of the footprint, ``z`` the
-height of the bottom face (0 = on the floor), sizes are full extents.
+height of the bottom face (0 = on the floor), sizes are full extents. An obstacle with a ``mass`` is movable: it
+starts at that pose, at rest, and the physics moves it when it is pushed; one without stays where it is put.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -22,12 +24,13 @@ if TYPE_CHECKING:
 
 SHAPES = ("box", "cylinder")
 MAX_OBSTACLE_HEIGHT = 5.0  # metres; anything taller only costs render time
+MASS_RANGE = (1e-3, 1e3)  # kg of a movable obstacle: from a gram to a tonne
 L = TypeVar("L")  # a layout: a Scene, or another world's scene type
 
 
 @dataclass(frozen=True)
 class Obstacle:
-    """A static upright obstacle: a box or a cylinder standing on the floor or on a surface.
+    """An upright obstacle: a box or a cylinder standing on the floor or on a surface, static or movable.
 
     Attributes:
         shape: "box" or "cylinder".
@@ -35,6 +38,7 @@ class Obstacle:
         position: footprint centre (x, y) in metres.
         yaw: rotation about +z in radians (ignored by the geometry of a cylinder).
         z: height of the bottom face above the floor, metres.
+        mass: kilograms of a movable obstacle (uniform density); 0 for a static one.
     """
 
     shape: str
@@ -42,6 +46,17 @@ class Obstacle:
     position: tuple[float, float]
     yaw: float = 0.0
     z: float = 0.0
+    mass: float = 0.0
+
+    @property
+    def movable(self) -> bool:
+        """True for an obstacle the physics moves (it has a mass)."""
+        return self.mass > 0.0
+
+    @property
+    def volume(self) -> float:
+        """m^3."""
+        return self.area * self.size[2]
 
     @property
     def centre(self) -> tuple[float, float, float]:
@@ -89,7 +104,27 @@ class Obstacle:
             out = {"shape": "cylinder", "radius": self.radius, "height": self.size[2], "position": list(self.position)}
         else:
             out = {"shape": "box", "size": list(self.size), "position": list(self.position), "yaw": self.yaw}
-        return {**out, "z": self.z} if self.z else out
+        if self.z:
+            out["z"] = self.z
+        return {**out, "mass": self.mass} if self.mass else out
+
+
+def with_masses(obstacles: Sequence[Obstacle], eligible: Sequence[int], fraction: float,
+                density: float) -> tuple[Obstacle, ...]:
+    """``obstacles`` with the first ``round(fraction * len(eligible))`` of the ``eligible`` ones (indices) made
+    movable at ``density`` kg/m^3 (each mass clipped to :data:`MASS_RANGE`).
+
+    A generated layout lists its obstacles in random order, so the first ones are a random subset, and the
+    layout itself is the same whatever the fraction: no random number is drawn here.
+    """
+    chosen = eligible[:round(fraction * len(eligible))]
+    if not chosen:
+        return tuple(obstacles)
+    out = list(obstacles)
+    for i in chosen:
+        mass = float(min(max(density * out[i].volume, MASS_RANGE[0]), MASS_RANGE[1]))
+        out[i] = dataclasses.replace(out[i], mass=mass)
+    return tuple(out)
 
 
 def polyline_distances(points: np.ndarray, polyline: np.ndarray) -> np.ndarray:
@@ -205,14 +240,14 @@ def parse_obstacle(spec: Any, field: str, arena_size: float) -> Obstacle:
     if not isinstance(spec, Mapping):
         raise ValueError(f"{field} must be a dict with a 'shape' key, got {spec!r}")
     shape = spec.get("shape")
-    allowed = {"box": {"shape", "size", "position", "yaw", "z"},
-               "cylinder": {"shape", "radius", "height", "position", "z"}}
+    allowed = {"box": {"shape", "size", "position", "yaw", "z", "mass"},
+               "cylinder": {"shape", "radius", "height", "position", "z", "mass"}}
     if shape not in allowed:
         raise ValueError(f"{field}.shape must be one of {SHAPES}, got {shape!r}")
     unknown = set(spec) - allowed[shape]
     if unknown:
         raise ValueError(f"{field} has unknown keys {sorted(unknown)}; a {shape} takes {sorted(allowed[shape])}")
-    missing = (allowed[shape] - {"yaw", "z"}) - set(spec)
+    missing = (allowed[shape] - {"yaw", "z", "mass"}) - set(spec)
     if missing:
         raise ValueError(f"{field} is missing {sorted(missing)}")
     position = parse_numbers(spec["position"], 2, f"{field}.position", "x, y in metres")
@@ -220,6 +255,7 @@ def parse_obstacle(spec: Any, field: str, arena_size: float) -> Obstacle:
     z = float(spec.get("z", 0.0)) if is_number(spec.get("z", 0.0)) else math.nan
     if not 0.0 <= z <= MAX_OBSTACLE_HEIGHT:
         raise ValueError(f"{field}.z (bottom height) must be in [0, {MAX_OBSTACLE_HEIGHT}] m, got {spec.get('z')!r}")
+    mass = _mass(spec.get("mass", 0.0), f"{field}.mass")
     if shape == "box":
         size = parse_numbers(spec["size"], 3, f"{field}.size", "full extents sx, sy, sz in metres")
         for axis, v in zip("xyz", size):
@@ -227,10 +263,19 @@ def parse_obstacle(spec: Any, field: str, arena_size: float) -> Obstacle:
             if not 0.0 < v <= limit:
                 raise ValueError(f"{field}.size {axis} must be in (0, {limit}] m, got {v}")
         yaw = _number(spec.get("yaw", 0.0), f"{field}.yaw", -math.inf, math.inf, "radians")
-        return Obstacle("box", size, position, yaw, z)
+        return Obstacle("box", size, position, yaw, z, mass)
     radius = _number(spec["radius"], f"{field}.radius", 0.0, 0.5 * arena_size, "metres")
     height = _number(spec["height"], f"{field}.height", 0.0, MAX_OBSTACLE_HEIGHT, "metres")
-    return Obstacle("cylinder", (2 * radius, 2 * radius, height), position, 0.0, z)
+    return Obstacle("cylinder", (2 * radius, 2 * radius, height), position, 0.0, z, mass)
+
+
+def _mass(value: Any, field: str) -> float:
+    """An obstacle's mass: 0 (static) or within :data:`MASS_RANGE` kg."""
+    lo, hi = MASS_RANGE
+    mass = float(value) if is_number(value) else math.nan
+    if not (mass == 0.0 or lo <= mass <= hi):
+        raise ValueError(f"{field} must be 0 (static) or in [{lo:g}, {hi:g}] kg (movable), got {value!r}")
+    return mass
 
 
 def parse_obstacles(raw: Any, arena_size: float) -> tuple[Obstacle, ...]:

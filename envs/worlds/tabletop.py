@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from clutter_gym.sim import Sim
-from clutter_gym.util.checks import check_integer
+from clutter_gym.util.checks import check_fraction, check_integer
 from clutter_gym.worlds.pool import ObstaclePool
 from clutter_gym.worlds.scene import (
     Obstacle,
@@ -24,6 +24,7 @@ from clutter_gym.worlds.scene import (
     parse_obstacles,
     polyline_distances,
     scene_from_options,
+    with_masses,
 )
 
 TABLE_GAP = 0.005
@@ -44,6 +45,8 @@ class TableSpec:
         shelf_target_probability: chance that the target is inside the shelf, [0, 1].
         start_noise: uniform noise on each joint of the ready pose at the start, radians, [0, 0.5].
         target_clearance: least distance from the target to any obstacle, metres.
+        movable_fraction: fraction of the boxes and cylinders (not the shelf) that are movable, in [0, 1].
+        movable_density: kg/m^3 of movable clutter, that of packed groceries: a few hundred grams an object.
     """
 
     n_obstacles: int = 6
@@ -51,6 +54,8 @@ class TableSpec:
     shelf_target_probability: float = 0.3
     start_noise: float = 0.1
     target_clearance: float = 0.06
+    movable_fraction: float = 0.0
+    movable_density: float = 300.0
 
     def __post_init__(self) -> None:
         check_integer("n_obstacles", self.n_obstacles, 0, 20)
@@ -58,6 +63,7 @@ class TableSpec:
             raise ValueError(f"shelf_target_probability must be in [0, 1], got {self.shelf_target_probability!r}")
         if not 0.0 <= self.start_noise <= 0.5:
             raise ValueError(f"start_noise must be in [0, 0.5] rad, got {self.start_noise!r}")
+        check_fraction("movable_obstacles", self.movable_fraction)
 
 
 @dataclass(frozen=True)
@@ -136,7 +142,8 @@ def sample_reach_scene(rng: np.random.Generator, spec: TableSpec, ready: Sequenc
         footprints.append((xy, reach))
     start = tuple(float(v) for v in np.asarray(ready) + rng.uniform(-spec.start_noise, spec.start_noise, size=7))
     target = _sample_target(rng, spec, tuple(obstacles), shelf_compartments)
-    return ReachScene(tuple(obstacles), start, target)
+    clutter = range(5 if spec.shelf else 0, len(obstacles))  # the shelf is furniture: it stays put
+    return ReachScene(with_masses(obstacles, clutter, spec.movable_fraction, spec.movable_density), start, target)
 
 
 def _sample_target(rng: np.random.Generator, spec: TableSpec, obstacles: tuple[Obstacle, ...],
