@@ -212,13 +212,18 @@ class Sim:
             half_extents: half sizes along x, y and z in metres.
             rgba: colour, each channel in [0, 1].
         """
+        return self._static_body(*self._box_shapes(half_extents, rgba), float(np.linalg.norm(half_extents)), rgba)
+
+    def _box_shapes(self, half_extents: Sequence[float], rgba: Sequence[float]) -> tuple[int, int]:
+        """(collision, visual) shape ids of a box, made once per size and colour; static and movable boxes share
+        them."""
         key = ("box", tuple(map(float, half_extents)), tuple(rgba))
         if key not in self._shapes:
             self._shapes[key] = (
                 pb.createCollisionShape(pb.GEOM_BOX, halfExtents=half_extents, physicsClientId=self._cid),
                 pb.createVisualShape(pb.GEOM_BOX, halfExtents=half_extents, rgbaColor=rgba, physicsClientId=self._cid),
             )
-        return self._static_body(*self._shapes[key], float(np.linalg.norm(half_extents)), rgba)
+        return self._shapes[key]
 
     def add_static_cylinder(self, radius: float, height: float, rgba: Sequence[float]) -> int:
         """Add a static (mass 0) upright cylinder centred at the origin, like :meth:`add_static_box`.
@@ -258,13 +263,7 @@ class Sim:
     def add_movable_box(self, half_extents: Sequence[float], rgba: Sequence[float]) -> int:
         """Add a dynamic box centred at the origin, parked (mass 0) until :meth:`set_mass` gives it a mass; returns
         its body id. Shapes are shared like :meth:`add_static_box`'s."""
-        key = ("movable box", tuple(map(float, half_extents)), tuple(rgba))
-        if key not in self._shapes:
-            self._shapes[key] = (
-                pb.createCollisionShape(pb.GEOM_BOX, halfExtents=half_extents, physicsClientId=self._cid),
-                pb.createVisualShape(pb.GEOM_BOX, halfExtents=half_extents, rgbaColor=rgba, physicsClientId=self._cid),
-            )
-        return self._movable_body(*self._shapes[key], float(np.linalg.norm(half_extents)), rgba)
+        return self._movable_body(*self._box_shapes(half_extents, rgba), float(np.linalg.norm(half_extents)), rgba)
 
     def add_movable_cylinder(self, radius: float, height: float, rgba: Sequence[float]) -> int:
         """Add a dynamic upright cylinder centred at the origin, like :meth:`add_movable_box`.
