@@ -23,6 +23,9 @@ import trimesh
 from clutter_gym.util.transforms import rpy_quat
 
 KINDS = ("box", "cylinder", "sphere", "capsule", "mesh")
+#: relative to the mesh's size: a triangle's area (over the diagonal squared) and a mesh's thinnest spread of vertices
+#: (over its widest) at or below this have none
+MIN_AREA = 1e-9
 
 
 @dataclass(frozen=True, eq=False)
@@ -93,10 +96,23 @@ def resolve_mesh(filename: str, urdf: Path) -> Path:
 
 @lru_cache(maxsize=64)
 def _load_mesh(path: Path) -> trimesh.Trimesh:
-    """One triangle mesh from ``path`` (scenes are merged); cached per process, never mutated."""
+    """One triangle mesh from ``path`` (scenes are merged), its triangles wound consistently; cached per process,
+    never mutated.
+
+    Raises:
+        ValueError: the mesh has no triangles, none of positive area, or all of its vertices in one plane (no solid
+            to collide with or to take a hull of); the message names the file.
+    """
     loaded = trimesh.load(path, force="mesh", process=True)
     if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
         raise ValueError(f"mesh {path} holds no triangles")
+    scale = float(np.linalg.norm(loaded.extents))
+    if not (loaded.area_faces > MIN_AREA * scale**2).any():
+        raise ValueError(f"mesh {path} has no triangle of positive area")
+    spans = np.linalg.svd(loaded.vertices - loaded.vertices.mean(axis=0), compute_uv=False)
+    if spans[-1] <= MIN_AREA * spans[0]:
+        raise ValueError(f"mesh {path} is flat: every vertex lies in one plane, so it encloses no volume")
+    trimesh.repair.fix_normals(loaded)  # one winding: a surface sampled by area-weighted normals needs it
     return loaded
 
 
