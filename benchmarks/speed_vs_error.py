@@ -260,7 +260,8 @@ def main() -> None:
               "(the RGB-D env against gym-pybullet-drones), `benchmarks.vec_throughput` (vector envs), "
               "`benchmarks.memory` (memory over many resets), `benchmarks.contact_agreement` and "
               "`benchmarks.fcl_accuracy` (FCL against pybullet and closed forms), `benchmarks.learning` (PPO curves). "
-              "Their results are in [benchmarks.md](benchmarks.md).", "",
+              "Their results are in [benchmarks.md](benchmarks.md); those of `benchmarks.large_scenes` (resets and "
+              "steps with up to 10,000 obstacles) in [design-notes.md](design-notes.md#large-scenes).", "",
               f"Total wall time: {time.perf_counter() - t0:.0f} s."]
     write_text_atomically(DOCS / "speed-vs-error.md", "\n".join(lines) + "\n")
     print("\n".join(lines))

@@ -69,11 +69,14 @@ class ClutterEnv(gym.Env):
         render_size: tuple[int, int] = (320, 240),
         safety: SafetyFilter | None = None,
     ) -> None:
-        sim = Sim(physics_hz=physics_hz, solver_iterations=solver_iterations, gui=render_mode == "human")
+        self.sensors = tuple(sensors)
+        # an env that never draws gives its obstacles no visual shapes (docs/design-notes.md#obstacle-visuals)
+        visuals = render_mode is not None or any(s.renders for s in self.sensors)
+        sim = Sim(physics_hz=physics_hz, solver_iterations=solver_iterations, gui=render_mode == "human",
+                  visuals=visuals)
         self.sim, self.robot, self.arena, self.checker, self.task = sim, robot, arena, checker, task
         self.safety = safety
         self._scan: np.ndarray | None = None  # the latest lidar_ranges delivered, for the safety filter
-        self.sensors = tuple(sensors)
         self.noise = noise
         self._clocks = tuple(SampleHoldDelay(noise.timing[s.name], 1.0 / control_hz) for s in self.sensors)
         self._action_channel = ActionChannel(noise.action, robot.action_space.shape[0])

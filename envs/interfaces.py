@@ -146,11 +146,13 @@ class Sensor(Protocol):
         spaces: observation keys this sensor fills, with their spaces.
         read_every_step: the sensor must be read every control step even while its output is held (state that
             integrates over time, like the IMU's finite difference).
+        renders: the sensor draws images of the world, so the Sim must give obstacles visual shapes.
     """
 
     name: str
     spaces: dict[str, spaces.Space]
     read_every_step: bool
+    renders: bool
 
     def reset(self, sim: Sim, state: RobotState, rng: np.random.Generator) -> None:
         """Start an episode: draw per-episode errors (biases, gains) from ``rng``."""

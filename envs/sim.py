@@ -44,6 +44,12 @@ MAX_SHAPES = 256
 MAX_REMOVED_BODIES = 2_000
 _HIT_FRACTION = operator.itemgetter(2)  # field 2 of a rayTestBatch result row
 MAX_RAY_BATCH = 16383  # rays one rayTestBatch call answers (16,384 silently return nothing, more raise)
+#: Bodies one ``createMultiBody(batchPositions=...)`` call makes. pybullet passes the positions in its data stream,
+#: 1 MiB on macOS (8 MiB elsewhere), and silently cuts a longer list short (24 bytes a body).
+MAX_BODY_BATCH = 4096
+#: The collision filter Bullet gives a static body: it meets every group but other static bodies.
+_STATIC_GROUP = 2
+_STATIC_MASK = -1 ^ _STATIC_GROUP
 
 
 @dataclass(frozen=True, slots=True)
@@ -78,6 +84,9 @@ class Sim:
         solver_iterations: constraint solver iterations per physics tick.
         gravity: gravitational acceleration in m/s^2 (points along -z).
         gui: open the pybullet GUI window (needs a display) instead of a DIRECT client.
+        visuals: give static boxes and cylinders visual shapes. Without them nothing can be drawn
+            (:meth:`render` and :meth:`camera_image` raise), and cylinders are much cheaper to make: TinyRenderer
+            tessellates the visual of each cylinder body anew (docs/design-notes.md#obstacle-visuals).
 
     Attributes:
         bodies: body id of each body given a name (:meth:`load_urdf`, :meth:`add_ground`, :meth:`add_marker`).
@@ -91,6 +100,7 @@ class Sim:
         solver_iterations: int = 10,
         gravity: float = 9.81,
         gui: bool = False,
+        visuals: bool = True,
     ) -> None:
         with quiet_c_output():
             self._cid = pb.connect(pb.GUI if gui else pb.DIRECT)
@@ -100,6 +110,7 @@ class Sim:
         self._solver_iterations = int(solver_iterations)
         self._gravity = float(gravity)
         self._renderer = pb.ER_TINY_RENDERER
+        self.visuals = visuals
         self._empty_world()
         if gui:
             pb.configureDebugVisualizer(pb.COV_ENABLE_GUI, 0, physicsClientId=self._cid)
@@ -107,6 +118,8 @@ class Sim:
     def _empty_world(self) -> None:
         """Set the physics parameters and forget every body and shape (the world is empty)."""
         self.bodies: dict[str, int] = {}
+        self._body_ids: set[int] = set()
+        self._freed: set[int] = set()  # removed body ids pybullet has not given out again
         self._filters: dict[int, tuple[int, int]] = {}  # body -> (collision group, mask) set by this Sim
         self._visuals: dict[int, list[tuple[int, tuple]]] = {}
         self._shapes: dict[tuple, tuple[int, int]] = {}  # (kind, sizes, rgba) -> (collision, visual) shape ids
@@ -169,7 +182,7 @@ class Sim:
             pb.GEOM_BOX, halfExtents=(half, half, 0.0005), visualFramePosition=(0.0, 0.0, -0.0005),
             rgbaColor=(0.85, 0.85, 0.8, 1.0), physicsClientId=self._cid,
         )
-        return self._register(name, self._static_body(shape, visual))
+        return self._register(name, self._static_bodies(shape, visual, [(0.0, 0.0, 0.0)])[0])
 
     def load_urdf(
         self, name: str, path: str | Path, position: Sequence[float] = (0.0, 0.0, 0.0), fixed_base: bool = False
@@ -201,18 +214,25 @@ class Sim:
                 )
         except pb.error as exc:
             raise ValueError(f"pybullet could not load URDF {path}: {exc}") from exc
+        self._body_ids.add(body)
+        self._freed.discard(body)
         return self._register(name, body)
 
-    def add_static_box(self, half_extents: Sequence[float], rgba: Sequence[float]) -> int:
-        """Add a static (mass 0) box centred at the origin (move it with :meth:`move_static`); returns its body id.
+    def add_static_boxes(
+        self, half_extents: Sequence[float], rgba: Sequence[float], positions: Sequence[Sequence[float]]
+    ) -> list[int]:
+        """Add static (mass 0) boxes of one size and colour, one centred at each of ``positions`` (metres, world
+        frame) and unrotated (turn them with :meth:`move_static`); returns their body ids in that order.
 
         Bodies of one size and colour share their shapes: pybullet could not free a second copy.
 
         Args:
             half_extents: half sizes along x, y and z in metres.
             rgba: colour, each channel in [0, 1].
+            positions: centres, one per box.
         """
-        return self._static_body(*self._box_shapes(half_extents, rgba), float(np.linalg.norm(half_extents)), rgba)
+        shapes = self._box_shapes(half_extents, rgba)
+        return self._static_bodies(*shapes, positions, float(np.linalg.norm(half_extents)), rgba)
 
     def _box_shapes(self, half_extents: Sequence[float], rgba: Sequence[float]) -> tuple[int, int]:
         """(collision, visual) shape ids of a box, made once per size and colour; static and movable boxes share
@@ -221,15 +241,17 @@ class Sim:
         if key not in self._shapes:
             self._shapes[key] = (
                 pb.createCollisionShape(pb.GEOM_BOX, halfExtents=half_extents, physicsClientId=self._cid),
-                pb.createVisualShape(pb.GEOM_BOX, halfExtents=half_extents, rgbaColor=rgba, physicsClientId=self._cid),
+                self._visual_shape(pb.GEOM_BOX, halfExtents=half_extents, rgbaColor=rgba),
             )
         return self._shapes[key]
 
-    def add_static_cylinder(self, radius: float, height: float, rgba: Sequence[float]) -> int:
-        """Add a static (mass 0) upright cylinder centred at the origin, like :meth:`add_static_box`.
+    def add_static_cylinders(
+        self, radius: float, height: float, rgba: Sequence[float], positions: Sequence[Sequence[float]]
+    ) -> list[int]:
+        """Add static (mass 0) upright cylinders of one size and colour, like :meth:`add_static_boxes`.
 
-        Its collision shape is a concave triangle mesh of a ``CYLINDER_SIDES``-gon prism with the circle's area, not
-        Bullet's cylinder primitive: rays against the primitive go through GJK convex casting, which is slow and
+        Their collision shape is a concave triangle mesh of a ``CYLINDER_SIDES``-gon prism with the circle's area,
+        not Bullet's cylinder primitive: rays against the primitive go through GJK convex casting, which is slow and
         still inexact, while the prism is hit by BVH ray-triangle tests, faster and with sub-millimetre error
         (docs/design-notes.md#cylinders). The visual shape stays a true cylinder. The mesh has no collision margin:
         pybullet's default margin makes contacts fire before FCL's exact cylinder touches
@@ -239,6 +261,7 @@ class Sim:
             radius: radius in metres.
             height: height in metres.
             rgba: colour, each channel in [0, 1].
+            positions: centres, one per cylinder.
         """
         key = ("cylinder", (float(radius), float(height)), tuple(rgba))
         if key not in self._shapes:
@@ -252,23 +275,22 @@ class Sim:
                     flags=pb.GEOM_FORCE_CONCAVE_TRIMESH,
                     physicsClientId=self._cid,
                 ),
-                pb.createVisualShape(
-                    pb.GEOM_CYLINDER, radius=radius, length=height, rgbaColor=rgba, physicsClientId=self._cid
-                ),
+                self._visual_shape(pb.GEOM_CYLINDER, radius=radius, length=height, rgbaColor=rgba),
             )
-        body = self._static_body(*self._shapes[key], float(np.hypot(radius, 0.5 * height)), rgba)
-        pb.changeDynamics(body, -1, collisionMargin=0.0, physicsClientId=self._cid)
-        return body
+        bodies = self._static_bodies(*self._shapes[key], positions, float(np.hypot(radius, 0.5 * height)), rgba)
+        for body in bodies:
+            pb.changeDynamics(body, -1, collisionMargin=0.0, physicsClientId=self._cid)
+        return bodies
 
     def add_movable_box(self, half_extents: Sequence[float], rgba: Sequence[float]) -> int:
         """Add a dynamic box centred at the origin, parked (mass 0) until :meth:`set_mass` gives it a mass; returns
-        its body id. Shapes are shared like :meth:`add_static_box`'s."""
+        its body id. Shapes are shared like :meth:`add_static_boxes`'s."""
         return self._movable_body(*self._box_shapes(half_extents, rgba), float(np.linalg.norm(half_extents)), rgba)
 
     def add_movable_cylinder(self, radius: float, height: float, rgba: Sequence[float]) -> int:
         """Add a dynamic upright cylinder centred at the origin, like :meth:`add_movable_box`.
 
-        Its collision shape is the convex hull of the prism :meth:`add_static_cylinder` uses (Bullet cannot move a
+        Its collision shape is the convex hull of the prism :meth:`add_static_cylinders` uses (Bullet cannot move a
         concave triangle mesh), without collision margin, so rays and contacts see the same shape either way.
         """
         key = ("movable cylinder", (float(radius), float(height)), tuple(rgba))
@@ -277,9 +299,7 @@ class Sim:
             self._shapes[key] = (
                 pb.createCollisionShape(pb.GEOM_MESH, vertices=vertices, meshScale=[radius, radius, height],
                                         physicsClientId=self._cid),
-                pb.createVisualShape(
-                    pb.GEOM_CYLINDER, radius=radius, length=height, rgbaColor=rgba, physicsClientId=self._cid
-                ),
+                self._visual_shape(pb.GEOM_CYLINDER, radius=radius, length=height, rgbaColor=rgba),
             )
         body = self._movable_body(*self._shapes[key], float(np.hypot(radius, 0.5 * height)), rgba)
         pb.changeDynamics(body, -1, collisionMargin=0.0, physicsClientId=self._cid)
@@ -287,11 +307,15 @@ class Sim:
 
     def _movable_body(self, collision: int, visual: int, radius: float, rgba: Sequence[float]) -> int:
         """A rigid body made with a mass, so that it is dynamic (a body made with mass 0 stays static for good),
-        then parked at mass 0; its collision filter is recorded so that :meth:`forget_contacts` can reset it."""
+        then parked at mass 0; its collision filter is recorded so that :meth:`forget_contacts` can reset it. One
+        call each, which returns the true id whatever removed ids wait for reuse."""
         body = pb.createMultiBody(1.0, collision, visual, useMaximalCoordinates=True, physicsClientId=self._cid)
         pb.changeDynamics(body, -1, mass=0.0, physicsClientId=self._cid)
+        self._body_ids.add(body)
+        self._freed.discard(body)
         self._filters[body] = (_DYNAMIC_GROUP, -1)
-        self.culler.add(body, radius, tuple(np.float32(rgba).tolist()))
+        if self.visuals:
+            self.culler.add(body, radius, tuple(np.float32(rgba).tolist()))
         return body
 
     def set_mass(self, body: int, mass: float, inertia: Sequence[float] = (0.0, 0.0, 0.0)) -> None:
@@ -315,38 +339,92 @@ class Sim:
             self.culler.move(body, position)
         return positions, rotations
 
-    def _static_body(
-        self, collision: int, visual: int, radius: float | None = None, rgba: Sequence[float] = ()
-    ) -> int:
-        """Add a mass-0 body as a plain (maximal-coordinate) rigid body, not a Featherstone multibody; returns its id.
+    def _visual_shape(self, geometry: int, **kwargs) -> int:
+        """A visual shape of an obstacle, or -1 (none) when this Sim has no :attr:`visuals`."""
+        if not self.visuals:
+            return -1
+        return pb.createVisualShape(geometry, **kwargs, physicsClientId=self._cid)
+
+    def _static_bodies(
+        self,
+        collision: int,
+        visual: int,
+        positions: Sequence[Sequence[float]],
+        radius: float | None = None,
+        rgba: Sequence[float] = (),
+    ) -> list[int]:
+        """Add mass-0 bodies as plain (maximal-coordinate) rigid bodies, not Featherstone multibodies, one at each of
+        ``positions``; returns their ids in that order.
 
         Every body in the world costs each physics tick, even fixed and far away, and a multibody costs more than a
-        static rigid body, a sleeping one less again (docs/design-notes.md#static-bodies). Bodies are made one
-        call each: a ``batchPositions`` call returns wrong ids once any body was removed (pybullet 3.2.7).
+        static rigid body, a sleeping one less again (docs/design-notes.md#static-bodies).
+
+        Bodies are made up to :data:`MAX_BODY_BATCH` in one ``createMultiBody(batchPositions=...)`` call. After a
+        call pybullet's server serialises a description of the body it made and its client parses it, most of what
+        a call costs; a batch describes only its last body (docs/design-notes.md#batched-bodies). The client's list
+        of bodies (``getNumBodies``) then misses the others: :meth:`body_ids` keeps them. pybullet numbers a batch as
+        if its ids were consecutive, which holds only while no removed id is left for it to reuse (it reuses those
+        first), so until then bodies are made one call each, and each call returns its true id.
 
         Args:
             collision: collision shape id (-1: visual only).
-            visual: visual shape id.
-            radius: radius in metres of a sphere about the body's origin that holds its visual. A body given one
-                joins :attr:`culler` and is culled from the camera frames it cannot appear in.
+            visual: visual shape id (-1: none).
+            positions: base positions in metres, world frame.
+            radius: radius in metres of a sphere about a body's origin that holds its visual. Bodies given one join
+                :attr:`culler` (when this Sim has :attr:`visuals`) and are culled from the camera frames they cannot
+                appear in.
             rgba: the visual's colour, each channel in [0, 1] (needed with ``radius``).
         """
-        body = pb.createMultiBody(0.0, collision, visual, useMaximalCoordinates=True, physicsClientId=self._cid)
-        if radius is not None:
-            # the colour as pybullet stores it: createVisualShape keeps single precision
-            self.culler.add(body, radius, tuple(np.float32(rgba).tolist()))
-        return body
+        positions = [[float(v) for v in p] for p in positions]
+        bodies: list[int] = []
+        while len(bodies) < len(positions):
+            batch = positions[len(bodies):len(bodies) + MAX_BODY_BATCH]
+            if self._freed:
+                body = pb.createMultiBody(
+                    0.0, collision, visual, batch[0], useMaximalCoordinates=True, physicsClientId=self._cid
+                )
+                self._freed.discard(body)
+                bodies.append(body)
+            else:
+                bodies.extend(pb.createMultiBody(
+                    0.0, collision, visual, useMaximalCoordinates=True, batchPositions=batch, physicsClientId=self._cid
+                ))
+        self._body_ids.update(bodies)
+        if radius is not None and self.visuals:
+            colour = tuple(np.float32(rgba).tolist())  # the colour as pybullet stores it: single precision
+            for body, position in zip(bodies, positions):
+                self.culler.add(body, radius, colour)
+                self.culler.move(body, position)
+        return bodies
+
+    def order_broadphase(self, bodies: Sequence[int]) -> None:
+        """Give the obstacle ``bodies`` new broad-phase entries, in this order, after those of every other body.
+
+        Bullet solves a tick's contacts in the order of their bodies' broad-phase ids, which follow the order the
+        bodies were made in: two obstacles a robot touches at once, made the other way round, give another
+        trajectory. Bodies made in batches, one shape at a time, get here the order of their scene
+        (docs/design-notes.md#batched-bodies). Their cached contacts go, as those of a body just made would.
+        """
+        for body in bodies:
+            group, mask = self._filters.get(body, (_STATIC_GROUP, _STATIC_MASK))  # movable bodies keep their own
+            pb.setCollisionFilterGroupMask(body, -1, group, mask, physicsClientId=self._cid)
 
     def remove_body(self, body: int) -> None:
         """Delete a body from the world (its collision and visual shapes stay cached for reuse)."""
         pb.removeBody(body, physicsClientId=self._cid)
         self.culler.remove(body)
         self._visuals.pop(body, None)
+        self._body_ids.discard(body)
+        self._freed.add(body)
         self._removed_bodies += 1
 
     def set_visible(self, body: int, visible: bool, rgba: Sequence[float]) -> None:
         """Show a single-shape body in colour ``rgba`` (channels in [0, 1]), or hide it from every renderer (fully
-        transparent shapes are skipped by TinyRenderer: a parked obstacle then costs a camera frame nothing)."""
+        transparent shapes are skipped by TinyRenderer: a parked obstacle then costs a camera frame nothing).
+
+        Does nothing in a Sim without :attr:`visuals`."""
+        if not self.visuals:
+            return
         colour = (*rgba[:3], rgba[3] if visible else 0.0)
         pb.changeVisualShape(body, -1, rgbaColor=colour, physicsClientId=self._cid)
         self.culler.set_colour(body, colour)
@@ -363,7 +441,8 @@ class Sim:
         vis = pb.createVisualShape(
             pb.GEOM_CYLINDER, radius=radius, length=0.01, rgbaColor=rgba, physicsClientId=self._cid
         )
-        return self._register(name, self._static_body(-1, vis, float(np.hypot(radius, 0.005)), rgba))
+        body = self._static_bodies(-1, vis, [(0.0, 0.0, 0.0)], float(np.hypot(radius, 0.005)), rgba)[0]
+        return self._register(name, body)
 
     def _register(self, name: str, body: int) -> int:
         if name in self.bodies:
@@ -601,7 +680,12 @@ class Sim:
         fov_deg: float = 60.0,
     ) -> np.ndarray:
         """An RGB image (height, width, 3) uint8 from TinyRenderer looking from ``eye`` to ``target`` (world frame,
-        metres) with a vertical field of view of ``fov_deg`` degrees."""
+        metres) with a vertical field of view of ``fov_deg`` degrees.
+
+        Raises:
+            RuntimeError: this Sim has no :attr:`visuals`.
+        """
+        self._check_visuals()
         view = pb.computeViewMatrix(eye, target, (0.0, 0.0, 1.0), physicsClientId=self._cid)
         proj = pb.computeProjectionMatrixFOV(fov_deg, width / height, 0.05, 50.0, physicsClientId=self._cid)
         _, _, rgba, _, _ = pb.getCameraImage(
@@ -646,7 +730,11 @@ class Sim:
         Returns:
             RGB (height, width, 3) uint8; the raw depth buffer (height, width) in [0, 1]; with ``segmentation``, the
             body id per pixel (height, width), -1 where there is none, else None.
+
+        Raises:
+            RuntimeError: this Sim has no :attr:`visuals`.
         """
+        self._check_visuals()
         flags = pb.ER_SEGMENTATION_MASK_OBJECT_AND_LINKINDEX if segmentation else pb.ER_NO_SEGMENTATION_MASK
         colours = self._visual_colours(behind) if behind >= 0 else []
         tiny = self._renderer == pb.ER_TINY_RENDERER
@@ -670,6 +758,10 @@ class Sim:
             return rgb, depth, None
         seg = np.asarray(seg, dtype=np.int64).reshape(height, width)
         return rgb, depth, np.where(seg >= 0, seg & ((1 << 24) - 1), -1)  # low 24 bits: the body id
+
+    def _check_visuals(self) -> None:
+        if not self.visuals:
+            raise RuntimeError("this Sim was made with visuals=False: its obstacles have no visual shapes to draw")
 
     def _visual_colours(self, body: int) -> list[tuple[int, tuple]]:
         """(link, rgba) of each link of ``body`` with a visual shape (read once, cached).
@@ -708,9 +800,9 @@ class Sim:
         return np.array(state[4]), rotation
 
     def body_ids(self) -> list[int]:
-        """Ids of every body in the world."""
-        return [pb.getBodyUniqueId(i, physicsClientId=self._cid)
-                for i in range(pb.getNumBodies(physicsClientId=self._cid))]
+        """Ids of every body in the world, in increasing order (kept here: pybullet's client does not list the bodies
+        :meth:`_static_bodies` makes in batches)."""
+        return sorted(self._body_ids)
 
     def body_names(self) -> dict[int, str]:
         """Body id -> name of every named body (see :meth:`load_urdf`, :meth:`add_ground`, :meth:`add_marker`)."""

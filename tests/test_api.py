@@ -13,6 +13,7 @@ from gymnasium.utils.env_checker import check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 from clutter_gym import ENV_IDS
+from clutter_gym.sim import pb
 
 INFO_KEYS = {"reward_terms", "cost", "is_success", "min_clearance", "closest_pair", "witness_points", "n_contacts",
              "max_penetration", "self_collision", "tunneling", "pybullet_contacts", "contact_disagreement"}
@@ -182,6 +183,23 @@ def test_render_rgb_array(make_env):
     frame = env.render()
     assert frame.shape == (240, 320, 3) and frame.dtype == np.uint8
     assert frame.std() > 5  # a picture, not a blank buffer
+
+
+@pytest.mark.parametrize(("kwargs", "draws"), [({}, False), ({"render_mode": "rgb_array"}, True),
+                                              ({"sensors": ("lidar", "camera")}, True)])
+def test_obstacles_have_visual_shapes_where_the_env_draws(make_env, kwargs, draws):
+    """An env with neither render_mode nor camera makes its obstacles without visual shapes (pybullet stands in
+    their collision shapes, white) and its Sim refuses to draw; one that draws gives them their colours."""
+    env = make_env(**kwargs)
+    env.reset(seed=0)
+    sim = env.unwrapped.sim
+    colours = {pb.getVisualShapeData(body, physicsClientId=sim.client_id)[0][7]
+               for _, body in env.unwrapped.arena._pool._active}
+    assert sim.visuals is draws
+    assert (colours == {(1.0, 1.0, 1.0, 1.0)}) is not draws
+    if not draws:
+        with pytest.raises(RuntimeError, match="visuals=False"):
+            sim.render(32, 32, (0.0, -5.0, 5.0), (0.0, 0.0, 0.0))
 
 
 def test_close_frees_the_client_and_200_cycles_leak_nothing_measurable():

@@ -95,6 +95,7 @@ class Camera:
 
     name = "camera"
     read_every_step = False
+    renders = True
 
     def __init__(self, config: CameraConfig | None = None, rgb_noise: RgbNoise | None = None,
                  depth_noise: DepthNoise | None = None) -> None:

@@ -88,6 +88,7 @@ class Lidar:
 
     name = "lidar"
     read_every_step = False
+    renders = False
 
     def __init__(self, config: LidarConfig | None = None, noise: LidarNoise | None = None) -> None:
         self.config = c = config or LidarConfig()

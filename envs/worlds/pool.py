@@ -43,6 +43,7 @@ def inertia(o: Obstacle) -> tuple[float, float, float]:
             o.mass * (sx * sx + sy * sy) / 12.0)
 
 
+
 def arena_walls(arena: float, height: float, thick: float) -> tuple[Obstacle, ...]:
     """The four walls around the square [-arena/2, arena/2]^2."""
     half, span = 0.5 * arena, arena + 2 * thick
@@ -72,7 +73,7 @@ class ObstaclePool:
         self.fixed = fixed
         self.fixed_bodies = []
         for o in fixed:
-            body = self._sim.add_static_box([0.5 * s for s in o.size], _COLOURS["wall"])
+            (body,) = self._sim.add_static_boxes([0.5 * s for s in o.size], _COLOURS["wall"], [o.centre])
             self._sim.move_static(body, o.centre, yaw_quat(o.yaw))
             self._sim.sleep(body)
             self.fixed_bodies.append(body)
@@ -82,53 +83,64 @@ class ObstaclePool:
         """Obstacle bodies in the world (active and parked)."""
         return len(self._active) + len(self._parked)
 
-    def _create(self, o: Obstacle) -> int:
-        colour = _COLOURS[_key(o)[0]]
-        if o.shape == "box":
-            add = self._sim.add_movable_box if o.movable else self._sim.add_static_box
-            return add([0.5 * s for s in o.size], colour)
-        add = self._sim.add_movable_cylinder if o.movable else self._sim.add_static_cylinder
-        return add(o.radius, o.size[2], colour)
-
-    def _take(self, key: tuple, o: Obstacle, shown: set[int]) -> int:
-        """A body for ``o``: a parked one if the pool has one (made visible unless in ``shown``), else a new one."""
-        if self._free[key]:
-            body = self._free[key].pop()
-            del self._parked[body]
-            if body not in shown:
-                self._sim.set_visible(body, True, _COLOURS[key[0]])
-            return body
-        return self._create(o)
+    def _create(self, key: tuple, obstacles: list[Obstacle]) -> list[int]:
+        """New bodies of shape ``key``, one centred at each of ``obstacles``: static ones in batches, movable ones
+        one at a time (they are few, and made at the origin)."""
+        shape, size = key
+        colour = _COLOURS[shape]
+        o = obstacles[0]
+        if shape == "movable box":
+            return [self._sim.add_movable_box([0.5 * s for s in size], colour) for _ in obstacles]
+        if shape == "movable cylinder":
+            return [self._sim.add_movable_cylinder(o.radius, size[2], colour) for _ in obstacles]
+        centres = [o.centre for o in obstacles]
+        if shape == "box":
+            return self._sim.add_static_boxes([0.5 * s for s in size], colour, centres)
+        return self._sim.add_static_cylinders(o.radius, size[2], colour, centres)
 
     def place(self, obstacles: tuple[Obstacle, ...]) -> list[int]:
         """Show exactly ``obstacles`` (in order) and park the bodies they no longer need; returns body ids.
 
         The last scene's bodies are reused first (each shape's free list is last in, first out), and those are
-        still visible. Bodies beyond ``max_parked`` are deleted before they would be parked, so a large scene
-        followed by a small one costs one removal each."""
+        still visible. The obstacles no parked body fits get new bodies, made a shape at a time and then given
+        broad-phase entries in scene order, so that contacts are solved as if each had been made in turn. Bodies
+        beyond ``max_parked`` are deleted before they would be parked, so a large scene followed by a small one
+        costs one removal each."""
         released = self._active
         for key, body in released:
             self._free[key].append(body)
             self._parked[body] = key
         shown = {body for _, body in released}
-        self._active = []
-        bodies = []
-        for o in obstacles:
-            key = _key(o)
-            body = self._take(key, o, shown)
+        keys = [_key(o) for o in obstacles]
+        bodies: list[int | None] = []
+        missing: dict[tuple, list[int]] = defaultdict(list)  # shape -> indices of the obstacles it has no body for
+        for i, key in enumerate(keys):
+            if self._free[key]:
+                body = self._free[key].pop()
+                del self._parked[body]
+                if body not in shown:
+                    self._sim.set_visible(body, True, _COLOURS[key[0]])
+                bodies.append(body)
+            else:
+                missing[key].append(i)
+                bodies.append(None)
+        for key, indices in missing.items():
+            for i, body in zip(indices, self._create(key, [obstacles[i] for i in indices])):
+                bodies[i] = body
+        for o, body in zip(obstacles, bodies):
             self._sim.move_static(body, o.centre, yaw_quat(o.yaw))
             if o.movable:  # awake, so that it settles where it was put and stays put by its own contacts
                 self._sim.set_mass(body, o.mass, inertia(o))
             else:
                 self._sim.sleep(body)
-            self._active.append((key, body))
-            bodies.append(body)
+        self._sim.order_broadphase([bodies[i] for i in sorted(i for indices in missing.values() for i in indices)])
+        self._active = list(zip(keys, bodies))
         self._evict()
         for _, body in released:
             if body in self._parked:
-                position = (PARK_SPACING * (body % 64), PARK_SPACING * (body // 64), PARK_DEPTH)
                 if self._parked[body][0].startswith("movable"):
                     self._sim.set_mass(body, 0.0)
+                position = (PARK_SPACING * (body % 64), PARK_SPACING * (body // 64), PARK_DEPTH)
                 self._sim.move_static(body, position, (0.0, 0.0, 0.0, 1.0))
                 self._sim.sleep(body)
                 self._sim.set_visible(body, False, _COLOURS[self._parked[body][0]])

@@ -47,10 +47,8 @@ def test_beams_that_hit_nothing_or_start_inside_an_obstacle():
     occurs in the envs, whose beams start 0.12 m from the mount, inside the robot's footprint."""
     sim = Sim()
     try:
-        box = sim.add_static_box((0.5, 0.5, 0.5), (1, 0, 0, 1))
-        cylinder = sim.add_static_cylinder(0.5, 1.0, (0, 1, 0, 1))
-        sim.move_static(box, (0.0, 0.0, 0.5), (0, 0, 0, 1))
-        sim.move_static(cylinder, (5.0, 0.0, 0.5), (0, 0, 0, 1))
+        sim.add_static_boxes((0.5, 0.5, 0.5), (1, 0, 0, 1), [(0.0, 0.0, 0.5)])
+        sim.add_static_cylinders(0.5, 1.0, (0, 1, 0, 1), [(5.0, 0.0, 0.5)])
         starts = [[0, 3, 0.5], [0, 0, 0.5], [5, 0, 0.5], [-2, 0, 0.5]]
         ends = [[4, 3, 0.5], [2, 0, 0.5], [7, 0, 0.5], [2, 0, 0.5]]
         nothing, in_box, in_cylinder, outside = sim.ray_hit_fractions(starts, ends)

@@ -113,7 +113,7 @@ def test_no_pixel_ray_meets_a_culled_body(size, far):
     edges = rays[(columns.ravel() % (k.width - 1) == 0) | (rows.ravel() % (k.height - 1) == 0)]
     sim = Sim()
     try:
-        bodies = [sim.add_static_box(he, (0.5, 0.5, 0.5, 1.0)) for he in half_extents]
+        bodies = [body for he in half_extents for body in sim.add_static_boxes(he, (0.5, 0.5, 0.5, 1.0), [(0, 0, 0)])]
         near_edge = 0
         for _ in range(6):
             rotation, _ = np.linalg.qr(rng.normal(size=(3, 3)))

@@ -82,8 +82,7 @@ def test_accelerometer_integrates_to_the_speed_gained(make_env):
 def test_ray_batches_of_any_size_answer_every_ray(n):
     """pybullet answers 16,384 rays in one call with an empty list; the Sim splits batches so none is lost."""
     sim = Sim()
-    box = sim.add_static_box([0.5, 0.5, 0.5], (1.0, 1.0, 1.0, 1.0))
-    sim.move_static(box, (2.0, 0.0, 0.5), (0.0, 0.0, 0.0, 1.0))
+    sim.add_static_boxes([0.5, 0.5, 0.5], (1.0, 1.0, 1.0, 1.0), [(2.0, 0.0, 0.5)])
     starts = np.zeros((n, 3)) + [0.0, 0.0, 0.5]
     ends = starts + [4.0, 0.0, 0.0]
     ends[1::2, 0] = -4.0  # every other ray points away and hits nothing

@@ -38,6 +38,13 @@ def test_scene_round_trip_reproduces_the_layout(make_env):
         np.testing.assert_allclose(obs_a[key], obs_b[key], atol=1e-9)
 
 
+def server_body_ids(cid: int) -> list[int]:
+    """Every body id in the world as the physics server lists it (pybullet's client lists bodies made in batches
+    only once it has synced)."""
+    pb.syncBodyInfo(physicsClientId=cid)
+    return sorted(pb.getBodyUniqueId(i, physicsClientId=cid) for i in range(pb.getNumBodies(physicsClientId=cid)))
+
+
 def test_new_layouts_move_pooled_bodies_without_reloading(make_env):
     env = make_env()
     env.reset(seed=0)
@@ -46,17 +53,18 @@ def test_new_layouts_move_pooled_bodies_without_reloading(make_env):
     for _ in range(50):
         env.reset()
     cid = unwrapped.sim._cid
-    n_bodies = pb.getNumBodies(physicsClientId=cid)
+    bodies = server_body_ids(cid)
     # ground + 4 walls + robot + goal marker + pooled obstacles: nothing else is in the world
-    assert n_bodies == 7 + unwrapped.arena.pool_size
+    assert len(bodies) == 7 + unwrapped.arena.pool_size
+    assert unwrapped.sim.body_ids() == bodies
     assert unwrapped.robot.body == robot
     pool = unwrapped.arena._pool
     assert pool.size <= len(unwrapped.scene.obstacles) + pool.max_parked  # parked bodies are capped
     env.reset(seed=0)
-    n_bodies = pb.getNumBodies(physicsClientId=cid)
+    n_bodies = len(server_body_ids(cid))
     for _ in range(30):  # the same layout again: the pool has every shape already
         env.reset(seed=0)
-    assert pb.getNumBodies(physicsClientId=cid) == n_bodies
+    assert len(server_body_ids(cid)) == n_bodies
 
 
 @pytest.mark.parametrize(
