@@ -121,6 +121,7 @@ class Sim:
         self._body_ids: set[int] = set()
         self._freed: set[int] = set()  # removed body ids pybullet has not given out again
         self._filters: dict[int, tuple[int, int]] = {}  # body -> (collision group, mask) set by this Sim
+        self._inertial_frames: dict[tuple, np.ndarray | None] = {}  # (body, links) -> inertial axes, or None: aligned
         self._visuals: dict[int, list[tuple[int, tuple]]] = {}
         self._shapes: dict[tuple, tuple[int, int]] = {}  # (kind, sizes, rgba) -> (collision, visual) shape ids
         self._removed_bodies = 0
@@ -623,19 +624,32 @@ class Sim:
         """The states of ``links`` (pybullet link indices, each >= 0; the base is :meth:`base_state`'s), in their order,
         from one batched ``getLinkStates`` call with velocities.
 
-        Rotation matrices come from pybullet's C ``getMatrixFromQuaternion``, one call per link, which is faster than
-        a vectorised numpy conversion for the few links a robot tracks (docs/design-notes.md#link-rotations).
+        The link frames are rebuilt from the centres of mass: pybullet hands those over in double precision but the
+        URDF link frames (``worldLinkFramePosition``) rounded to float32, half a millimetre off 10 km from the origin
+        (docs/design-notes.md#link-frames). Rotation matrices come from pybullet's C ``getMatrixFromQuaternion``, one
+        call per link, which is faster than a vectorised numpy conversion for the few links a robot tracks
+        (docs/design-notes.md#link-rotations).
         """
         rows = pb.getLinkStates(
             body, links, computeLinkVelocity=1, computeForwardKinematics=1, physicsClientId=self._cid
         )
-        flat = np.array([r[4] + r[6] + r[7] for r in rows])  # one conversion: frame origin, lin and ang velocity
-        rotation = np.array([pb.getMatrixFromQuaternion(r[5]) for r in rows]).reshape(-1, 3, 3)
+        # one conversion: centre of mass, its offset in the link frame, linear and angular velocity
+        flat = np.array([r[0] + r[2] + r[6] + r[7] for r in rows])
+        rotation = np.array([pb.getMatrixFromQuaternion(r[1]) for r in rows]).reshape(-1, 3, 3)
+        key = (body, tuple(links))
+        if key not in self._inertial_frames:  # constant per link: the inertial frame's axes in the link frame
+            turned = [r[3] != (0.0, 0.0, 0.0, 1.0) for r in rows]
+            self._inertial_frames[key] = (
+                np.array([pb.getMatrixFromQuaternion(r[3]) for r in rows]).reshape(-1, 3, 3) if any(turned) else None
+            )
+        inertial = self._inertial_frames[key]
+        if inertial is not None:
+            rotation = rotation @ inertial.transpose(0, 2, 1)
         return LinkStates(
-            position=flat[:, 0:3],
+            position=flat[:, 0:3] - np.matmul(rotation, flat[:, 3:6, None])[:, :, 0],
             rotation=rotation,
-            linear_velocity=flat[:, 3:6],
-            angular_velocity=flat[:, 6:9],
+            linear_velocity=flat[:, 6:9],
+            angular_velocity=flat[:, 9:12],
         )
 
     def ray_hit_fractions(

@@ -28,8 +28,9 @@ link frame, which ``Sim.link_states`` and ``Sim.link_frame`` read) rounded to fl
 centre-of-mass pose with the inertial offset in Bullet3's single-precision ``b3Transform``. The link frames are off
 by up to half a float32 ulp of the coordinate: 1.2e-7 m at 2 m, 3e-5 m at 1e3, 4.9e-4 m at 1e4, and FCL clearances
 of every link but the base with them (a caster 0.12 mm off at 1e4). Inside the largest arena (|x| <= 15 m) that is
-at most 1e-6 m. The centre-of-mass pose (``linkWorldPosition``) is double: ``test_link_states_keep_double_precision``
-is a strict xfail until ``Sim.link_states`` builds the link frame from it.
+at most 1e-6 m. The centre-of-mass pose (``linkWorldPosition``) is double, and ``Sim.link_states`` builds the link
+frames from it (``test_link_states_keep_double_precision``); ``Sim.link_frame`` (a camera's mount, the Panda's IK
+target) still reads the float32 frame.
 
 Millimetre obstacles (a 2 mm rod, a 1 mm cube on the floor and one at chassis height; 10 mm and 2 mm clear,
 touching, 0.3 mm deep; at the origin and at 1e4 m): FCL within 5.0e-6 of the closed forms (the exact touch of the
@@ -275,8 +276,6 @@ def test_pybullet_reports_link_frames_in_float32_and_centres_of_mass_in_float64(
     assert np.abs(np.subtract(row[4], exact)).max() > 1e-4
 
 
-@pytest.mark.xfail(strict=True, reason="Sim.link_states reads pybullet's worldLinkFramePosition, which is float32: "
-                                       "4.9e-4 m off at 1e4 m (see the module docstring)")
 @pytest.mark.parametrize("offset", OFFSETS)
 def test_link_states_keep_double_precision(worlds, offset):
     """The robot's link frames as ``Sim.link_states`` reads them, and the FCL clearance of every shape through
