@@ -11,9 +11,10 @@ obstacle) pair from below in one numpy pass, then:
 3. enabled self pairs (the ACM) are tested, after a bounding-ball filter;
 4. shapes that moved faster than ``swept_speed`` are swept from their previous pose (``fcl.continuousCollide``,
    translation motion, conservative advancement) against the obstacles near their path: a hit the end-of-step
-   check does not see is *tunneling*. The translation motion holds the start rotation (measured: it ignores
-   rotation), so a step's rotation is covered only at its two ends; mesh shapes sweep their convex hull
-   (conservative advancement never detects a moving BVH).
+   check does not see is *tunneling*, unless the pair was in contact at the previous check (a shape leaving a
+   contact). The translation motion holds the start rotation (measured: it ignores rotation), so a step's rotation
+   is covered only at its two ends; mesh shapes sweep their convex hull (conservative advancement never detects a
+   moving BVH).
 """
 
 from __future__ import annotations
@@ -152,6 +153,7 @@ class CollisionChecker:
         self._ccd_request = fcl.ContinuousCollisionRequest()
         self._rows: np.ndarray | None = None
         self._previous: tuple[np.ndarray, np.ndarray] | None = None
+        self._touching: set[tuple[int, int]] = set()
 
     # ------------------------------------------------------------------------------------------- scene
     def set_scene(self, obstacles: Sequence[Obstacle], bodies: Sequence[int]) -> None:
@@ -160,6 +162,7 @@ class CollisionChecker:
         self._bounds = ObstacleBounds(obstacles)
         self._obstacle_bodies = frozenset(bodies)
         self._previous = None  # a reset teleports the robot: nothing to sweep from
+        self._touching: set[tuple[int, int]] = set()  # (shape, obstacle) pairs within the tolerance at the last check
 
     def move_obstacles(self, obstacles: np.ndarray, positions: np.ndarray, rotations: np.ndarray) -> None:
         """Put movable ``obstacles`` (indices into the scene's) where the physics moved them: centres (k, 3) and
@@ -309,8 +312,9 @@ class CollisionChecker:
         directions = np.divide(gap, norms[:, None], out=np.zeros_like(gap), where=pointing[:, None])
         k = int(np.argmin(distance))
         found = other[k] >= 0
+        touching_before = self._touching
         contacts = self._contacts(distance, points, candidates, bound)
-        tunneling = self._swept(candidates, bound)
+        tunneling = self._swept(candidates, bound, touching_before)
         tol = self.contact_tolerance
         n_pb = sum(1 for body, d in pybullet_contacts if d <= tol and body in self._obstacle_bodies)
         return CollisionReport(
@@ -335,6 +339,7 @@ class CollisionChecker:
         clearance; ``fcl.collide`` gives only its position, as its own depth estimates run deep on convex shapes.
         """
         model, out, tol = self.model, [], self.contact_tolerance
+        self._touching = touching = set()
         for row, i in enumerate(self._moving):
             if distance[i] > tol:
                 continue
@@ -349,6 +354,7 @@ class CollisionChecker:
                     deepest = max(result.contacts, key=lambda c: c.penetration_depth)
                     where = np.asarray(deepest.pos, dtype=float)
                 out.append(Contact(model.shapes[i].link, int(j), max(0.0, -d), where))
+                touching.add((int(i), int(j)))
         return tuple(out)
 
     def _pair_distance(self, shape: int, obstacle: int) -> float:
@@ -356,11 +362,13 @@ class CollisionChecker:
         d, _ = signed_distance(self.model.solid_object(shape), self._obstacles[obstacle])
         return d - self.model.padding[shape]
 
-    def _swept(self, candidates: np.ndarray, bound: np.ndarray) -> int:
+    def _swept(self, candidates: np.ndarray, bound: np.ndarray, touching_before: set[tuple[int, int]]) -> int:
         """Count swept hits, for shapes faster than ``swept_speed``, that end the step clear of the obstacle.
 
         ``candidates`` and ``bound`` are the end-of-step lower bounds (rows: moving shapes). No point of a shape
-        moved farther than its ``travel`` during the step, so the bound less the travel bounds the sweep.
+        moved farther than its ``travel`` during the step, so the bound less the travel bounds the sweep. A pair in
+        ``touching_before`` (in contact at the last check) that ends clear left its contact: the sweep hits it at
+        its start, which is no tunneling.
         """
         model = self.model
         now = (model.position, model.rotation)  # sync replaces these arrays, never writes into them
@@ -385,6 +393,8 @@ class CollisionChecker:
         hits = 0
         for row, k in zip(*np.nonzero(reach <= tol)):
             i, j = moving[rows[row]], int(candidates[k])
+            if (int(i), j) in touching_before:
+                continue
             sweeper, obstacle = self._sweepers[i], self._obstacles[j]
             sweeper.setRotation(previous[1][i])
             sweeper.setTranslation(previous[0][i])

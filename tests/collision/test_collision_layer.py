@@ -263,6 +263,18 @@ def test_a_ball_through_a_thin_wall_is_caught_by_the_swept_check_only():
     assert slow.check(ball_state(0.2)).tunneling == 0
 
 
+def test_a_ball_leaving_a_contact_fast_is_no_tunneling():
+    """The sweep of a ball that starts against the wall hits it at time 0; leaving a contact is not passing through.
+    Starting 1 cm clear instead, the same step through the wall is flagged."""
+    checker = ball_checker(0.05, swept_speed=0.2, dt=0.05)
+    checker.set_scene([WALL], [])
+    assert checker.check(ball_state(-0.0549)).in_contact  # 0.1 mm into the wall
+    after = checker.check(ball_state(-0.4))  # 0.35 m away in one 50 ms step
+    assert not after.in_contact and after.tunneling == 0
+    checker.check(ball_state(-0.065))
+    assert checker.check(ball_state(0.3)).tunneling == 1
+
+
 def test_continuous_collide_time_of_contact_is_exact():
     """The request the checker uses (translation motion, conservative advancement) on the 1 cm wall."""
     ball = fcl.CollisionObject(fcl.Sphere(0.05), fcl.Transform(np.eye(3), [-0.5, 0.0, 0.5]))
