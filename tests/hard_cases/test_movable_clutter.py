@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 from helpers import empty_scene
 
+from benchmarks.hard_scenes import PUSH_BOX_HALF, PUSH_WALL_FACE, movable_poses, push_box, tabletop_creep
 from benchmarks.stacking import stack_scene, tilt_degrees
 from clutter_gym.collision.distance import signed_distance
 from clutter_gym.collision.obstacles import obstacle_object
@@ -21,11 +22,6 @@ from clutter_gym.worlds.pool import inertia
 from clutter_gym.worlds.scene import Obstacle, parse_obstacle
 
 ZERO = np.zeros(2)
-
-
-def movable_poses(env: gym.Env) -> tuple[np.ndarray, np.ndarray]:
-    unwrapped = env.unwrapped
-    return unwrapped.sim.body_poses(unwrapped.movable_bodies)
 
 
 # ------------------------------------------------------------------------------------------- the scene format
@@ -74,29 +70,21 @@ def test_inertia_is_the_closed_form_of_the_solid():
 @pytest.fixture(scope="module")
 def pushed():
     """The robot drives a 1 kg box 0.5 m ahead of it into a static wall 1.2 m ahead, for 6 s at full speed."""
-    box = {"shape": "box", "size": [0.3, 0.3, 0.3], "position": [0.5, 0.0], "mass": 1.0}
-    wall = {"shape": "box", "size": [0.1, 2.0, 0.5], "position": [1.25, 0.0]}
     env = gym.make("ClutterNav-v0", max_linear_speed=1.0)
-    env.reset(seed=0, options={"scene": empty_scene(start=(0.0, 0.0, 0.0), goal=(-2.0, 0.0),
-                                                      obstacles=[box, wall])})
-    infos, positions = [], []
-    for _ in range(120):
-        _, reward, _, _, info = env.step(np.array([1.0, 0.0]))
-        assert np.isfinite(reward)
-        infos.append(info)
-        positions.append(movable_poses(env)[0][0].copy())
-    yield env, infos, np.array(positions)
+    infos, positions, _ = push_box(env, seconds=6.0)
+    assert all(np.isfinite(info["reward"]) for info in infos)
+    yield env, infos, positions
     env.close()
 
 
 def test_a_pushed_box_moves_and_stops_at_the_wall(pushed):
     env, infos, positions = pushed
-    front = positions[:, 0] + 0.15  # the box's face towards the wall, which starts 1.2 m out
+    front = positions[:, 0] + PUSH_BOX_HALF  # the box's face towards the wall, which starts 1.2 m out
     assert positions[-1, 0] > 0.8  # pushed all the way
     # it hits the wall at 1 m/s, 8 mm a physics tick: Bullet's contact lets it 5 mm in for a moment, then pushes
     # it out to rest against the wall
-    assert front.max() < 1.2 + 0.01
-    assert front[-20:].max() < 1.2 + 1e-3
+    assert front.max() < PUSH_WALL_FACE + 0.01
+    assert front[-20:].max() < PUSH_WALL_FACE + 1e-3
     assert np.isfinite(positions).all()
     assert any(info["n_contacts"] for info in infos)  # pushing is touching: it is a contact, and it costs
     assert sum(info["cost"] for info in infos) > 0
@@ -138,18 +126,10 @@ def test_a_seed_gives_the_same_pushes():
 # ----------------------------------------------------------------------------------------- resting, masses
 def test_clutter_resting_on_the_table_does_not_creep():
     """Every object movable; after it has settled onto the table (its first half second), it holds still."""
-    env = gym.make("ClutterReach-v0", movable_obstacles=1.0)
-    env.reset(seed=2)
-    for _ in range(10):
-        env.step(np.zeros(7))
-    settled, rotation = movable_poses(env)
-    assert len(settled) == len(env.unwrapped.scene.obstacles) - 5
-    for _ in range(200):  # 10 s, the arm held at rest
-        env.step(np.zeros(7))
-    position, later = movable_poses(env)
-    assert np.abs(position - settled).max() < 1e-4
-    assert tilt_degrees(rotation, later).max() < 0.05
-    env.close()
+    moved, tilt, static, _ = tabletop_creep(seconds=10.0, seed=2)  # the arm held at rest
+    assert static == 5  # the shelf stays put
+    assert moved < 1e-4
+    assert tilt < 0.05
 
 
 @pytest.mark.parametrize(("masses", "physics_hz", "iterations"), [

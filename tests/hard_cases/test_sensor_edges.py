@@ -10,19 +10,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from helpers import empty_scene
 
-from clutter_gym.sensors import SEGMENTATION_CLASSES
+from benchmarks.hard_scenes import OBSTACLE, WALL_DEPTH, imu_impact, wall_view
 from clutter_gym.sim import Sim
-
-WALL_DEPTH = 3.0 - 0.165  # the arena wall's inner face, less the camera joint's x in base_link (diffbot.urdf)
-OBSTACLE = SEGMENTATION_CLASSES.index("obstacle")
-
-
-def wall_view(make_env, far: float) -> tuple[np.ndarray, np.ndarray]:
-    env = make_env(sensors=("camera",), camera_modes=("depth", "segmentation"), camera_size=(84, 64), camera_far=far)
-    obs, _ = env.reset(options={"scene": empty_scene()})
-    return obs["camera_depth"], obs["camera_segmentation"]
 
 
 @pytest.mark.parametrize("far", [10.0, 1000.0])
@@ -61,15 +51,7 @@ def test_beams_that_hit_nothing_or_start_inside_an_obstacle():
 
 @pytest.mark.parametrize("accel_range", [None, 5.0])
 def test_imu_through_a_full_speed_impact_is_finite_and_saturates(make_env, accel_range):
-    noise = "none" if accel_range is None else {"profile": "none", "imu": {"accel_range": accel_range}}
-    env = make_env(sensors=("imu",), noise=noise, terminate_on_collision=False)
-    env.reset(options={"scene": empty_scene(start=(2.5, 0.0, 0.0))})  # 0.3 m from the wall, facing it
-    readings, contacts = [], 0
-    for _ in range(40):
-        obs, _, _, _, info = env.step(np.array([1.0, 0.0], dtype=np.float32))
-        readings.append(obs["imu"])
-        contacts += info["n_contacts"] > 0
-    readings = np.array(readings)
+    readings, contacts, _ = imu_impact(make_env, accel_range)  # 0.3 m from the wall, facing it, at full command
     assert contacts and np.isfinite(readings).all()
     peak = np.abs(readings[:, 0]).max()
     if accel_range is None:  # 0.5 m/s to 0 within one 0.05 s control period
