@@ -9,6 +9,7 @@ import fcl
 import numpy as np
 import pytest
 
+from benchmarks.contact_agreement import panda_depth_errors
 from clutter_gym.collision import (
     FIDELITY_LEVELS,
     CollisionChecker,
@@ -228,22 +229,11 @@ def test_contact_depth_is_the_padded_signed_distance():
     assert report.min_clearance == pytest.approx(-0.03, abs=1e-6)
 
 
-def test_panda_contact_depths_agree_with_the_signed_distance(make_env):
+def test_panda_contact_depths_agree_with_the_signed_distance():
     """fcl.collide's depth on a hull ran up to 2.3x the signed distance's on these steps (full joint speed into
     clutter); the reported depth is the signed distance's."""
-    env = make_env("ClutterReach-v0", n_obstacles=10)
-    checker = env.unwrapped.checker
-    env.reset(seed=0)
-    rng = np.random.default_rng(0)
-    deep = 0
-    for _ in range(800):
-        _, _, terminated, truncated, info = env.step(np.sign(rng.uniform(-1, 1, 7)).astype(np.float32))
-        for contact in checker.check(env.unwrapped.robot.state()).contacts:
-            i = next(k for k in checker._moving if checker.model.shapes[k].link == contact.link)
-            assert contact.depth == pytest.approx(max(0.0, -checker._pair_distance(i, contact.obstacle)), abs=1e-9)
-            deep += contact.depth > 1e-3
-        if terminated or truncated:
-            env.reset()
+    worst, _, deep, _ = panda_depth_errors(800, seed=0)
+    assert worst < 1e-9
     assert deep > 0
 
 
