@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from clutter_gym.collision import CollisionChecker
+from clutter_gym.collision.distance import signed_distance
 from clutter_gym.collision.kinematics import UrdfKinematics
 from clutter_gym.core import collision_checker
 from clutter_gym.robots import DiffDriveRobot
@@ -169,3 +170,29 @@ def millimetre_scene(gap: float) -> tuple[Obstacle, ...]:
         Obstacle("box", (CUBE, CUBE, CUBE), (edge + CUBE / 2, 0.0)),
         Obstacle("box", (CUBE, CUBE, CUBE), (-CHASSIS_RADIUS - gap - CUBE / 2, 0.0), 0.0, 0.07),
     )
+
+
+def millimetre_pairs(world: World) -> tuple[tuple[int, int, int], ...]:
+    """For each obstacle of :func:`millimetre_scene`: (the robot shape ``gap`` from it, as an index into the
+    checker's model; the obstacle's index; the robot's pybullet link of that shape)."""
+    links = [s.link for s in world.checker.model.shapes]
+    caster = world.robot.link_index["front_caster"]
+    return ((links.index("base_link"), 0, -1), (links.index("front_caster"), 1, caster),
+            (links.index("base_link"), 2, -1))
+
+
+def millimetre_errors(world: World, gap: float) -> tuple[np.ndarray, np.ndarray]:
+    """The robot at the origin of a :func:`millimetre_scene` ``gap`` world: FCL's signed distance of each pair of
+    :func:`millimetre_pairs` less ``gap``, and where ``gap`` <= 0 pybullet's deepest contact of each pair less
+    ``gap`` (empty where the robot is clear), metres."""
+    world.place(0.0, 0.0, 0.0)
+    world.checker.sync(world.exact_state(0.0, 0.0, 0.0))
+    model, objects = world.checker.model, world.checker._obstacles
+    pairs = millimetre_pairs(world)
+    fcl = np.array([signed_distance(model.objects[i], objects[j])[0] - gap for i, j, _ in pairs])
+    if gap > 0:
+        return fcl, np.zeros(0)
+    contacts = world.contacts()
+    deepest = [min(d for (body, link, _), (_, d) in contacts.items() if body == world.bodies[j] and link == robot_link)
+               for _, j, robot_link in pairs]
+    return fcl, np.array(deepest) - gap
