@@ -148,6 +148,7 @@ def _sample_obstacles(rng: np.random.Generator, spec: VolumeSpec, corridor: np.n
 
 
 def _centre(flat: int, spec: VolumeSpec, shape: tuple[int, int, int]) -> np.ndarray:
+    """(3,) centre (metres) of the cell with flat index ``flat`` on a grid of ``shape``."""
     return np.array([c[i] for c, i in zip(spec.cell_centres, np.unravel_index(flat, shape))])
 
 
