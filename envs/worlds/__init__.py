@@ -1,10 +1,16 @@
-"""Worlds: scenes as plain data, seeded clutter layouts, and the body pool that puts a scene into a Sim."""
+"""Worlds: scenes as plain data, seeded clutter layouts (the floor, the table, the ClutterFly volume), and the body
+pool that puts a scene into a Sim."""
 
 from clutter_gym.worlds.arena import ClutterArena
 from clutter_gym.worlds.clutter import ClutterSpec, sample_scene
 from clutter_gym.worlds.pool import ObstaclePool
 from clutter_gym.worlds.scene import Obstacle, Scene, parse_scene
 from clutter_gym.worlds.tabletop import ReachScene, TableSpec, TabletopArena, sample_reach_scene
+from clutter_gym.worlds.volume import sample_volume_scene
+from clutter_gym.worlds.volume_arena import VolumeArena
+from clutter_gym.worlds.volume_path import VolumePathDistance
+from clutter_gym.worlds.volume_scene import VolumeScene, parse_volume_scene
+from clutter_gym.worlds.volume_spec import VolumeSpec
 
 __all__ = [
     "ClutterArena",
@@ -15,7 +21,13 @@ __all__ = [
     "Scene",
     "TableSpec",
     "TabletopArena",
+    "VolumeArena",
+    "VolumePathDistance",
+    "VolumeScene",
+    "VolumeSpec",
     "parse_scene",
+    "parse_volume_scene",
     "sample_reach_scene",
     "sample_scene",
+    "sample_volume_scene",
 ]

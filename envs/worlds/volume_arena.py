@@ -1,0 +1,79 @@
+"""The ClutterFly world in the Sim: floor, four walls and an optional ceiling around the volume, pooled clutter."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from clutter_gym.sim import Sim
+from clutter_gym.worlds.pool import ObstaclePool
+from clutter_gym.worlds.scene import Obstacle, scene_from_options
+from clutter_gym.worlds.volume import sample_volume_scene
+from clutter_gym.worlds.volume_scene import VolumeScene, parse_volume_scene
+from clutter_gym.worlds.volume_spec import VolumeSpec
+
+BOUNDARY_THICKNESS = 0.1  # metres of the walls and the ceiling, outside the volume
+
+
+def volume_boundary(spec: VolumeSpec) -> tuple[Obstacle, ...]:
+    """The walls just outside the volume's four sides, from the floor to its top (to the ceiling's top with one),
+    and the ceiling on top of it when ``spec.ceiling`` is on; world frame, metres."""
+    sx, sy, sz = spec.size
+    t = BOUNDARY_THICKNESS
+    height = sz + t if spec.ceiling else sz
+    walls = (
+        Obstacle("box", (sx + 2 * t, t, height), (0.0, 0.5 * (sy + t))),
+        Obstacle("box", (sx + 2 * t, t, height), (0.0, -0.5 * (sy + t))),
+        Obstacle("box", (t, sy + 2 * t, height), (0.5 * (sx + t), 0.0)),
+        Obstacle("box", (t, sy + 2 * t, height), (-0.5 * (sx + t), 0.0)),
+    )
+    return (*walls, Obstacle("box", (sx + 2 * t, sy + 2 * t, t), (0.0, 0.0), 0.0, sz)) if spec.ceiling else walls
+
+
+class VolumeArena:
+    """Floor, boundary and the obstacle pool of one env (the ``Arena`` contract of ``clutter_gym.interfaces``).
+
+    Args:
+        spec: the volume and its layout parameters.
+        robot_radius: bounding radius of the robot, metres, for reachability and the start check.
+    """
+
+    def __init__(self, spec: VolumeSpec, robot_radius: float) -> None:
+        self.spec = spec
+        self.robot_radius = robot_radius
+        self._pool: ObstaclePool | None = None
+
+    def load(self, sim: Sim) -> None:
+        """Create the floor and the boundary (once per built world)."""
+        sim.add_ground(visual_size=max(self.spec.size[:2]) + 2.0)
+        self._pool = ObstaclePool(sim, volume_boundary(self.spec))
+
+    @property
+    def pool_size(self) -> int:
+        """Obstacle bodies in the world (placed and parked)."""
+        return self._pool.size
+
+    def choose_scene(self, rng: np.random.Generator, options: Mapping[str, Any] | None) -> VolumeScene:
+        """The user's scene from ``options["scene"]`` if given, else a layout drawn from ``rng``.
+
+        Raises:
+            ValueError: unknown option keys or a malformed scene (the message names the field).
+        """
+        return scene_from_options(
+            options,
+            parse=lambda raw: parse_volume_scene(raw, self.spec, self.robot_radius),
+            sample=lambda: sample_volume_scene(rng, self.spec, self.robot_radius),
+        )
+
+    def place(self, scene: VolumeScene) -> tuple[tuple[Obstacle, ...], list[int]]:
+        """Move pooled bodies into ``scene``; returns every obstacle (the boundary included) and its body ids."""
+        bodies = self._pool.place(scene.obstacles)
+        return scene.obstacles + self._pool.fixed, bodies + self._pool.fixed_bodies
+
+    def overview_camera(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+        """(eye, target) of the rgb_array view: from a top corner inside the volume (under a ceiling) to the
+        centre of the floor."""
+        sx, sy, sz = self.spec.size
+        return (-0.45 * sx, -0.45 * sy, 0.9 * sz), (0.0, 0.0, 0.0)
