@@ -720,3 +720,52 @@ class Sim:
         """Point the GUI camera (render_mode="human") at ``target`` (metres) from ``distance`` metres away, turned by
         ``yaw_deg`` and ``pitch_deg`` degrees."""
         pb.resetDebugVisualizerCamera(distance, yaw_deg, pitch_deg, target, physicsClientId=self._cid)
+
+    # ------------------------------------------------------------- bodies driven by external forces (quadrotor)
+    # pybullet clears external forces after every stepSimulation: a robot that flies on them applies them before
+    # each physics tick (clutter_gym.interfaces.TickedRobot).
+    @property
+    def gravity(self) -> float:
+        """Gravitational acceleration in m/s^2 (along -z)."""
+        return self._gravity
+
+    def load_urdf_inertia_from_file(self, name: str, path: str | Path, position: Sequence[float] = (0.0, 0.0, 0.0)
+                                    ) -> int:
+        """Like :meth:`load_urdf` (free base), but every link keeps the mass, inertial frame and inertia its URDF
+        gives (``URDF_USE_INERTIA_FROM_FILE``): by default pybullet recomputes inertias from the collision shapes,
+        which is wrong for a link whose mass is not spread like its collision primitive (a rotor's motor and
+        propeller). Returns the body id.
+
+        Raises:
+            FileNotFoundError: ``path`` does not exist.
+            ValueError: pybullet could not parse the URDF.
+        """
+        path = Path(path)
+        if not path.is_file():
+            raise FileNotFoundError(f"URDF not found: {path}")
+        flags = pb.URDF_USE_IMPLICIT_CYLINDER | pb.URDF_USE_INERTIA_FROM_FILE
+        try:
+            with quiet_c_output():
+                body = pb.loadURDF(str(path), position, flags=flags, physicsClientId=self._cid)
+        except pb.error as exc:
+            raise ValueError(f"pybullet could not load URDF {path}: {exc}") from exc
+        return self._register(name, body)
+
+    def set_damping(self, body: int, linear: float, angular: float) -> None:
+        """Set a body's velocity damping (pybullet's default is 0.04 for both, which slows every free body:
+        a flying body gets its drag from its own model instead)."""
+        pb.changeDynamics(body, -1, linearDamping=linear, angularDamping=angular, physicsClientId=self._cid)
+
+    def apply_link_forces(self, body: int, links: Sequence[int], forces: Sequence[Sequence[float]]) -> None:
+        """Apply ``forces`` (N, one (fx, fy, fz) per link, in that link's frame) at the links' centres of mass for
+        the next physics tick. pybullet's link frame for forces is the link's inertial frame, so a force along a
+        rotor axis that passes through the link's centre of mass is the rotor's thrust."""
+        for link, force in zip(links, forces):
+            pb.applyExternalForce(body, link, force, (0.0, 0.0, 0.0), pb.LINK_FRAME, physicsClientId=self._cid)
+
+    def apply_base_wrench(self, body: int, force: Sequence[float], torque: Sequence[float]) -> None:
+        """Apply a world-frame ``force`` (N) at the base's centre of mass and a world-frame ``torque`` (N m) to the
+        base, for the next physics tick."""
+        position, _ = pb.getBasePositionAndOrientation(body, physicsClientId=self._cid)
+        pb.applyExternalForce(body, -1, force, position, pb.WORLD_FRAME, physicsClientId=self._cid)
+        pb.applyExternalTorque(body, -1, torque, pb.WORLD_FRAME, physicsClientId=self._cid)
