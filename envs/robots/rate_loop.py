@@ -17,9 +17,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-#: Bisection steps of the yaw reduction: the yaw torque kept is within 2^-20 of the largest that fits.
-_YAW_STEPS = 20
-
 
 @dataclass(frozen=True)
 class RateGains:
@@ -109,13 +106,13 @@ class Mixer:
         if rp_spread > span:
             rp *= span / rp_spread
             yaw = np.zeros_like(yaw)
-        elif (rp + yaw).max() - (rp + yaw).min() > span:  # the spread is convex in the yaw scale: bisect
-            lo, hi = 0.0, 1.0
-            for _ in range(_YAW_STEPS):
-                mid = 0.5 * (lo + hi)
-                both = rp + mid * yaw
-                lo, hi = (mid, hi) if both.max() - both.min() <= span else (lo, mid)
-            yaw = lo * yaw
+        elif (rp + yaw).max() - (rp + yaw).min() > span:
+            # the spread is the largest pairwise difference (rp_i - rp_j) + k (yaw_i - yaw_j): keep the largest
+            # yaw scale k in [0, 1] for which every pair fits the span
+            rise = yaw[:, None] - yaw[None, :]
+            room = span - (rp[:, None] - rp[None, :])
+            growing = rise > 0.0
+            yaw = yaw * max(0.0, float((room[growing] / rise[growing]).min()))
         differential = rp + yaw
         per_rotor = thrust * self._collective
         shift = np.clip(per_rotor + differential, self.min_thrust, self.max_thrust) - (per_rotor + differential)
