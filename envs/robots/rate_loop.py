@@ -57,10 +57,14 @@ class RateController:
     def torque(self, rate_ref: np.ndarray, rate: np.ndarray) -> np.ndarray:
         """Body torque (N m, body frame) for the setpoint ``rate_ref`` at the measured body rate ``rate`` (rad/s)."""
         error = rate_ref - rate
-        self.integral = np.clip(self.integral + error * self.dt, -self.limit, self.limit)
-        accel = self.kp * error + self.ki * self.integral
+        integral = self.integral + error * self.dt
+        self.integral = integral = np.minimum(np.maximum(integral, -self.limit), self.limit)
         j = self.inertia
-        return j @ accel + np.cross(rate, j @ rate)
+        momentum = j @ rate
+        p, q, r = rate.tolist()
+        hx, hy, hz = momentum.tolist()
+        gyroscopic = np.array([q * hz - r * hy, r * hx - p * hz, p * hy - q * hx])  # rate x (J rate)
+        return j @ (self.kp * error + self.ki * integral) + gyroscopic
 
 
 def allocation(positions: np.ndarray, spin: np.ndarray, torque_ratio: float) -> np.ndarray:
@@ -102,20 +106,23 @@ class Mixer:
         span = self.max_thrust - self.min_thrust
         rp = self._roll_pitch @ torque[:2]
         yaw = self._yaw * torque[2]
-        rp_spread = rp.max() - rp.min()
-        if rp_spread > span:
-            rp *= span / rp_spread
-            yaw = np.zeros_like(yaw)
-        elif (rp + yaw).max() - (rp + yaw).min() > span:
-            # the spread is the largest pairwise difference (rp_i - rp_j) + k (yaw_i - yaw_j): keep the largest
-            # yaw scale k in [0, 1] for which every pair fits the span
-            rise = yaw[:, None] - yaw[None, :]
-            room = span - (rp[:, None] - rp[None, :])
-            growing = rise > 0.0
-            yaw = yaw * max(0.0, float((room[growing] / rise[growing]).min()))
         differential = rp + yaw
-        per_rotor = thrust * self._collective
-        shift = np.clip(per_rotor + differential, self.min_thrust, self.max_thrust) - (per_rotor + differential)
+        if differential.max() - differential.min() > span:
+            rp_spread = rp.max() - rp.min()
+            if rp_spread > span:
+                differential = rp * (span / rp_spread)
+            else:
+                # the spread is the largest pairwise difference (rp_i - rp_j) + k (yaw_i - yaw_j): keep the
+                # largest yaw scale k in [0, 1] for which every pair fits the span
+                rise = yaw[:, None] - yaw[None, :]
+                room = span - (rp[:, None] - rp[None, :])
+                growing = rise > 0.0
+                differential = rp + yaw * max(0.0, float((room[growing] / rise[growing]).min()))
+        thrusts = thrust * self._collective + differential
+        low, high = thrusts.min(), thrusts.max()
         # one common shift brings every rotor into range: the differential part fits the span by construction
-        common = shift.max() if shift.max() > 0.0 else shift.min()
-        return np.clip(per_rotor + differential + common, self.min_thrust, self.max_thrust)
+        if low < self.min_thrust:
+            thrusts = np.minimum(thrusts + (self.min_thrust - low), self.max_thrust)  # min: rounding
+        elif high > self.max_thrust:
+            thrusts = np.maximum(thrusts - (high - self.max_thrust), self.min_thrust)
+        return thrusts
