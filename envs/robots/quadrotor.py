@@ -279,13 +279,12 @@ class Quadrotor:
         else:
             command = self._speed_command
         self._speeds = speeds = self.rotors.step(self._speeds, command, self._decay)
-        squared = speeds * speeds
-        thrust = self.config.thrust_coefficient * self._thrust_scale * squared
+        thrust = self.rotors.thrust(speeds) * self._thrust_scale
         if self._ground_effect and rot[2, 2] > 0.0:  # upright: the rotors blow towards the ground
             heights = com[2] + rot[2] @ self._hubs.T
             thrust = thrust * ground_effect_gain(heights, self.config.rotor_radius)
         sim.apply_link_forces(self._body, self._rotor_links, [(0.0, 0.0, f) for f in thrust.tolist()])
-        yaw = -self.config.torque_coefficient * self._thrust_scale * float(self._spin @ squared)
+        yaw = self.rotors.yaw_torque(speeds, self._spin) * self._thrust_scale
         force = rot @ rotor_drag(rot.T @ np.asarray(lin), speeds, self.config.drag_xy, self.config.drag_z) \
             if self._drag else _ZERO
         sim.apply_base_wrench(self._body, force, (yaw * rot[0, 2], yaw * rot[1, 2], yaw * rot[2, 2]))
