@@ -729,28 +729,6 @@ class Sim:
         """Gravitational acceleration in m/s^2 (along -z)."""
         return self._gravity
 
-    def load_urdf_inertia_from_file(self, name: str, path: str | Path, position: Sequence[float] = (0.0, 0.0, 0.0)
-                                    ) -> int:
-        """Like :meth:`load_urdf` (free base), but every link keeps the mass, inertial frame and inertia its URDF
-        gives (``URDF_USE_INERTIA_FROM_FILE``): by default pybullet recomputes inertias from the collision shapes,
-        which is wrong for a link whose mass is not spread like its collision primitive (a rotor's motor and
-        propeller). Returns the body id.
-
-        Raises:
-            FileNotFoundError: ``path`` does not exist.
-            ValueError: pybullet could not parse the URDF.
-        """
-        path = Path(path)
-        if not path.is_file():
-            raise FileNotFoundError(f"URDF not found: {path}")
-        flags = pb.URDF_USE_IMPLICIT_CYLINDER | pb.URDF_USE_INERTIA_FROM_FILE
-        try:
-            with quiet_c_output():
-                body = pb.loadURDF(str(path), position, flags=flags, physicsClientId=self._cid)
-        except pb.error as exc:
-            raise ValueError(f"pybullet could not load URDF {path}: {exc}") from exc
-        return self._register(name, body)
-
     def set_damping(self, body: int, linear: float, angular: float) -> None:
         """Set a body's velocity damping (pybullet's default is 0.04 for both, which slows every free body:
         a flying body gets its drag from its own model instead)."""

@@ -214,9 +214,17 @@ class Quadrotor:
         return np.full(4, 2.0 * level - 1.0)
 
     def load(self, sim: Sim) -> int:
-        """Load the URDF (its inertias as written) into ``sim``, switch off velocity damping and look up links."""
+        """Load the URDF into ``sim`` with its own inertias, switch off velocity damping and look up links.
+
+        pybullet recomputes every link's inertia from its collision shapes when it loads a URDF, which is wrong for
+        a link whose mass is not spread like its collision primitive (a rotor's motor and propeller); the URDF's
+        values are set back here, and they are the nominal values :meth:`apply_dynamics` scales.
+
+        Raises:
+            ValueError: a link's URDF inertia has products of inertia (pybullet takes principal moments only).
+        """
         self._sim = sim
-        self._body = sim.load_urdf_inertia_from_file("robot", self.urdf_path)
+        self._body = sim.load_urdf("robot", self.urdf_path)
         sim.set_damping(self._body, 0.0, 0.0)
         sim.hide_from_rays(self._body)
         self.link_index = sim.link_indices(self._body)
@@ -228,8 +236,16 @@ class Quadrotor:
         self._decay = self.rotors.decay(dt)
         self._controller = RateController(self.model.inertia, self.config.rate_gains(), dt)
         self._gravity = sim.gravity
-        links = [-1, *sorted(self.link_index.values())]
-        self._nominal = dict(zip(links, sim.inertial_properties(self._body, links)))
+        links = sorted(self.link_index.values())  # -1, the base, first
+        friction = [f for _, f, _ in sim.inertial_properties(self._body, links)]
+        names = {index: name for name, index in self.link_index.items()}
+        self._nominal = {}
+        for link, mu in zip(links, friction):
+            mass, inertia = self.model.link_inertias[names[link]]
+            if np.count_nonzero(inertia - np.diag(np.diag(inertia))):
+                raise ValueError(f"{self.urdf} link {names[link]!r}: give the inertia in principal axes")
+            self._nominal[link] = (mass, mu, tuple(np.diag(inertia).tolist()))
+        scale_link_dynamics(sim, self._body, self._nominal, DynamicsSample())
         self._dynamics = DynamicsSample()
         self._thrust_scale = 1.0
         return self._body

@@ -27,12 +27,15 @@ class RigidBody:
         com: (3,) centre of mass, metres.
         inertia: (3, 3) inertia about ``com`` in the root link's axes, kg m^2.
         frames: each link's frame origin (3,) and rotation (3, 3) (columns: the link's axes), by link name.
+        link_inertias: each link's mass (kg) and inertia (3, 3) (kg m^2) in its inertial frame, as the URDF gives
+            them, by link name (links without an ``<inertial>`` element are left out).
     """
 
     mass: float
     com: np.ndarray
     inertia: np.ndarray
     frames: dict[str, tuple[np.ndarray, np.ndarray]]
+    link_inertias: dict[str, tuple[float, np.ndarray]]
 
 
 def _origin(element, where: str) -> tuple[np.ndarray, np.ndarray]:
@@ -70,6 +73,7 @@ def rigid_body(urdf: str | Path) -> RigidBody:
         return frames[link]
 
     masses, centres, inertias = [], [], []
+    link_inertias: dict[str, tuple[float, np.ndarray]] = {}
     for link in root.findall("link"):
         name = link.attrib["name"]
         p, r = frame(name)
@@ -84,6 +88,7 @@ def rigid_body(urdf: str | Path) -> RigidBody:
         attrib = inertial.find("inertia").attrib
         ixx, ixy, ixz, iyy, iyz, izz = (float(attrib.get(k, 0.0)) for k in _INERTIA_KEYS)
         local = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
+        link_inertias[name] = (mass, local)
         axes = r @ rot
         masses.append(mass)
         centres.append(p + r @ xyz)
@@ -94,4 +99,4 @@ def rigid_body(urdf: str | Path) -> RigidBody:
     for m, c, i in zip(masses, centres, inertias):
         d = c - com
         inertia += i + m * (d @ d * np.eye(3) - np.outer(d, d))
-    return RigidBody(mass=total, com=com, inertia=inertia, frames=frames)
+    return RigidBody(mass=total, com=com, inertia=inertia, frames=frames, link_inertias=link_inertias)

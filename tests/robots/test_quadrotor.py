@@ -78,10 +78,13 @@ def test_urdf_mass_properties_are_the_stated_closed_forms_and_crazyflie_sized(si
     np.testing.assert_allclose(np.diag(body.inertia), [1.3287e-5, 1.3661e-5, 2.3396e-5], rtol=1e-4)
     # within 10 % of the measured Crazyflie 2.0 inertia (Foerster 2015)
     np.testing.assert_allclose(np.diag(body.inertia), [1.395e-5, 1.436e-5, 2.173e-5], rtol=0.1)
-    # pybullet holds the URDF's masses (not inertias recomputed from the collision shapes)
+    # pybullet holds the URDF's masses and inertias, not inertias it recomputed from the collision shapes
     sim, robot = make(sims)
-    links = sorted(robot.link_index.values())  # -1 (the base) first
-    assert sum(m for m, _, _ in sim.inertial_properties(robot.body, links)) == pytest.approx(0.027, rel=1e-12)
+    names = {index: name for name, index in robot.link_index.items()}
+    for link, (mass, _, inertia) in zip(names, sim.inertial_properties(robot.body, list(names))):
+        urdf_mass, urdf_inertia = body.link_inertias[names[link]]
+        assert mass == urdf_mass
+        np.testing.assert_array_equal(inertia, np.diag(urdf_inertia))
 
 
 # ----------------------------------------------------------------------------------------------------- physics
