@@ -85,6 +85,8 @@ class ClutterEnv(gym.Env):
         self.render_size = render_size
         self.metadata = {**self.metadata, "render_fps": control_hz}
         self.substeps = int(round(sim.physics_hz / control_hz))  # physics ticks per action
+        # a TickedRobot (interfaces.py) acts before every physics tick; others once per action
+        self._before_tick = robot.before_tick if getattr(robot, "ticked", False) else None
         self._build_world()
         self.action_space = robot.action_space
         self._action_low = self.action_space.low.astype(np.float64)
@@ -169,7 +171,12 @@ class ClutterEnv(gym.Env):
         if command is not applied:
             command = np.minimum(np.maximum(command, self._action_low), self._action_high)
         self.robot.apply_action(command)
-        self.sim.step(self.substeps)
+        if self._before_tick is None:
+            self.sim.step(self.substeps)
+        else:
+            for _ in range(self.substeps):
+                self._before_tick()
+                self.sim.step()
         if self._movable[1]:  # the checker follows what the physics pushed
             self.checker.move_obstacles(self._movable[0], *self.sim.body_poses(self._movable[1]))
         state = self.robot.state()

@@ -82,6 +82,22 @@ class Robot(Protocol):
         """Proprioceptive observation entries."""
 
 
+class TickedRobot(Robot, Protocol):
+    """A robot that must act before every physics tick, not once per control step: one driven by external forces
+    (a quadrotor's rotor thrusts), which pybullet clears after each ``stepSimulation``, or one whose inner loop runs
+    at the physics rate.
+
+    A robot opts in with the class attribute ``ticked = True``. :class:`clutter_gym.core.ClutterEnv` then runs the
+    control period one tick at a time, ``robot.before_tick(); sim.step()``, after :meth:`Robot.apply_action`;
+    robots without the attribute keep ``sim.step(substeps)``.
+    """
+
+    ticked: bool
+
+    def before_tick(self) -> None:
+        """Apply this tick's actuation (forces, motor targets) from the command :meth:`Robot.apply_action` held."""
+
+
 class Arena(Protocol):
     """The world around the robot: fixed structure built with the world, clutter moved into place per episode."""
 

@@ -826,3 +826,30 @@ class Sim:
         """Point the GUI camera (render_mode="human") at ``target`` (metres) from ``distance`` metres away, turned by
         ``yaw_deg`` and ``pitch_deg`` degrees."""
         pb.resetDebugVisualizerCamera(distance, yaw_deg, pitch_deg, target, physicsClientId=self._cid)
+
+    # ------------------------------------------------------------- bodies driven by external forces (quadrotor)
+    # pybullet clears external forces after every stepSimulation: a robot that flies on them applies them before
+    # each physics tick (clutter_gym.interfaces.TickedRobot).
+    @property
+    def gravity(self) -> float:
+        """Gravitational acceleration in m/s^2 (along -z)."""
+        return self._gravity
+
+    def set_damping(self, body: int, linear: float, angular: float) -> None:
+        """Set a body's velocity damping (pybullet's default is 0.04 for both, which slows every free body:
+        a flying body gets its drag from its own model instead)."""
+        pb.changeDynamics(body, -1, linearDamping=linear, angularDamping=angular, physicsClientId=self._cid)
+
+    def apply_link_forces(self, body: int, links: Sequence[int], forces: Sequence[Sequence[float]]) -> None:
+        """Apply ``forces`` (N, one (fx, fy, fz) per link, in that link's frame) at the links' centres of mass for
+        the next physics tick. pybullet's link frame for forces is the link's inertial frame, so a force along a
+        rotor axis that passes through the link's centre of mass is the rotor's thrust."""
+        for link, force in zip(links, forces):
+            pb.applyExternalForce(body, link, force, (0.0, 0.0, 0.0), pb.LINK_FRAME, physicsClientId=self._cid)
+
+    def apply_base_wrench(self, body: int, force: Sequence[float], torque: Sequence[float]) -> None:
+        """Apply a world-frame ``force`` (N) at the base's centre of mass and a world-frame ``torque`` (N m) to the
+        base, for the next physics tick."""
+        position, _ = pb.getBasePositionAndOrientation(body, physicsClientId=self._cid)
+        pb.applyExternalForce(body, -1, force, position, pb.WORLD_FRAME, physicsClientId=self._cid)
+        pb.applyExternalTorque(body, -1, torque, pb.WORLD_FRAME, physicsClientId=self._cid)

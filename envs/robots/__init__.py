@@ -2,6 +2,7 @@
 
 from clutter_gym.robots.diffdrive import DiffDriveConfig, DiffDriveRobot
 from clutter_gym.robots.panda import PandaArm, PandaConfig
+from clutter_gym.robots.quadrotor import Quadrotor, QuadrotorConfig
 from clutter_gym.robots.state import RobotState
 
-__all__ = ["DiffDriveConfig", "DiffDriveRobot", "PandaArm", "PandaConfig", "RobotState"]
+__all__ = ["DiffDriveConfig", "DiffDriveRobot", "PandaArm", "PandaConfig", "Quadrotor", "QuadrotorConfig", "RobotState"]

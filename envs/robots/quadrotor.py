@@ -1,0 +1,324 @@
+"""Quadrotor (assets/robots/quadrotor.urdf): a Crazyflie-2.x-sized X-configuration nano quadrotor on rotor forces.
+
+It flies on forces alone: before every physics tick (:meth:`Quadrotor.before_tick`) the inner loop turns the held
+command into rotor speed commands, the motors follow them with a first-order lag, and each rotor's thrust is
+applied to its own link, with the rotors' drag-reaction torque on the body. Attitude therefore comes from the
+physics engine, never from setting a pose. Coefficients, limits and their sources: docs/quadrotor.md.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+from pathlib import Path
+
+import numpy as np
+from gymnasium import spaces
+
+from clutter_gym.assets import asset_path
+from clutter_gym.noise.dynamics import DynamicsSample
+from clutter_gym.robots.aero import AERO_EFFECTS, ground_effect_gain, rotor_drag
+from clutter_gym.robots.dynamics import scale_link_dynamics
+from clutter_gym.robots.rate_loop import Mixer, RateController, RateGains, allocation
+from clutter_gym.robots.rigid_body import rigid_body
+from clutter_gym.robots.rotors import RotorModel
+from clutter_gym.robots.state import RobotState
+from clutter_gym.sim import Sim
+from clutter_gym.util.checks import is_number
+from clutter_gym.util.transforms import quat_to_matrix, yaw_quat
+
+ROTOR_LINKS = ("rotor_1", "rotor_2", "rotor_3", "rotor_4")
+#: Spin of each rotor of ``ROTOR_LINKS``: +1 counter-clockwise seen from above. Diagonal rotors turn alike, so equal
+#: speeds cancel their drag torques; rotor_1 (front right) turns counter-clockwise.
+ROTOR_SPIN = (1.0, -1.0, 1.0, -1.0)
+#: Links whose states are read every control step: every link with collision geometry, the IMU and the sensor mount.
+TRACKED_LINKS = ("battery", "arm_1", "arm_2", "arm_3", "arm_4", *ROTOR_LINKS, "imu", "sensor_mount")
+CONTROL_MODES = ("rates", "motors")
+
+_ZERO = (0.0, 0.0, 0.0)
+#: (low, high, low_open) of every number field: low < value (low_open) or low <= value, and value <= high
+_RANGES = {
+    "thrust_coefficient": (0.0, 1e-4, True),
+    "torque_coefficient": (0.0, 1e-5, False),
+    "motor_time_constant": (0.0, 1.0, False),
+    "min_rotor_speed": (0.0, 1e4, False),
+    "max_rotor_speed": (0.0, 1e4, True),
+    "max_roll_rate": (0.0, 20.0, True),
+    "max_pitch_rate": (0.0, 20.0, True),
+    "max_yaw_rate": (0.0, 10.0, True),
+    "rate_kp_roll_pitch": (0.0, 200.0, True),
+    "rate_kp_yaw": (0.0, 200.0, True),
+    "rate_ki_roll_pitch": (0.0, 1000.0, False),
+    "rate_ki_yaw": (0.0, 1000.0, False),
+    "rate_integral_limit": (0.0, 10.0, True),
+    "drag_xy": (0.0, 1e-3, False),
+    "drag_z": (0.0, 1e-3, False),
+    "rotor_radius": (0.0, 0.5, True),
+}
+
+
+@dataclass(frozen=True)
+class QuadrotorConfig:
+    """Actuation, inner loop and aerodynamics of the quadrotor (defaults: docs/quadrotor.md, with sources).
+
+    Attributes:
+        control: ``"rates"``: action = (collective thrust, roll rate, pitch rate, yaw rate), tracked by the inner
+            rate loop; ``"motors"``: action = one speed command per rotor.
+        thrust_coefficient: kf, N / (rad/s)^2.
+        torque_coefficient: km, N m / (rad/s)^2.
+        motor_time_constant: first-order lag of the rotor speeds, seconds (0: none).
+        min_rotor_speed: rad/s; action -1 of the motor mode.
+        max_rotor_speed: rad/s; action +1 of the motor mode, and the collective thrust of action[0] = 1.
+        max_roll_rate: body roll rate of action[1] = 1, rad/s.
+        max_pitch_rate: body pitch rate of action[2] = 1, rad/s.
+        max_yaw_rate: body yaw rate of action[3] = 1, rad/s.
+        rate_kp_roll_pitch: proportional gain of the roll and pitch rate loops, 1/s.
+        rate_kp_yaw: proportional gain of the yaw rate loop, 1/s.
+        rate_ki_roll_pitch: integral gain of the roll and pitch rate loops, 1/s^2.
+        rate_ki_yaw: integral gain of the yaw rate loop, 1/s^2.
+        rate_integral_limit: bound of each axis' integrated rate error, rad.
+        drag_xy: rotor-induced drag coefficient along body x and y, kg/rad (``"drag"`` in ``aero``).
+        drag_z: rotor-induced drag coefficient along body z, kg/rad.
+        rotor_radius: propeller radius for the ground effect, metres.
+        aero: aerodynamic effects on, a subset of ``("drag", "ground_effect")`` (empty: none).
+        start_hovering: episodes start with every rotor at the nominal hover speed (else stopped).
+    """
+
+    control: str = "rates"
+    thrust_coefficient: float = 2.8816e-8
+    torque_coefficient: float = 1.7187e-10
+    motor_time_constant: float = 0.05
+    min_rotor_speed: float = 0.0
+    max_rotor_speed: float = 2272.7
+    max_roll_rate: float = 3.0
+    max_pitch_rate: float = 3.0
+    max_yaw_rate: float = 2.0
+    rate_kp_roll_pitch: float = 10.0
+    rate_kp_yaw: float = 10.0
+    rate_ki_roll_pitch: float = 0.0
+    rate_ki_yaw: float = 0.0
+    rate_integral_limit: float = 0.5
+    drag_xy: float = 9.1785e-7
+    drag_z: float = 10.311e-7
+    rotor_radius: float = 0.0231348
+    aero: tuple[str, ...] = ()
+    start_hovering: bool = True
+
+    def __post_init__(self) -> None:
+        if self.control not in CONTROL_MODES:
+            raise ValueError(f"control must be one of {CONTROL_MODES}, got {self.control!r}")
+        for field in fields(self):
+            if field.name not in _RANGES:
+                continue
+            lo, hi, low_open = _RANGES[field.name]
+            value = getattr(self, field.name)
+            number = is_number(value) and math.isfinite(value)
+            if not (number and (lo < value if low_open else lo <= value) and value <= hi):
+                bracket = "(" if low_open else "["
+                raise ValueError(f"{field.name} must be a number in {bracket}{lo}, {hi}], got {value!r}")
+        if self.min_rotor_speed >= self.max_rotor_speed:
+            raise ValueError(
+                f"min_rotor_speed must be in [0, max_rotor_speed={self.max_rotor_speed}), got {self.min_rotor_speed!r}"
+            )
+        if not (isinstance(self.aero, tuple) and set(self.aero) <= set(AERO_EFFECTS)
+                and len(set(self.aero)) == len(self.aero)):
+            raise ValueError(f"aero must be a tuple of distinct names from {AERO_EFFECTS}, got {self.aero!r}")
+        if not isinstance(self.start_hovering, bool):
+            raise ValueError(f"start_hovering must be True or False, got {self.start_hovering!r}")
+
+    def rotor_model(self) -> RotorModel:
+        """The rotors these values describe."""
+        return RotorModel(self.thrust_coefficient, self.torque_coefficient, self.motor_time_constant,
+                          self.min_rotor_speed, self.max_rotor_speed)
+
+    def rate_gains(self) -> RateGains:
+        """The rate loop's gains, (roll, pitch, yaw)."""
+        rp, y = self.rate_kp_roll_pitch, self.rate_kp_yaw
+        return RateGains((rp, rp, y), (self.rate_ki_roll_pitch, self.rate_ki_roll_pitch, self.rate_ki_yaw),
+                         self.rate_integral_limit)
+
+
+class Quadrotor:
+    """Rate- or motor-commanded quadrotor on per-rotor forces.
+
+    Action: Box(-1, 1, (4,)). With ``control="rates"``: ``T = (a0 + 1) / 2 * 4 kf w_max^2`` (N, collective
+    thrust, 0 to the four rotors' maximum) and body rates ``(p, q, r) = (a1, a2, a3) * (max_roll_rate,
+    max_pitch_rate, max_yaw_rate)`` (rad/s, body frame, counter-clockwise positive about x forward, y left, z up);
+    the rate loop (:mod:`clutter_gym.robots.rate_loop`) and the mixer turn them into rotor speed commands at the
+    physics rate. With ``control="motors"``: rotor ``i``'s speed command is
+    ``w_min + (a_i + 1) / 2 * (w_max - w_min)`` (rad/s), in ``ROTOR_LINKS`` order.
+
+    The inner loop uses the nominal model (URDF mass and inertia, configured coefficients); per-episode dynamics
+    (:meth:`apply_dynamics`) change the simulated masses and the rotors' thrust and torque, not the model, as an
+    airframe differs from its datasheet. pybullet's velocity damping is off: the only drag is the optional
+    ``aero`` model.
+
+    Attributes:
+        ticked: the robot needs :meth:`before_tick` before every physics tick (the env steps tick by tick).
+        model: mass properties of the URDF (mass, centre of mass, inertia), the inner loop's plant model.
+        rotors: the rotor model.
+    """
+
+    name = "quadrotor"
+    base_link = "base_link"
+    urdf = "robots/quadrotor.urdf"
+    ticked = True
+
+    def __init__(self, config: QuadrotorConfig | None = None) -> None:
+        self.config = c = config or QuadrotorConfig()
+        self.action_space = spaces.Box(-1.0, 1.0, shape=(4,), dtype=np.float32)
+        self.spaces = {"rotor_speeds": spaces.Box(0.0, 1.0, shape=(4,), dtype=np.float32)}
+        self.rotors = c.rotor_model()
+        self.model = rigid_body(self.urdf_path)
+        self._spin = np.array(ROTOR_SPIN)
+        self._hubs = np.array([self.model.frames[n][0] - self.model.com for n in ROTOR_LINKS])
+        alloc = allocation(self._hubs[:, :2], self._spin, c.torque_coefficient / c.thrust_coefficient)
+        self.mixer = Mixer(alloc, self.rotors.min_thrust, self.rotors.max_thrust)
+        self._rate_scale = np.array([c.max_roll_rate, c.max_pitch_rate, c.max_yaw_rate])
+        self._drag = "drag" in c.aero
+        self._ground_effect = "ground_effect" in c.aero
+        self._sim: Sim | None = None
+        self._body = -1
+        self._controller: RateController | None = None
+        self._decay = 0.0
+        self._thrust_scale = 1.0  # the episode's motor strength
+        self._speeds = np.zeros(4)
+        self._speed_command = np.zeros(4)
+        self._thrust_command = 0.0
+        self._rate_command = np.zeros(3)
+
+    @property
+    def urdf_path(self) -> Path:
+        return asset_path(self.urdf)
+
+    @property
+    def body(self) -> int:
+        return self._body
+
+    @property
+    def rotor_speeds(self) -> np.ndarray:
+        """Current rotor speeds, rad/s, in ``ROTOR_LINKS`` order (a copy)."""
+        return self._speeds.copy()
+
+    def hover_speed(self, gravity: float) -> float:
+        """Rotor speed (rad/s) at which the four nominal rotors carry the nominal weight."""
+        return math.sqrt(self.model.mass * gravity / (4.0 * self.config.thrust_coefficient))
+
+    def hover_action(self, gravity: float) -> np.ndarray:
+        """The action that holds a level hover at rest in the configured control mode (zero rates)."""
+        c = self.config
+        if c.control == "rates":
+            thrust = self.model.mass * gravity / (4.0 * self.rotors.max_thrust)
+            return np.array([2.0 * thrust - 1.0, 0.0, 0.0, 0.0])
+        level = (self.hover_speed(gravity) - c.min_rotor_speed) / (c.max_rotor_speed - c.min_rotor_speed)
+        return np.full(4, 2.0 * level - 1.0)
+
+    def load(self, sim: Sim) -> int:
+        """Load the URDF into ``sim`` with its own inertias, switch off velocity damping and look up links.
+
+        pybullet recomputes every link's inertia from its collision shapes when it loads a URDF, which is wrong for
+        a link whose mass is not spread like its collision primitive (a rotor's motor and propeller); the URDF's
+        values are set back here, and they are the nominal values :meth:`apply_dynamics` scales.
+
+        Raises:
+            ValueError: a link's URDF inertia has products of inertia (pybullet takes principal moments only).
+        """
+        self._sim = sim
+        self._body = sim.load_urdf("robot", self.urdf_path)
+        sim.set_damping(self._body, 0.0, 0.0)
+        sim.hide_from_rays(self._body)
+        self.link_index = sim.link_indices(self._body)
+        self.link_names = TRACKED_LINKS
+        self._tracked = tuple(self.link_index[name] for name in TRACKED_LINKS)
+        self._rotor_links = [self.link_index[name] for name in ROTOR_LINKS]
+        self._com_offset = sim.base_inertial_offset(self._body)
+        dt = 1.0 / sim.physics_hz
+        self._decay = self.rotors.decay(dt)
+        self._controller = RateController(self.model.inertia, self.config.rate_gains(), dt)
+        self._gravity = sim.gravity
+        links = sorted(self.link_index.values())  # -1, the base, first
+        friction = [f for _, f, _ in sim.inertial_properties(self._body, links)]
+        names = {index: name for name, index in self.link_index.items()}
+        self._nominal = {}
+        for link, mu in zip(links, friction):
+            mass, inertia = self.model.link_inertias[names[link]]
+            if np.count_nonzero(inertia - np.diag(np.diag(inertia))):
+                raise ValueError(f"{self.urdf} link {names[link]!r}: give the inertia in principal axes")
+            self._nominal[link] = (mass, mu, tuple(np.diag(inertia).tolist()))
+        scale_link_dynamics(sim, self._body, self._nominal, DynamicsSample())
+        self._dynamics = DynamicsSample()
+        self._thrust_scale = 1.0
+        return self._body
+
+    def apply_dynamics(self, sample: DynamicsSample) -> None:
+        """Set this episode's masses (inertias scale with them), friction and restitution relative to the URDF,
+        and scale the rotors' thrust and torque by the motor strength (the inner loop keeps the nominal model)."""
+        if sample == self._dynamics:
+            return
+        scale_link_dynamics(self._sim, self._body, self._nominal, sample)
+        self._thrust_scale = sample.motor_scale
+        self._dynamics = sample
+
+    def reset_to(self, start: tuple[float, float, float, float]) -> None:
+        """Place the robot at rest at ``start`` = (x m, y m, z m of the base frame, yaw rad), level; the rotors
+        spin at hover speed (``start_hovering``) or stand, and the command holds that state."""
+        x, y, z, yaw = start
+        q = yaw_quat(yaw)
+        com = np.array([x, y, z]) + quat_to_matrix(np.array(q)) @ self._com_offset
+        self._sim.set_pose(self._body, com, q)
+        self._sim.forget_contacts(self._body)
+        self._controller.reset()
+        hovering = self.config.start_hovering
+        self._speeds = np.full(4, self.hover_speed(self._gravity) if hovering else self.config.min_rotor_speed)
+        self._speeds = np.clip(self._speeds, self.config.min_rotor_speed, self.config.max_rotor_speed)
+        self.apply_action(self.hover_action(self._gravity) if hovering else -np.ones(4))
+
+    def apply_action(self, action: np.ndarray) -> None:
+        """Hold a clipped, normalised action as the command of the coming ticks."""
+        a = np.asarray(action, dtype=float)
+        c = self.config
+        if c.control == "motors":
+            self._speed_command = c.min_rotor_speed + 0.5 * (a + 1.0) * (c.max_rotor_speed - c.min_rotor_speed)
+        else:
+            self._thrust_command = 0.5 * (a[0] + 1.0) * 4.0 * self.rotors.max_thrust
+            self._rate_command = a[1:4] * self._rate_scale
+
+    def before_tick(self) -> None:
+        """One physics tick of actuation: inner loop, motor lag, then rotor forces and the body torque for the
+        next ``stepSimulation`` (which clears them). Rotor speeds advance first, so a tick's forces come from the
+        speeds at its end."""
+        sim = self._sim
+        com, rot, lin, ang = sim.base_state(self._body)
+        if self.config.control == "rates":
+            torque = self._controller.torque(self._rate_command, rot.T @ np.asarray(ang))
+            command = self.rotors.speed_for_thrust(self.mixer.mix(self._thrust_command, torque))
+        else:
+            command = self._speed_command
+        self._speeds = speeds = self.rotors.step(self._speeds, command, self._decay)
+        thrust = self.rotors.thrust(speeds) * self._thrust_scale
+        if self._ground_effect and rot[2, 2] > 0.0:  # upright: the rotors blow towards the ground
+            heights = com[2] + rot[2] @ self._hubs.T
+            thrust = thrust * ground_effect_gain(heights, self.config.rotor_radius)
+        sim.apply_link_forces(self._body, self._rotor_links, [(0.0, 0.0, f) for f in thrust.tolist()])
+        yaw = self.rotors.yaw_torque(speeds, self._spin) * self._thrust_scale
+        force = rot @ rotor_drag(rot.T @ np.asarray(lin), speeds, self.config.drag_xy, self.config.drag_z) \
+            if self._drag else _ZERO
+        sim.apply_base_wrench(self._body, force, (yaw * rot[0, 2], yaw * rot[1, 2], yaw * rot[2, 2]))
+
+    def state(self) -> RobotState:
+        """Ground-truth state from batched pybullet reads."""
+        com, rot, lin, ang = self._sim.base_state(self._body)
+        return RobotState(
+            position=np.asarray(com) - rot @ self._com_offset,
+            rotation=rot,
+            linear_velocity=lin,
+            angular_velocity=ang,
+            links=self._sim.link_states(self._body, self._tracked),
+            link_names=self.link_names,
+            link_index=self.link_index,
+            body=self._body,
+        )
+
+    def observe(self, state: RobotState) -> dict[str, np.ndarray]:
+        """``rotor_speeds``: each rotor's speed over ``max_rotor_speed``, in [0, 1] (an RPM sensor's reading)."""
+        return {"rotor_speeds": (self._speeds / self.config.max_rotor_speed).astype(np.float32)}
