@@ -15,7 +15,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-import clutter_gym.sim
+import clutter_gym.sim.core
 from benchmarks.memory import new_sizes_scene, resident_mib
 from clutter_gym.collision.obstacles import ObstacleObjects, obstacle_object
 from clutter_gym.worlds import ClutterSpec, sample_scene
@@ -54,7 +54,7 @@ def test_generated_layouts_share_shapes_and_hold_memory_flat():
 
 
 def test_new_sizes_every_reset_rebuild_the_world_and_hold_memory_flat(monkeypatch):
-    monkeypatch.setattr(clutter_gym.sim, "MAX_SHAPES", 60)  # a rebuild every 12 resets instead of every ~100
+    monkeypatch.setattr(clutter_gym.sim.core, "MAX_SHAPES", 60)  # a rebuild every 12 resets instead of every ~100
     env = gym.make("ClutterNav-v0")
     env.reset(seed=0)
     rng = np.random.default_rng(0)
@@ -88,7 +88,7 @@ def test_a_rebuilt_world_runs_as_a_fresh_one(monkeypatch):
     names = fresh.unwrapped.sim.body_names()
     fresh.close()
 
-    monkeypatch.setattr(clutter_gym.sim, "MAX_SHAPES", 8)
+    monkeypatch.setattr(clutter_gym.sim.core, "MAX_SHAPES", 8)
     env = gym.make("ClutterNav-v0")
     rng = np.random.default_rng(0)
     for _ in range(2):

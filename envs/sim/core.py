@@ -1,42 +1,29 @@
-"""The one gateway to pybullet (docs/architecture.md, "Rules"): a physics client, bodies by name, batched reads.
+""":class:`Sim`: one pybullet physics client, its world and robots, and the batched reads of the hot path.
 
-Every pybullet call in clutter-gym goes through :class:`Sim`. It passes its own ``physicsClientId`` to pybullet
-directly rather than going through ``pybullet_utils.BulletClient``, which adds overhead to every call
-(docs/design-notes.md#no-bulletclient).
-
-pybullet prints its build banner (stderr) and URDF/shape warnings (stdout) from C, straight to the file
-descriptors; :func:`quiet_c_output` silences them around the calls that print, so output stays readable.
+Obstacle bodies (:mod:`clutter_gym.sim.obstacles`) and camera images (:mod:`clutter_gym.sim.rendering`) are its
+other two parts, mixed into the class; all three share the client id and the caches :meth:`Sim._empty_world` sets.
 """
 
 from __future__ import annotations
 
 import contextlib
-import importlib.util
 import operator
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+import pybullet as pb  # imported quietly by the package first
 
-from clutter_gym.util.meshes import prism_mesh
+from clutter_gym.sim.obstacles import ObstacleBodies
+from clutter_gym.sim.rendering import Rendering
 from clutter_gym.util.quiet import quiet_c_output
 from clutter_gym.util.view_culling import ViewCuller
 
-with quiet_c_output():
-    import pybullet as pb
-
-
-CYLINDER_SIDES = 64
 #: Collision-filter group of bodies that rays do not report (the robot: a LIDAR never sees its own chassis).
 #: pybullet applies the ray mask after the narrow phase, so this is about correctness, not speed.
 RAY_INVISIBLE_GROUP = 4
 _RAY_MASK = -1 ^ RAY_INVISIBLE_GROUP
-_DYNAMIC_GROUP = 1  # Bullet's collision group of dynamic bodies
-
-_INVISIBLE = (0.0, 0.0, 0.0, 0.0)
-
-_UNIT_PRISM = prism_mesh(1.0, 1.0, CYLINDER_SIDES)
 #: pybullet frees no shape a body has used (``removeCollisionShape`` then frees nothing) and keeps about a
 #: kilobyte of every removed body; only ``resetSimulation`` gives the memory back (docs/design-notes.md#memory).
 #: Past either limit :attr:`Sim.needs_rebuild` turns true, and the env rebuilds its world on the next reset.
@@ -44,12 +31,6 @@ MAX_SHAPES = 256
 MAX_REMOVED_BODIES = 2_000
 _HIT_FRACTION = operator.itemgetter(2)  # field 2 of a rayTestBatch result row
 MAX_RAY_BATCH = 16383  # rays one rayTestBatch call answers (16,384 silently return nothing, more raise)
-#: Bodies one ``createMultiBody(batchPositions=...)`` call makes. pybullet passes the positions in its data stream,
-#: 1 MiB on macOS (8 MiB elsewhere), and silently cuts a longer list short (24 bytes a body).
-MAX_BODY_BATCH = 4096
-#: The collision filter Bullet gives a static body: it meets every group but other static bodies.
-_STATIC_GROUP = 2
-_STATIC_MASK = -1 ^ _STATIC_GROUP
 
 
 @dataclass(frozen=True, slots=True)
@@ -76,7 +57,7 @@ def pybullet_data_file(relative: str) -> Path:
     return Path(pybullet_data.getDataPath()) / relative
 
 
-class Sim:
+class Sim(ObstacleBodies, Rendering):
     """One pybullet physics client.
 
     Args:
@@ -219,221 +200,6 @@ class Sim:
         self._freed.discard(body)
         return self._register(name, body)
 
-    def add_static_boxes(
-        self, half_extents: Sequence[float], rgba: Sequence[float], positions: Sequence[Sequence[float]]
-    ) -> list[int]:
-        """Add static (mass 0) boxes of one size and colour, one centred at each of ``positions`` (metres, world
-        frame) and unrotated (turn them with :meth:`move_static`); returns their body ids in that order.
-
-        Bodies of one size and colour share their shapes: pybullet could not free a second copy.
-
-        Args:
-            half_extents: half sizes along x, y and z in metres.
-            rgba: colour, each channel in [0, 1].
-            positions: centres, one per box.
-        """
-        shapes = self._box_shapes(half_extents, rgba)
-        return self._static_bodies(*shapes, positions, float(np.linalg.norm(half_extents)), rgba)
-
-    def _box_shapes(self, half_extents: Sequence[float], rgba: Sequence[float]) -> tuple[int, int]:
-        """(collision, visual) shape ids of a box, made once per size and colour; static and movable boxes share
-        them."""
-        key = ("box", tuple(map(float, half_extents)), tuple(rgba))
-        if key not in self._shapes:
-            self._shapes[key] = (
-                pb.createCollisionShape(pb.GEOM_BOX, halfExtents=half_extents, physicsClientId=self._cid),
-                self._visual_shape(pb.GEOM_BOX, halfExtents=half_extents, rgbaColor=rgba),
-            )
-        return self._shapes[key]
-
-    def add_static_cylinders(
-        self, radius: float, height: float, rgba: Sequence[float], positions: Sequence[Sequence[float]]
-    ) -> list[int]:
-        """Add static (mass 0) upright cylinders of one size and colour, like :meth:`add_static_boxes`.
-
-        Their collision shape is a concave triangle mesh of a ``CYLINDER_SIDES``-gon prism with the circle's area,
-        not Bullet's cylinder primitive: rays against the primitive go through GJK convex casting, which is slow and
-        still inexact, while the prism is hit by BVH ray-triangle tests, faster and with sub-millimetre error
-        (docs/design-notes.md#cylinders). The visual shape stays a true cylinder. The mesh has no collision margin:
-        pybullet's default margin makes contacts fire before FCL's exact cylinder touches
-        (docs/design-notes.md#mesh-collision-margin).
-
-        Args:
-            radius: radius in metres.
-            height: height in metres.
-            rgba: colour, each channel in [0, 1].
-            positions: centres, one per cylinder.
-        """
-        key = ("cylinder", (float(radius), float(height)), tuple(rgba))
-        if key not in self._shapes:
-            vertices, indices = _UNIT_PRISM  # one shared list: pybullet keeps a reference to every list it is given
-            self._shapes[key] = (
-                pb.createCollisionShape(
-                    pb.GEOM_MESH,
-                    vertices=vertices,
-                    indices=indices,
-                    meshScale=[radius, radius, height],
-                    flags=pb.GEOM_FORCE_CONCAVE_TRIMESH,
-                    physicsClientId=self._cid,
-                ),
-                self._visual_shape(pb.GEOM_CYLINDER, radius=radius, length=height, rgbaColor=rgba),
-            )
-        bodies = self._static_bodies(*self._shapes[key], positions, float(np.hypot(radius, 0.5 * height)), rgba)
-        for body in bodies:
-            pb.changeDynamics(body, -1, collisionMargin=0.0, physicsClientId=self._cid)
-        return bodies
-
-    def add_movable_box(self, half_extents: Sequence[float], rgba: Sequence[float]) -> int:
-        """Add a dynamic box centred at the origin, parked (mass 0) until :meth:`set_mass` gives it a mass; returns
-        its body id. Shapes are shared like :meth:`add_static_boxes`'s."""
-        return self._movable_body(*self._box_shapes(half_extents, rgba), float(np.linalg.norm(half_extents)), rgba)
-
-    def add_movable_cylinder(self, radius: float, height: float, rgba: Sequence[float]) -> int:
-        """Add a dynamic upright cylinder centred at the origin, like :meth:`add_movable_box`.
-
-        Its collision shape is the convex hull of the prism :meth:`add_static_cylinders` uses (Bullet cannot move a
-        concave triangle mesh), without collision margin, so rays and contacts see the same shape either way.
-        """
-        key = ("movable cylinder", (float(radius), float(height)), tuple(rgba))
-        if key not in self._shapes:
-            vertices, _ = _UNIT_PRISM
-            self._shapes[key] = (
-                pb.createCollisionShape(pb.GEOM_MESH, vertices=vertices, meshScale=[radius, radius, height],
-                                        physicsClientId=self._cid),
-                self._visual_shape(pb.GEOM_CYLINDER, radius=radius, length=height, rgbaColor=rgba),
-            )
-        body = self._movable_body(*self._shapes[key], float(np.hypot(radius, 0.5 * height)), rgba)
-        pb.changeDynamics(body, -1, collisionMargin=0.0, physicsClientId=self._cid)
-        return body
-
-    def _movable_body(self, collision: int, visual: int, radius: float, rgba: Sequence[float]) -> int:
-        """A rigid body made with a mass, so that it is dynamic (a body made with mass 0 stays static for good),
-        then parked at mass 0; its collision filter is recorded so that :meth:`forget_contacts` can reset it. One
-        call each, which returns the true id whatever removed ids wait for reuse."""
-        body = pb.createMultiBody(1.0, collision, visual, useMaximalCoordinates=True, physicsClientId=self._cid)
-        pb.changeDynamics(body, -1, mass=0.0, physicsClientId=self._cid)
-        self._body_ids.add(body)
-        self._freed.discard(body)
-        self._filters[body] = (_DYNAMIC_GROUP, -1)
-        if self.visuals:
-            self.culler.add(body, radius, tuple(np.float32(rgba).tolist()))
-        return body
-
-    def set_mass(self, body: int, mass: float, inertia: Sequence[float] = (0.0, 0.0, 0.0)) -> None:
-        """Give a body made by :meth:`add_movable_box` or :meth:`add_movable_cylinder` its mass (kg) and principal
-        moments of inertia (kg m^2, about its centre); mass 0 holds it where it is. Its velocity is zeroed and its
-        contact history forgotten, so that a body placed again starts as if new (same seed, same trajectory). It falls
-        asleep once it has rested a while, as Bullet's bodies can (pybullet turns that off by default): a resting
-        body then stays exactly where it is until something touches it."""
-        pb.changeDynamics(body, -1, mass=mass, localInertiaDiagonal=inertia,
-                          activationState=pb.ACTIVATION_STATE_ENABLE_SLEEPING, physicsClientId=self._cid)
-        pb.resetBaseVelocity(body, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), physicsClientId=self._cid)
-        self.forget_contacts(body)
-
-    def body_poses(self, bodies: Sequence[int]) -> tuple[np.ndarray, np.ndarray]:
-        """(n, 3) positions (metres) and (n, 3, 3) rotation matrices of ``bodies``' base frames; the view culler
-        follows them (call it after the physics moved them)."""
-        poses = [pb.getBasePositionAndOrientation(b, physicsClientId=self._cid) for b in bodies]
-        positions = np.array([p for p, _ in poses], dtype=float).reshape(-1, 3)
-        rotations = np.array([pb.getMatrixFromQuaternion(q) for _, q in poses], dtype=float).reshape(-1, 3, 3)
-        for body, position in zip(bodies, positions):
-            self.culler.move(body, position)
-        return positions, rotations
-
-    def _visual_shape(self, geometry: int, **kwargs) -> int:
-        """A visual shape of an obstacle, or -1 (none) when this Sim has no :attr:`visuals`."""
-        if not self.visuals:
-            return -1
-        return pb.createVisualShape(geometry, **kwargs, physicsClientId=self._cid)
-
-    def _static_bodies(
-        self,
-        collision: int,
-        visual: int,
-        positions: Sequence[Sequence[float]],
-        radius: float | None = None,
-        rgba: Sequence[float] = (),
-    ) -> list[int]:
-        """Add mass-0 bodies as plain (maximal-coordinate) rigid bodies, not Featherstone multibodies, one at each of
-        ``positions``; returns their ids in that order.
-
-        Every body in the world costs each physics tick, even fixed and far away, and a multibody costs more than a
-        static rigid body, a sleeping one less again (docs/design-notes.md#static-bodies).
-
-        Bodies are made up to :data:`MAX_BODY_BATCH` in one ``createMultiBody(batchPositions=...)`` call. After a
-        call pybullet's server serialises a description of the body it made and its client parses it, most of what
-        a call costs; a batch describes only its last body (docs/design-notes.md#batched-bodies). The client's list
-        of bodies (``getNumBodies``) then misses the others: :meth:`body_ids` keeps them. pybullet numbers a batch as
-        if its ids were consecutive, which holds only while no removed id is left for it to reuse (it reuses those
-        first), so until then bodies are made one call each, and each call returns its true id.
-
-        Args:
-            collision: collision shape id (-1: visual only).
-            visual: visual shape id (-1: none).
-            positions: base positions in metres, world frame.
-            radius: radius in metres of a sphere about a body's origin that holds its visual. Bodies given one join
-                :attr:`culler` (when this Sim has :attr:`visuals`) and are culled from the camera frames they cannot
-                appear in.
-            rgba: the visual's colour, each channel in [0, 1] (needed with ``radius``).
-        """
-        positions = [[float(v) for v in p] for p in positions]
-        bodies: list[int] = []
-        while len(bodies) < len(positions):
-            batch = positions[len(bodies):len(bodies) + MAX_BODY_BATCH]
-            if self._freed:
-                body = pb.createMultiBody(
-                    0.0, collision, visual, batch[0], useMaximalCoordinates=True, physicsClientId=self._cid
-                )
-                self._freed.discard(body)
-                bodies.append(body)
-            else:
-                bodies.extend(pb.createMultiBody(
-                    0.0, collision, visual, useMaximalCoordinates=True, batchPositions=batch, physicsClientId=self._cid
-                ))
-        self._body_ids.update(bodies)
-        if radius is not None and self.visuals:
-            colour = tuple(np.float32(rgba).tolist())  # the colour as pybullet stores it: single precision
-            for body, position in zip(bodies, positions):
-                self.culler.add(body, radius, colour)
-                self.culler.move(body, position)
-        return bodies
-
-    def order_broadphase(self, bodies: Sequence[int]) -> None:
-        """Give the obstacle ``bodies`` new broad-phase entries, in this order, after those of every other body.
-
-        Bullet solves a tick's contacts in the order of their bodies' broad-phase ids, which follow the order the
-        bodies were made in: two obstacles a robot touches at once, made the other way round, give another
-        trajectory. Bodies made in batches, one shape at a time, get here the order of their scene
-        (docs/design-notes.md#batched-bodies). Their cached contacts go, as those of a body just made would.
-        """
-        for body in bodies:
-            group, mask = self._filters.get(body, (_STATIC_GROUP, _STATIC_MASK))  # movable bodies keep their own
-            pb.setCollisionFilterGroupMask(body, -1, group, mask, physicsClientId=self._cid)
-
-    def remove_body(self, body: int) -> None:
-        """Delete a body from the world (its collision and visual shapes stay cached for reuse)."""
-        pb.removeBody(body, physicsClientId=self._cid)
-        self.culler.remove(body)
-        self._visuals.pop(body, None)
-        self._body_ids.discard(body)
-        self._freed.add(body)
-        self._removed_bodies += 1
-
-    def set_visible(self, body: int, visible: bool, rgba: Sequence[float]) -> None:
-        """Show a single-shape body in colour ``rgba`` (channels in [0, 1]), or hide it from every renderer (fully
-        transparent shapes are skipped by TinyRenderer: a parked obstacle then costs a camera frame nothing).
-
-        Does nothing in a Sim without :attr:`visuals`."""
-        if not self.visuals:
-            return
-        colour = (*rgba[:3], rgba[3] if visible else 0.0)
-        pb.changeVisualShape(body, -1, rgbaColor=colour, physicsClientId=self._cid)
-        self.culler.set_colour(body, colour)
-
-    def sleep(self, body: int) -> None:
-        """Deactivate a static body so the physics tick skips it (teleporting it wakes it again)."""
-        pb.changeDynamics(body, -1, activationState=pb.ACTIVATION_STATE_SLEEP, physicsClientId=self._cid)
-
     def add_marker(self, name: str, radius: float, rgba: Sequence[float]) -> int:
         """Add a visual-only disc 1 cm thick, ``radius`` in metres, e.g. a goal marker; returns its body id.
 
@@ -477,12 +243,6 @@ class Sim:
         group, mask = self._filters[body]
         for link in range(-1, pb.getNumJoints(body, physicsClientId=self._cid)):
             pb.setCollisionFilterGroupMask(body, link, group, mask, physicsClientId=self._cid)
-
-    def move_static(self, body: int, position: Sequence[float], quaternion: Sequence[float]) -> None:
-        """Teleport a static body's base inertial frame to ``position`` (metres, world frame) and ``quaternion``
-        (x, y, z, w); it has no velocity to reset."""
-        pb.resetBasePositionAndOrientation(body, position, quaternion, physicsClientId=self._cid)
-        self.culler.move(body, position)
 
     def set_pose(self, body: int, position: Sequence[float], quaternion: Sequence[float]) -> None:
         """Teleport a body's base inertial frame to ``position`` (metres) and ``quaternion`` (x, y, z, w), world
@@ -684,129 +444,6 @@ class Sim:
             (c[2], c[8]) for c in pb.getContactPoints(bodyA=body, physicsClientId=self._cid)
         ]
 
-    # ---------------------------------------------------------------------------------------- rendering
-    def render(
-        self,
-        width: int,
-        height: int,
-        eye: Sequence[float],
-        target: Sequence[float],
-        fov_deg: float = 60.0,
-    ) -> np.ndarray:
-        """An RGB image (height, width, 3) uint8 from TinyRenderer looking from ``eye`` to ``target`` (world frame,
-        metres) with a vertical field of view of ``fov_deg`` degrees.
-
-        Raises:
-            RuntimeError: this Sim has no :attr:`visuals`.
-        """
-        self._check_visuals()
-        view = pb.computeViewMatrix(eye, target, (0.0, 0.0, 1.0), physicsClientId=self._cid)
-        proj = pb.computeProjectionMatrixFOV(fov_deg, width / height, 0.05, 50.0, physicsClientId=self._cid)
-        _, _, rgba, _, _ = pb.getCameraImage(
-            width,
-            height,
-            view,
-            proj,
-            renderer=pb.ER_TINY_RENDERER,
-            flags=pb.ER_NO_SEGMENTATION_MASK,
-            physicsClientId=self._cid,
-        )
-        return np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)[:, :, :3].copy()
-
-    def camera_image(
-        self,
-        width: int,
-        height: int,
-        view: Sequence[float],
-        projection: Sequence[float],
-        segmentation: bool,
-        behind: int = -1,
-        cull: bool = True,
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-        """One ``getCameraImage``.
-
-        The renderer is TinyRenderer unless :meth:`use_egl` loaded the EGL plugin. TinyRenderer transforms every
-        triangle of every shown visual, in view or not, so some bodies are hidden for the frame (made fully
-        transparent, which it skips; the images are the same, tests/sensors/test_camera_culling.py):
-
-        * ``behind``, a body that lies wholly behind the camera (the robot carrying it). TinyRenderer rasterises
-          the projection of its triangles that reach in front of the eye over the whole viewport, so such a body
-          costs a large share of a frame while contributing no pixel (docs/design-notes.md#camera-frames).
-        * with ``cull``, and TinyRenderer, the static bodies ``culler.outside_view`` names.
-
-        Args:
-            width, height: image size in pixels.
-            view, projection: OpenGL matrices, column-major (16 values each; the view's translation in metres).
-            segmentation: also return body ids per pixel.
-            behind: id of a body wholly behind the camera, hidden for the frame (-1: none).
-            cull: hide, for the frame, the static bodies the camera cannot show.
-
-        Returns:
-            RGB (height, width, 3) uint8; the raw depth buffer (height, width) in [0, 1]; with ``segmentation``, the
-            body id per pixel (height, width), -1 where there is none, else None.
-
-        Raises:
-            RuntimeError: this Sim has no :attr:`visuals`.
-        """
-        self._check_visuals()
-        flags = pb.ER_SEGMENTATION_MASK_OBJECT_AND_LINKINDEX if segmentation else pb.ER_NO_SEGMENTATION_MASK
-        colours = self._visual_colours(behind) if behind >= 0 else []
-        tiny = self._renderer == pb.ER_TINY_RENDERER
-        culled = self.culler.outside_view(view, projection, width, height) if cull and tiny else []
-        for link, _ in colours:
-            pb.changeVisualShape(behind, link, rgbaColor=_INVISIBLE, physicsClientId=self._cid)
-        for body in culled:
-            pb.changeVisualShape(body, -1, rgbaColor=_INVISIBLE, physicsClientId=self._cid)
-        try:
-            _, _, rgba, depth, seg = pb.getCameraImage(
-                width, height, view, projection, renderer=self._renderer, flags=flags, physicsClientId=self._cid
-            )
-        finally:
-            for link, colour in colours:
-                pb.changeVisualShape(behind, link, rgbaColor=colour, physicsClientId=self._cid)
-            for body in culled:
-                pb.changeVisualShape(body, -1, rgbaColor=self.culler.colour(body), physicsClientId=self._cid)
-        rgb = np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)[:, :, :3]
-        depth = np.asarray(depth, dtype=np.float64).reshape(height, width)
-        if not segmentation:
-            return rgb, depth, None
-        seg = np.asarray(seg, dtype=np.int64).reshape(height, width)
-        return rgb, depth, np.where(seg >= 0, seg & ((1 << 24) - 1), -1)  # low 24 bits: the body id
-
-    def _check_visuals(self) -> None:
-        if not self.visuals:
-            raise RuntimeError("this Sim was made with visuals=False: its obstacles have no visual shapes to draw")
-
-    def _visual_colours(self, body: int) -> list[tuple[int, tuple]]:
-        """(link, rgba) of each link of ``body`` with a visual shape (read once, cached).
-
-        Raises:
-            ValueError: a link has several visual shapes: pybullet's ``changeVisualShape`` ignores its shape index,
-                so they could not get their colours back.
-        """
-        if body not in self._visuals:
-            links = [data[1] for data in pb.getVisualShapeData(body, physicsClientId=self._cid)]
-            if len(set(links)) != len(links):
-                raise ValueError(f"body {body} has a link with several visual shapes; give each its own link")
-            colours = [data[7] for data in pb.getVisualShapeData(body, physicsClientId=self._cid)]
-            self._visuals[body] = list(zip(links, colours))
-        return self._visuals[body]
-
-    def use_egl(self) -> None:
-        """Render camera images with the EGL (OpenGL, headless) plugin instead of TinyRenderer.
-
-        Raises:
-            RuntimeError: the plugin does not load on this machine (no EGL driver).
-        """
-        egl = importlib.util.find_spec("eglRenderer")
-        plugin = -1
-        if egl is not None and egl.origin:
-            with quiet_c_output():
-                plugin = pb.loadPlugin(egl.origin, "_eglRendererPlugin", physicsClientId=self._cid)
-        if plugin < 0:
-            raise RuntimeError("camera_renderer='egl': the pybullet EGL plugin did not load (no EGL driver?)")
-        self._renderer = pb.ER_BULLET_HARDWARE_OPENGL
-
     def link_frame(self, body: int, link: int) -> tuple[np.ndarray, np.ndarray]:
         """(origin (3,), rotation (3, 3)) of a link's URDF frame in world coordinates."""
         state = pb.getLinkState(body, link, physicsClientId=self._cid)
@@ -821,11 +458,6 @@ class Sim:
     def body_names(self) -> dict[int, str]:
         """Body id -> name of every named body (see :meth:`load_urdf`, :meth:`add_ground`, :meth:`add_marker`)."""
         return {body: name for name, body in self.bodies.items()}
-
-    def follow_camera(self, target: Sequence[float], distance: float, yaw_deg: float, pitch_deg: float) -> None:
-        """Point the GUI camera (render_mode="human") at ``target`` (metres) from ``distance`` metres away, turned by
-        ``yaw_deg`` and ``pitch_deg`` degrees."""
-        pb.resetDebugVisualizerCamera(distance, yaw_deg, pitch_deg, target, physicsClientId=self._cid)
 
     # ------------------------------------------------------------- bodies driven by external forces (quadrotor)
     # pybullet clears external forces after every stepSimulation: a robot that flies on them applies them before

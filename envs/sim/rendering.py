@@ -1,0 +1,148 @@
+"""Pictures of the world: the ``rgb_array`` render, robot-mounted camera images, the GUI camera, EGL.
+
+Part of :class:`clutter_gym.sim.Sim` (a mixin: it uses the client id, the renderer choice, the visual-colour cache
+and the view culler the Sim keeps).
+"""
+
+from __future__ import annotations
+
+import importlib.util
+from collections.abc import Sequence
+
+import numpy as np
+import pybullet as pb
+
+from clutter_gym.util.quiet import quiet_c_output
+
+_INVISIBLE = (0.0, 0.0, 0.0, 0.0)
+
+
+class Rendering:
+    """Camera images of a Sim's world (mixed into :class:`~clutter_gym.sim.Sim`)."""
+
+    def render(
+        self,
+        width: int,
+        height: int,
+        eye: Sequence[float],
+        target: Sequence[float],
+        fov_deg: float = 60.0,
+    ) -> np.ndarray:
+        """An RGB image (height, width, 3) uint8 from TinyRenderer looking from ``eye`` to ``target`` (world frame,
+        metres) with a vertical field of view of ``fov_deg`` degrees.
+
+        Raises:
+            RuntimeError: this Sim has no :attr:`visuals`.
+        """
+        self._check_visuals()
+        view = pb.computeViewMatrix(eye, target, (0.0, 0.0, 1.0), physicsClientId=self._cid)
+        proj = pb.computeProjectionMatrixFOV(fov_deg, width / height, 0.05, 50.0, physicsClientId=self._cid)
+        _, _, rgba, _, _ = pb.getCameraImage(
+            width,
+            height,
+            view,
+            proj,
+            renderer=pb.ER_TINY_RENDERER,
+            flags=pb.ER_NO_SEGMENTATION_MASK,
+            physicsClientId=self._cid,
+        )
+        return np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)[:, :, :3].copy()
+
+    def camera_image(
+        self,
+        width: int,
+        height: int,
+        view: Sequence[float],
+        projection: Sequence[float],
+        segmentation: bool,
+        behind: int = -1,
+        cull: bool = True,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        """One ``getCameraImage``.
+
+        The renderer is TinyRenderer unless :meth:`use_egl` loaded the EGL plugin. TinyRenderer transforms every
+        triangle of every shown visual, in view or not, so some bodies are hidden for the frame (made fully
+        transparent, which it skips; the images are the same, tests/sensors/test_camera_culling.py):
+
+        * ``behind``, a body that lies wholly behind the camera (the robot carrying it). TinyRenderer rasterises
+          the projection of its triangles that reach in front of the eye over the whole viewport, so such a body
+          costs a large share of a frame while contributing no pixel (docs/design-notes.md#camera-frames).
+        * with ``cull``, and TinyRenderer, the static bodies ``culler.outside_view`` names.
+
+        Args:
+            width, height: image size in pixels.
+            view, projection: OpenGL matrices, column-major (16 values each; the view's translation in metres).
+            segmentation: also return body ids per pixel.
+            behind: id of a body wholly behind the camera, hidden for the frame (-1: none).
+            cull: hide, for the frame, the static bodies the camera cannot show.
+
+        Returns:
+            RGB (height, width, 3) uint8; the raw depth buffer (height, width) in [0, 1]; with ``segmentation``, the
+            body id per pixel (height, width), -1 where there is none, else None.
+
+        Raises:
+            RuntimeError: this Sim has no :attr:`visuals`.
+        """
+        self._check_visuals()
+        flags = pb.ER_SEGMENTATION_MASK_OBJECT_AND_LINKINDEX if segmentation else pb.ER_NO_SEGMENTATION_MASK
+        colours = self._visual_colours(behind) if behind >= 0 else []
+        tiny = self._renderer == pb.ER_TINY_RENDERER
+        culled = self.culler.outside_view(view, projection, width, height) if cull and tiny else []
+        for link, _ in colours:
+            pb.changeVisualShape(behind, link, rgbaColor=_INVISIBLE, physicsClientId=self._cid)
+        for body in culled:
+            pb.changeVisualShape(body, -1, rgbaColor=_INVISIBLE, physicsClientId=self._cid)
+        try:
+            _, _, rgba, depth, seg = pb.getCameraImage(
+                width, height, view, projection, renderer=self._renderer, flags=flags, physicsClientId=self._cid
+            )
+        finally:
+            for link, colour in colours:
+                pb.changeVisualShape(behind, link, rgbaColor=colour, physicsClientId=self._cid)
+            for body in culled:
+                pb.changeVisualShape(body, -1, rgbaColor=self.culler.colour(body), physicsClientId=self._cid)
+        rgb = np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)[:, :, :3]
+        depth = np.asarray(depth, dtype=np.float64).reshape(height, width)
+        if not segmentation:
+            return rgb, depth, None
+        seg = np.asarray(seg, dtype=np.int64).reshape(height, width)
+        return rgb, depth, np.where(seg >= 0, seg & ((1 << 24) - 1), -1)  # low 24 bits: the body id
+
+    def _check_visuals(self) -> None:
+        if not self.visuals:
+            raise RuntimeError("this Sim was made with visuals=False: its obstacles have no visual shapes to draw")
+
+    def _visual_colours(self, body: int) -> list[tuple[int, tuple]]:
+        """(link, rgba) of each link of ``body`` with a visual shape (read once, cached).
+
+        Raises:
+            ValueError: a link has several visual shapes: pybullet's ``changeVisualShape`` ignores its shape index,
+                so they could not get their colours back.
+        """
+        if body not in self._visuals:
+            links = [data[1] for data in pb.getVisualShapeData(body, physicsClientId=self._cid)]
+            if len(set(links)) != len(links):
+                raise ValueError(f"body {body} has a link with several visual shapes; give each its own link")
+            colours = [data[7] for data in pb.getVisualShapeData(body, physicsClientId=self._cid)]
+            self._visuals[body] = list(zip(links, colours))
+        return self._visuals[body]
+
+    def use_egl(self) -> None:
+        """Render camera images with the EGL (OpenGL, headless) plugin instead of TinyRenderer.
+
+        Raises:
+            RuntimeError: the plugin does not load on this machine (no EGL driver).
+        """
+        egl = importlib.util.find_spec("eglRenderer")
+        plugin = -1
+        if egl is not None and egl.origin:
+            with quiet_c_output():
+                plugin = pb.loadPlugin(egl.origin, "_eglRendererPlugin", physicsClientId=self._cid)
+        if plugin < 0:
+            raise RuntimeError("camera_renderer='egl': the pybullet EGL plugin did not load (no EGL driver?)")
+        self._renderer = pb.ER_BULLET_HARDWARE_OPENGL
+
+    def follow_camera(self, target: Sequence[float], distance: float, yaw_deg: float, pitch_deg: float) -> None:
+        """Point the GUI camera (render_mode="human") at ``target`` (metres) from ``distance`` metres away, turned by
+        ``yaw_deg`` and ``pitch_deg`` degrees."""
+        pb.resetDebugVisualizerCamera(distance, yaw_deg, pitch_deg, target, physicsClientId=self._cid)
