@@ -11,7 +11,7 @@ from gymnasium import spaces
 from clutter_gym.assets import asset_path
 from clutter_gym.noise.dynamics import DynamicsSample
 from clutter_gym.robots.dynamics import scale_link_dynamics
-from clutter_gym.robots.state import RobotState
+from clutter_gym.robots.state import RobotState, floating_base_state
 from clutter_gym.sim import Sim
 from clutter_gym.util.transforms import quat_to_matrix, yaw_quat
 
@@ -158,18 +158,9 @@ class DiffDriveRobot:
         self._sim.set_joint_velocities(self._body, self._wheels, [left, right], self._torques)
 
     def state(self) -> RobotState:
-        """Ground-truth state from three batched pybullet reads."""
-        com, rot, lin, ang = self._sim.base_state(self._body)
-        return RobotState(
-            position=np.asarray(com) - rot @ self._com_offset,
-            rotation=rot,
-            linear_velocity=lin,
-            angular_velocity=ang,
-            links=self._sim.link_states(self._body, self._tracked),
-            link_names=self.link_names,
-            link_index=self.link_index,
-            body=self._body,
-        )
+        """Ground-truth state from batched pybullet reads."""
+        return floating_base_state(self._sim, self._body, self._com_offset, self._tracked, self.link_names,
+                                   self.link_index)
 
     def observe(self, state: RobotState) -> dict[str, np.ndarray]:
         """``velocity``: (forward speed m/s, yaw rate rad/s) in the base frame, clipped to twice the commanded

@@ -22,7 +22,7 @@ from clutter_gym.robots.dynamics import scale_link_dynamics
 from clutter_gym.robots.rate_loop import Mixer, RateController, RateGains, allocation
 from clutter_gym.robots.rigid_body import rigid_body
 from clutter_gym.robots.rotors import RotorModel
-from clutter_gym.robots.state import RobotState
+from clutter_gym.robots.state import RobotState, floating_base_state
 from clutter_gym.sim import Sim
 from clutter_gym.util.checks import is_number
 from clutter_gym.util.transforms import quat_to_matrix, yaw_quat
@@ -307,17 +307,8 @@ class Quadrotor:
 
     def state(self) -> RobotState:
         """Ground-truth state from batched pybullet reads."""
-        com, rot, lin, ang = self._sim.base_state(self._body)
-        return RobotState(
-            position=np.asarray(com) - rot @ self._com_offset,
-            rotation=rot,
-            linear_velocity=lin,
-            angular_velocity=ang,
-            links=self._sim.link_states(self._body, self._tracked),
-            link_names=self.link_names,
-            link_index=self.link_index,
-            body=self._body,
-        )
+        return floating_base_state(self._sim, self._body, self._com_offset, self._tracked, self.link_names,
+                                   self.link_index)
 
     def observe(self, state: RobotState) -> dict[str, np.ndarray]:
         """``rotor_speeds``: each rotor's speed over ``max_rotor_speed``, in [0, 1] (an RPM sensor's reading)."""
