@@ -16,6 +16,7 @@ from clutter_gym.robots.quadrotor import TRACKED_LINKS
 from clutter_gym.robots.rigid_body import RigidBody
 from clutter_gym.sensors import ImuConfig, LidarConfig, build_sensors, camera_config
 from clutter_gym.tasks import FlyRewardWeights, FlyTask
+from clutter_gym.util.checks import is_number
 from clutter_gym.worlds import VolumeArena, VolumeSpec
 from clutter_gym.worlds.volume_spec import SIZE_RANGE
 
@@ -231,11 +232,10 @@ def bounding_radius(model: RobotCollisionModel, body: RigidBody) -> float:
 
 def _volume_spec(size: Any, density: float, ceiling: bool) -> VolumeSpec:
     """The generated volume of the env's arguments; errors name ``volume_size`` where the spec says ``size``."""
+    if isinstance(size, (Sequence, np.ndarray)) and len(size) == 3 and is_number(size[2]) and size[2] < MIN_HEIGHT:
+        raise ValueError(f"volume_size z must be in [{MIN_HEIGHT:g}, {SIZE_RANGE[2][1]:g}] m, got {size[2]!r}")
     try:
-        spec = VolumeSpec(size=size, obstacle_density=density, ceiling=ceiling)
+        return VolumeSpec(size=size, obstacle_density=density, ceiling=ceiling)
     except ValueError as exc:
         message = str(exc)
         raise ValueError("volume_" + message if message.startswith("size") else message) from None
-    if spec.size[2] < MIN_HEIGHT:
-        raise ValueError(f"volume_size z must be in [{MIN_HEIGHT:g}, {SIZE_RANGE[2][1]:g}] m, got {spec.size[2]!r}")
-    return spec
