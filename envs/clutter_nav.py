@@ -14,7 +14,7 @@ from clutter_gym.noise.profiles import NoiseProfile, resolve_noise
 from clutter_gym.robots import DiffDriveConfig, DiffDriveRobot
 from clutter_gym.robots.diffdrive import TRACKED_LINKS
 from clutter_gym.robots.safety import SafetyConfig, SafetyFilter
-from clutter_gym.sensors import CameraConfig, ImuConfig, LidarConfig, build_sensors
+from clutter_gym.sensors import ImuConfig, LidarConfig, build_sensors, camera_config
 from clutter_gym.tasks import NavigateTask, NavRewardWeights
 from clutter_gym.worlds import ClutterArena, ClutterSpec
 
@@ -190,7 +190,7 @@ class ClutterNavEnv(ClutterEnv):
                            movable_fraction=movable_obstacles)
         lidar = LidarConfig(n_rays=n_rays, fov=lidar_fov, max_range=lidar_range, mount_height=lidar_mount_height,
                             n_channels=lidar_channels, vertical_fov=lidar_vertical_fov)
-        camera = _camera_config(camera_size, camera_modes, camera_fov, camera_far, camera_renderer)
+        camera = camera_config(camera_size, camera_modes, camera_fov, camera_far, camera_renderer)
         profile = resolve_noise(noise)
         sensor_objects = build_sensors(sensors, profile, lidar, ImuConfig(dt=1.0 / control_hz), camera)
         task = NavigateTask(
@@ -238,10 +238,3 @@ def _safety_filter(config: SafetyConfig, sensors: Sequence[str], lidar: LidarCon
     return SafetyFilter(config, c.footprint_radius, c.max_linear_speed, c.max_angular_speed,
                         lidar.angles + yaw, (float(mount[0, 3]), float(mount[1, 3])), lidar.max_range, 1.0 / control_hz)
 
-
-def _camera_config(size: Any, modes: Any, fov: float, far: float, renderer: str) -> CameraConfig:
-    if isinstance(size, (str, bytes)) or not isinstance(size, Sequence) or len(size) != 2:
-        raise ValueError(f"camera_size must be (width, height) in pixels, got {size!r}")
-    if isinstance(modes, str) or not isinstance(modes, Sequence):
-        raise ValueError(f"camera_modes must be a tuple of names, got {modes!r}")
-    return CameraConfig(width=size[0], height=size[1], modes=tuple(modes), vertical_fov=fov, far=far, renderer=renderer)

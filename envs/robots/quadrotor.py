@@ -34,6 +34,8 @@ ROTOR_SPIN = (1.0, -1.0, 1.0, -1.0)
 #: Links whose states are read every control step: every link with collision geometry, the IMU and the sensor mount.
 TRACKED_LINKS = ("battery", "arm_1", "arm_2", "arm_3", "arm_4", *ROTOR_LINKS, "imu", "sensor_mount")
 CONTROL_MODES = ("rates", "motors")
+#: Bound of the observed body-frame linear velocity, m/s (faster readings are clipped).
+MAX_OBSERVED_SPEED = 20.0
 
 _ZERO = (0.0, 0.0, 0.0)
 #: (low, high, low_open) of every number field: low < value (low_open) or low <= value, and value <= high
@@ -167,7 +169,14 @@ class Quadrotor:
     def __init__(self, config: QuadrotorConfig | None = None) -> None:
         self.config = c = config or QuadrotorConfig()
         self.action_space = spaces.Box(-1.0, 1.0, shape=(4,), dtype=np.float32)
-        self.spaces = {"rotor_speeds": spaces.Box(0.0, 1.0, shape=(4,), dtype=np.float32)}
+        rate_bound = 2.0 * max(c.max_roll_rate, c.max_pitch_rate, c.max_yaw_rate)
+        self._velocity_bound = np.array([MAX_OBSERVED_SPEED] * 3 + [rate_bound] * 3)
+        self.spaces = {
+            "rotor_speeds": spaces.Box(0.0, 1.0, shape=(4,), dtype=np.float32),
+            "attitude": spaces.Box(-1.0, 1.0, shape=(3,), dtype=np.float32),
+            "velocity": spaces.Box(-self._velocity_bound.astype(np.float32), self._velocity_bound.astype(np.float32),
+                                   dtype=np.float32),
+        }
         self.rotors = c.rotor_model()
         self.model = rigid_body(self.urdf_path)
         self._spin = np.array(ROTOR_SPIN)
@@ -311,5 +320,18 @@ class Quadrotor:
                                    self.link_index)
 
     def observe(self, state: RobotState) -> dict[str, np.ndarray]:
-        """``rotor_speeds``: each rotor's speed over ``max_rotor_speed``, in [0, 1] (an RPM sensor's reading)."""
-        return {"rotor_speeds": (self._speeds / self.config.max_rotor_speed).astype(np.float32)}
+        """Proprioception, as a flight controller's state estimate gives it (ground truth here):
+
+        * ``rotor_speeds``: each rotor's speed over ``max_rotor_speed``, in [0, 1] (an RPM sensor's reading);
+        * ``attitude``: the world's up axis in the body frame (x forward, y left, z up), a unit vector: (0, 0, 1)
+          when level, its z the cosine of the tilt;
+        * ``velocity``: body-frame linear velocity (m/s, clipped to +-``MAX_OBSERVED_SPEED``) then body rates
+          (rad/s, clipped to +-2x the largest commanded rate).
+        """
+        rot = state.rotation
+        body = np.concatenate([rot.T @ np.asarray(state.linear_velocity), rot.T @ np.asarray(state.angular_velocity)])
+        return {
+            "rotor_speeds": (self._speeds / self.config.max_rotor_speed).astype(np.float32),
+            "attitude": np.clip(rot[2], -1.0, 1.0).astype(np.float32),
+            "velocity": np.clip(body, -self._velocity_bound, self._velocity_bound).astype(np.float32),
+        }

@@ -8,6 +8,7 @@ with the pixels, so the robots and clutter keep their visual meshes lean.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -83,6 +84,18 @@ class CameraConfig:
         if self.renderer == "egl":
             return ideal
         return Intrinsics(self.width, self.height, ideal.fx, ideal.fy, self.width / 2, self.height / 2 - 1)
+
+
+def camera_config(size: Any, modes: Any, fov: float, far: float, renderer: str,
+                  link: str = CameraConfig.link) -> CameraConfig:
+    """The camera of an env's ``camera_size``, ``camera_modes``, ``camera_fov``, ``camera_far`` and
+    ``camera_renderer`` keyword arguments, mounted on ``link``; errors name the argument."""
+    if isinstance(size, (str, bytes)) or not isinstance(size, Sequence) or len(size) != 2:
+        raise ValueError(f"camera_size must be (width, height) in pixels, got {size!r}")
+    if isinstance(modes, str) or not isinstance(modes, Sequence):
+        raise ValueError(f"camera_modes must be a tuple of names, got {modes!r}")
+    return CameraConfig(width=size[0], height=size[1], modes=tuple(modes), vertical_fov=fov, far=far, renderer=renderer,
+                        link=link)
 
 
 class Camera:

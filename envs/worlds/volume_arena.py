@@ -32,22 +32,35 @@ def volume_boundary(spec: VolumeSpec) -> tuple[Obstacle, ...]:
     return (*walls, Obstacle("box", (sx + 2 * t, sy + 2 * t, t), (0.0, 0.0), 0.0, sz)) if spec.ceiling else walls
 
 
+def floor_slab(spec: VolumeSpec) -> tuple[Obstacle, ...]:
+    """The floor as an obstacle: a slab under the whole volume and its walls whose top face is the ground plane
+    z = 0 (world frame, metres)."""
+    sx, sy, _ = spec.size
+    t = BOUNDARY_THICKNESS
+    return (Obstacle("box", (sx + 2 * t, sy + 2 * t, t), (0.0, 0.0), 0.0, -t),)
+
+
 class VolumeArena:
     """Floor, boundary and the obstacle pool of one env (the ``Arena`` contract of ``clutter_gym.interfaces``).
 
     Args:
         spec: the volume and its layout parameters.
         robot_radius: bounding radius of the robot, metres, for reachability and the start check.
+        floor_obstacle: count the floor among the obstacles :meth:`place` returns (:func:`floor_slab`, paired with
+            the ground plane's body), so that the collision checker measures a flying robot's clearance to the
+            floor and reports touching it as a contact; a robot that stands on the floor leaves it out.
     """
 
-    def __init__(self, spec: VolumeSpec, robot_radius: float) -> None:
+    def __init__(self, spec: VolumeSpec, robot_radius: float, floor_obstacle: bool = False) -> None:
         self.spec = spec
         self.robot_radius = robot_radius
+        self.floor_obstacle = bool(floor_obstacle)
         self._pool: ObstaclePool | None = None
+        self._ground = -1
 
     def load(self, sim: Sim) -> None:
         """Create the floor and the boundary (once per built world)."""
-        sim.add_ground(visual_size=max(self.spec.size[:2]) + 2.0)
+        self._ground = sim.add_ground(visual_size=max(self.spec.size[:2]) + 2.0)
         self._pool = ObstaclePool(sim, volume_boundary(self.spec))
 
     @property
@@ -68,9 +81,13 @@ class VolumeArena:
         )
 
     def place(self, scene: VolumeScene) -> tuple[tuple[Obstacle, ...], list[int]]:
-        """Move pooled bodies into ``scene``; returns every obstacle (the boundary included) and its body ids."""
+        """Move pooled bodies into ``scene``; returns every obstacle (the boundary included, and the floor with
+        ``floor_obstacle``) and its body ids."""
         bodies = self._pool.place(scene.obstacles)
-        return scene.obstacles + self._pool.fixed, bodies + self._pool.fixed_bodies
+        obstacles, bodies = scene.obstacles + self._pool.fixed, bodies + self._pool.fixed_bodies
+        if self.floor_obstacle:
+            return obstacles + floor_slab(self.spec), [*bodies, self._ground]
+        return obstacles, bodies
 
     def overview_camera(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
         """(eye, target) of the rgb_array view: from a top corner inside the volume (under a ceiling) to the

@@ -340,3 +340,22 @@ def test_the_arena_places_bodies_whose_aabbs_match_the_scene(ceiling):
         assert user == parse_volume_scene(GOOD, spec, R)
     finally:
         sim.close()
+
+
+def test_the_floor_is_an_obstacle_on_request_with_its_top_at_the_ground_plane():
+    spec = VolumeSpec()
+    sims = [Sim(), Sim()]
+    try:
+        placed = []
+        for sim, floor in zip(sims, (False, True)):
+            arena = VolumeArena(spec, R, floor_obstacle=floor)
+            arena.load(sim)
+            placed.append(arena.place(arena.choose_scene(np.random.default_rng(1), {"scene": GOOD})))
+        (without, _), (obstacles, bodies) = placed
+        assert obstacles[:-1] == without and bodies[-1] == sims[1].bodies["ground"]
+        low, high = expected_aabb(obstacles[-1])
+        assert high[2] == 0.0 and np.all(low[:2] < -0.5 * np.array(spec.size[:2]))
+        assert np.all(high[:2] > 0.5 * np.array(spec.size[:2]))
+    finally:
+        for sim in sims:
+            sim.close()

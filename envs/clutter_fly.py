@@ -1,0 +1,241 @@
+"""ClutterFly: a nano quadrotor flies through a cluttered 3D volume to a goal point without touching anything."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from clutter_gym.collision import RobotCollisionModel
+from clutter_gym.core import ClutterEnv, check_env_settings, check_flags, check_numbers, collision_checker
+from clutter_gym.noise.profiles import NoiseProfile, resolve_noise
+from clutter_gym.robots import Quadrotor, QuadrotorConfig
+from clutter_gym.robots.quadrotor import TRACKED_LINKS
+from clutter_gym.robots.rigid_body import RigidBody
+from clutter_gym.sensors import ImuConfig, LidarConfig, build_sensors, camera_config
+from clutter_gym.tasks import FlyRewardWeights, FlyTask
+from clutter_gym.util.checks import is_number
+from clutter_gym.worlds import VolumeArena, VolumeSpec
+from clutter_gym.worlds.volume_spec import SIZE_RANGE
+
+#: The link the LIDAR and the camera sit on, and the IMU's link (assets/robots/quadrotor.urdf).
+SENSOR_LINK, IMU_LINK = "sensor_mount", "imu"
+#: Lowest volume height, metres: the generator's wall openings (up to 1.6 m tall) must fit under the top.
+MIN_HEIGHT = 2.0
+#: m/s^2, the Sim's gravity: the hover action the control term is measured from.
+GRAVITY = 9.81
+
+
+class ClutterFlyEnv(ClutterEnv):
+    """## Description
+
+    A Crazyflie-sized nano quadrotor (``assets/robots/quadrotor.urdf``, 27 g, flying on per-rotor forces; see
+    docs/quadrotor.md) starts hovering in a box-shaped volume with a floor, four walls and by default a ceiling,
+    cluttered with vertical poles, boxes on the floor or hanging, horizontal beams and walls with one opening, and
+    must fly to a goal point. Every generated volume is seeded and guaranteed reachable for a sphere enclosing the
+    drone (``worlds/volume.py``). The floor, the walls and the ceiling are obstacles like the clutter. FCL measures
+    the exact clearance, pybullet's contact points cross-check it, and swept checks between control steps catch
+    contacts that happen between two checks (tunneling); contacts and tunneling are penalised and reported as a
+    Safety-Gymnasium style ``info["cost"]``.
+
+    ## Action space
+
+    ``Box(-1, 1, (4,), float32)``: (collective thrust, roll rate, pitch rate, yaw rate), normalised. Thrust
+    ``(a0 + 1) / 2`` of the four rotors' maximum (0 to a thrust-to-weight of about 2.25; hover near a0 = -0.11);
+    body rates ``a1 * 3``, ``a2 * 3``, ``a3 * 2`` rad/s about body x (forward), y (left), z (up), counter-clockwise
+    positive. An inner rate loop and mixer turn the command into rotor speeds at the physics rate, and the rotors
+    follow with a first-order lag (docs/quadrotor.md). Finite values outside [-1, 1] are clipped; NaN/Inf or a wrong
+    shape raise ``ValueError``.
+
+    ## Observation space
+
+    ``Dict``, every entry float32:
+
+    | key | shape | content | units, frame | bounds |
+    |---|---|---|---|---|
+    | ``imu`` | (6,) | specific force (f_x, f_y, f_z), angular rate (w_x, w_y, w_z) | m/s^2, rad/s; IMU link (body axes, at the centre of mass) | +-156.9, +-34.9 |
+    | ``lidar`` | (lidar_channels, n_rays), or (n_rays,) with one channel | range / lidar_range, beams CCW from body +x, channels bottom up | -, sensor mount | [0, 1] |
+    | ``camera_depth`` | (h, w) | depth along the optical axis (body +x), 0 = no data | m | [0, camera_far] |
+    | ``camera_rgb`` | (h, w, 3) uint8 | colour image (only with "rgb" in ``camera_modes``) | - | [0, 255] |
+    | ``camera_segmentation`` | (h, w) uint8 | class per pixel: nothing, ground, obstacle, robot, goal (only with "segmentation") | - | [0, 4] |
+    | ``goal`` | (4,) | goal minus the base origin (x, y, z), then its length | m; body frame | +-volume diagonal, [0, volume diagonal] |
+    | ``attitude`` | (3,) | the world's up axis in the body frame (z = cosine of the tilt) | -; body frame | [-1, 1] |
+    | ``velocity`` | (6,) | linear velocity (v_x, v_y, v_z), body rates (p, q, r) | m/s, rad/s; body frame | +-20, +-6 |
+    | ``rotor_speeds`` | (4,) | rotor speed / max rotor speed, rotors front right, rear right, rear left, front left | - | [0, 1] |
+
+    Sensor entries are present only when listed in ``sensors`` (``("imu",)`` by default; camera entries only for
+    its ``camera_modes``, ``(w, h) = camera_size``). The LIDAR and the camera sit on the ``sensor_mount`` link,
+    10 mm above the centre of mass, looking along body +x; rays and the camera see through the drone. The IMU reads
+    +9.81 m/s^2 on z in a level hover. With a noise profile the sensor entries carry that profile's noise, update
+    rate (held between updates) and latency; ``goal``, ``attitude``, ``velocity`` and ``rotor_speeds`` are the
+    flight controller's state estimate, taken as exact.
+
+    ## Rewards
+
+    Sum of signed terms, each in ``info["reward_terms"]``; weights are constructor arguments:
+    ``progress`` (+progress_weight per metre the shortest path to the goal through the clutter shrinks),
+    ``success`` (+success_weight once), ``crash`` (-crash_weight once, on leaving the volume, flipping, or a contact
+    that ends the episode), ``contact`` (-contact_weight per step with a contact or a tunneling hit),
+    ``clearance`` (-clearance_weight * (margin - clearance) / margin per step when clearance < clearance_margin),
+    ``control`` (-control_weight * |a - a_hover|^2), ``attitude`` (-attitude_weight * (1 - cos tilt)) and
+    ``rate`` (-rate_weight * |body rate|^2, rad/s). ``info["cost"]`` is 1.0 in a step with a contact or a tunneling
+    hit, else 0.0.
+
+    ## Starting state
+
+    A new volume per reset from the env's ``np_random`` (or exactly ``options["scene"]``, format in docs/envs.md):
+    the drone level, at rest at the start point with yaw ``scene.start[3]``, its rotors at hover speed and the
+    hover command held; start and goal at least ``0.4 * max(x, y)`` apart, each with 0.3 m spare clearance beyond
+    the drone's bounding radius.
+
+    ## Episode end
+
+    ``terminated`` on success (base within ``success_radius`` of the goal), on leaving the volume (the base
+    origin through a wall, above the top or below the floor), on flipping (tilt beyond ``max_tilt``) and, with
+    ``terminate_on_collision=True``, on the first step with a contact or a tunneling hit. ``truncated`` by the
+    TimeLimit wrapper at ``max_episode_steps`` (600 steps = 20 s at the default 30 Hz).
+
+    ## Info
+
+    ``reward_terms``, ``cost``, ``is_success``, ``min_clearance`` (m, FCL, negative = penetration, capped at the
+    volume's diagonal), ``closest_pair``, ``witness_points``, ``n_contacts``, ``max_penetration`` (m),
+    ``self_collision`` (always None: the airframe is rigid), ``tunneling`` (swept hits), ``pybullet_contacts`` and
+    ``contact_disagreement``, ``lidar_ranges`` (m, with ``"lidar"``), ``noise_profile`` (at reset).
+
+    ## Noise
+
+    ``noise`` names a profile (``"none"``, ``"nominal"``, ``"low-cost"``, ``"harsh"``) or overrides one per
+    parameter, as for ClutterNav (docs/noise.md): IMU, LIDAR and depth/RGB noise, sensor rates and latencies, action
+    latency and noise, and per-episode dynamics randomisation (link masses and inertias, friction, restitution, and
+    the rotors' thrust and torque through the motor strength). Rewards and termination always use ground truth.
+
+    ## Arguments
+
+    ``render_mode`` (None, "rgb_array", "human"); ``sensors`` (subset of ("imu", "lidar", "camera"));
+    ``noise`` (profile name, override mapping or NoiseProfile); ``volume_size`` (x, y, z) m, x and y in [2, 30],
+    z in [2, 5]; ``obstacle_density`` volume fraction [0, 0.25]; ``ceiling``; ``n_rays`` [1, 4096];
+    ``lidar_fov`` rad (0, 2 pi]; ``lidar_range`` m; ``lidar_channels`` [1, 128] and ``lidar_vertical_fov`` rad
+    [0, pi/2]; ``camera_size`` (width, height) px; ``camera_modes`` (subset of ("rgb", "depth", "segmentation"));
+    ``camera_fov`` vertical, rad; ``camera_far`` m; ``camera_renderer`` ("tiny" or "egl"); ``physics_hz`` (a
+    multiple of ``control_hz``); ``control_hz``; ``solver_iterations``; ``aero`` (subset of ("drag",
+    "ground_effect")); ``success_radius`` m (0, 2]; ``clearance_margin`` m [0, 1]; ``max_tilt`` rad (0, pi];
+    ``terminate_on_collision``; ``contact_tolerance`` m [0, 0.05]; ``collision_fidelity``; ``collision_padding`` m
+    [0, 1]; ``swept_speed`` m/s (``inf`` turns swept checks off); ``*_weight`` reward weights [0, 1e4].
+
+    Self-collision is not checked: every link of the airframe is fixed to the base, so no pair can move into
+    another.
+
+    Defaults are in the signature.
+
+    ## Version history
+
+    * v0: initial release.
+    """
+
+    def __init__(
+        self,
+        render_mode: str | None = None,
+        sensors: Sequence[str] = ("imu",),
+        noise: str | Mapping[str, Any] | NoiseProfile | None = "none",
+        volume_size: Sequence[float] = (10.0, 10.0, 4.0),
+        obstacle_density: float = 0.05,
+        ceiling: bool = True,
+        n_rays: int = 36,
+        lidar_fov: float = 2 * math.pi,
+        lidar_range: float = LidarConfig.max_range,
+        lidar_channels: int = 8,
+        lidar_vertical_fov: float = math.radians(60.0),
+        camera_size: tuple[int, int] = (64, 64),
+        camera_modes: Sequence[str] = ("depth",),
+        camera_fov: float = math.radians(58.0),
+        camera_far: float = 10.0,
+        camera_renderer: str = "tiny",
+        physics_hz: float = 240.0,
+        control_hz: float = 30.0,
+        solver_iterations: int = 10,
+        aero: Sequence[str] = (),
+        success_radius: float = 0.3,
+        clearance_margin: float = 0.1,
+        max_tilt: float = math.pi / 2,
+        terminate_on_collision: bool = False,
+        contact_tolerance: float = 1e-3,
+        collision_fidelity: str = "primitive",
+        collision_padding: float = 0.0,
+        swept_speed: float = 0.2,
+        progress_weight: float = 10.0,
+        success_weight: float = 10.0,
+        crash_weight: float = 10.0,
+        contact_weight: float = 1.0,
+        clearance_weight: float = 0.5,
+        control_weight: float = 0.01,
+        attitude_weight: float = 0.1,
+        rate_weight: float = 0.01,
+    ) -> None:
+        check_numbers(ClutterFlyEnv.__init__, locals())
+        check_env_settings(render_mode, physics_hz, control_hz, solver_iterations, contact_tolerance)
+        check_flags(ceiling=ceiling, terminate_on_collision=terminate_on_collision)
+        if not (swept_speed > 0.0):  # inf allowed: no swept checks
+            raise ValueError(f"swept_speed must be > 0 m/s (inf disables swept checks), got {swept_speed!r}")
+        if isinstance(aero, str) or not isinstance(aero, Sequence):
+            raise ValueError(f"aero must be a tuple of names from ('drag', 'ground_effect'), got {aero!r}")
+        robot = Quadrotor(QuadrotorConfig(aero=tuple(aero)))
+        spec = _volume_spec(volume_size, obstacle_density, ceiling)
+        diagonal = math.sqrt(sum(v * v for v in spec.size))
+        # the whole volume is in range: every step reports the distance to the nearest obstacle; the airframe is
+        # rigid (fixed joints only), so self-collision is off and no allowed-collision matrix is needed
+        checker = collision_checker(robot, TRACKED_LINKS, collision_fidelity, collision_padding, contact_tolerance,
+                                    diagonal, control_hz, self_collision=False, swept_speed=swept_speed)
+        radius = bounding_radius(checker.model, robot.model)
+        lidar = LidarConfig(n_rays=n_rays, fov=lidar_fov, max_range=lidar_range, n_channels=lidar_channels,
+                            vertical_fov=lidar_vertical_fov, link=SENSOR_LINK)
+        camera = camera_config(camera_size, camera_modes, camera_fov, camera_far, camera_renderer, link=SENSOR_LINK)
+        profile = resolve_noise(noise)
+        sensor_objects = build_sensors(sensors, profile, lidar, ImuConfig(dt=1.0 / control_hz, link=IMU_LINK), camera)
+        task = FlyTask(
+            FlyRewardWeights(progress_weight, success_weight, crash_weight, contact_weight, clearance_weight,
+                             control_weight, attitude_weight, rate_weight),
+            spec=spec,
+            robot_radius=radius,
+            success_radius=success_radius,
+            clearance_margin=clearance_margin,
+            max_tilt=max_tilt,
+            terminate_on_collision=terminate_on_collision,
+            hover_action=robot.hover_action(GRAVITY),
+        )
+        super().__init__(
+            physics_hz=physics_hz,
+            solver_iterations=solver_iterations,
+            robot=robot,
+            arena=VolumeArena(spec, radius, floor_obstacle=True),
+            sensors=sensor_objects,
+            checker=checker,
+            task=task,
+            control_hz=control_hz,
+            noise=profile,
+            render_mode=render_mode,
+        )
+
+
+def bounding_radius(model: RobotCollisionModel, body: RigidBody) -> float:
+    """Radius of the sphere about the base origin that encloses every collision shape of ``model`` (padding
+    included) on the rigid airframe whose link frames ``body`` holds, metres."""
+    reach = 0.0
+    for shape, radius, padding in zip(model.shapes, model.ball_radius, model.padding):
+        origin, rotation = body.frames[shape.link]
+        centre = shape.bounding_ball[0]
+        point = origin + rotation @ (np.asarray(shape.position) + np.asarray(shape.rotation) @ centre)
+        reach = max(reach, float(np.linalg.norm(point)) + float(radius) + float(padding))
+    return reach
+
+
+def _volume_spec(size: Any, density: float, ceiling: bool) -> VolumeSpec:
+    """The generated volume of the env's arguments; errors name ``volume_size`` where the spec says ``size``."""
+    if isinstance(size, (Sequence, np.ndarray)) and len(size) == 3 and is_number(size[2]) and size[2] < MIN_HEIGHT:
+        raise ValueError(f"volume_size z must be in [{MIN_HEIGHT:g}, {SIZE_RANGE[2][1]:g}] m, got {size[2]!r}")
+    try:
+        return VolumeSpec(size=size, obstacle_density=density, ceiling=ceiling)
+    except ValueError as exc:
+        message = str(exc)
+        raise ValueError("volume_" + message if message.startswith("size") else message) from None
