@@ -13,12 +13,13 @@ from pathlib import Path
 import gymnasium as gym
 
 import clutter_gym  # noqa: F401  (registers the envs)
-from clutter_gym import ENV_IDS
 from clutter_gym.noise.profiles import PROFILE_NAMES, profile_description, profile_table_markdown, resolve_noise
 from clutter_gym.training import commands as training_commands
 from clutter_gym.training.baselines import PotentialFieldNavigator
 from clutter_gym.training.commands import UserError, positive_int
 from clutter_gym.util.video import write_video
+
+DEMO_ENVS = ("ClutterNav-v0",)  # the envs PotentialFieldNavigator can drive
 
 
 def demo(args: argparse.Namespace) -> dict:
@@ -85,7 +86,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("demo", help="roll out a scripted policy, write an episode GIF and print a summary",
                        description="Roll out the scripted potential-field policy, write an episode GIF and print "
                                    "a summary.")
-    p.add_argument("--env", choices=ENV_IDS, default="ClutterNav-v0", help="env id")
+    p.add_argument("--env", choices=DEMO_ENVS, default="ClutterNav-v0",
+                   help="env id (the scripted policy drives the ground robot)")
     p.add_argument("--seed", type=int, default=0, help="reset seed (the layout)")
     p.add_argument("--max-steps", type=positive_int, default=400, help="stop the episode after this many steps")
     p.add_argument("--frame-every", type=positive_int, default=2, help="keep every k-th frame in the GIF")

@@ -150,3 +150,12 @@ def test_report_refuses_a_run_with_other_settings(tmp_path, capsys):
     err = capsys.readouterr().err
     assert exit_info.value.code == 2
     assert "env_kwargs.obstacle_density: 0.05 in the run, 0.1 asked" in err and "another --out" in err
+
+
+@pytest.mark.parametrize("env_id", ["ClutterReach-v0", "ClutterFly-v0"])
+def test_demo_refuses_envs_its_scripted_policy_cannot_drive(env_id, capsys):
+    """The potential-field policy drives the ground robot only: other ids are refused by argparse, in one line."""
+    with pytest.raises(SystemExit) as exit_info:
+        build_parser().parse_args(["demo", "--env", env_id])
+    err = capsys.readouterr().err.strip()
+    assert exit_info.value.code == 2 and "--env" in err and "ClutterNav-v0" in err and len(err.splitlines()) == 1
