@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Iterator
+from typing import TypeVar
 
 import gymnasium as gym
 import numpy as np
@@ -18,6 +19,8 @@ from clutter_gym.util.quiet import quiet_c_output
 
 with quiet_c_output():  # pybullet prints its build banner on import
     import pybullet as pb
+
+T = TypeVar("T")
 
 __all__ = ["EnvRunner", "alternating_rounds", "navigator_states", "pb", "run_block", "smooth_actions", "table_header"]
 
@@ -80,9 +83,10 @@ def navigator_states(env: gym.Env, steps: int, seed: int) -> Iterator[RobotState
         yield env.unwrapped.robot.state()
 
 
-def alternating_rounds(measures: dict[str, Callable[[], float]], rounds: int) -> dict[str, list[float]]:
-    """Call every measure once per round, in order, for ``rounds`` rounds; the figures per measure."""
-    figures: dict[str, list[float]] = {name: [] for name in measures}
+def alternating_rounds(measures: dict[str, Callable[[], T]], rounds: int) -> dict[str, list[T]]:
+    """Call every measure once per round, in order, for ``rounds`` rounds; the figures per measure (a number, or
+    whatever record a measure returns)."""
+    figures: dict[str, list[T]] = {name: [] for name in measures}
     for _ in range(rounds):
         for name, measure in measures.items():
             figures[name].append(measure())
