@@ -1,0 +1,315 @@
+"""ClutterFly-v0 against gym-pybullet-drones' HoverAviary, side by side: kinematic, LIDAR and camera workloads.
+
+Every workload runs in one process, one block each per round in alternating rounds, on uniform-random actions,
+resetting where an episode ends as a training loop would (the reset counted). Each block keeps wall-clock and
+process CPU time of ``step`` and of the resets apart; figures are medians over blocks, and on a shared machine the
+CPU-time ones are the steadier. The peers are rebuilt call for call because gym-pybullet-drones is not installable
+here: ``benchmarks.peers.hover`` (HoverAviary, KIN observation, RPM action, its defaults: 240 Hz physics, 30 Hz
+control) and ``benchmarks.peers.drones`` (the same env with its 64x48 RGB camera at 24 FPS, 48 Hz control).
+
+The workloads: the KIN peer; ClutterFly-v0 at its defaults (IMU only; FCL clearance, contacts and the swept
+audit every step); with a 16-channel x 64-ray LIDAR cast every control step (30 Hz) and at a 3D LIDAR's 10 Hz
+(the rate is the noise profile's ``lidar.rate_hz``, set through ``noise={"lidar": {"rate_hz": 10}}`` on the clean
+"none" profile: no noise is added, the scan is held between updates); with an 84x84 depth camera rendered every
+control step; and the RGB peer. Then the ratios against the issue's 2x targets, what the rays cost, and a
+per-phase profile of one IMU-only step.
+
+    python -m benchmarks.fly_throughput [--steps 500] [--rounds 6] [--profile-steps 1000]
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import statistics
+import time
+from collections import Counter
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+import clutter_gym  # noqa: F401  (registers the envs)
+from benchmarks.harness import alternating_rounds, table_header
+from benchmarks.peers.drones import make_drone_camera_workload
+from benchmarks.peers.hover import HoverKinPeer, count_pybullet_calls
+
+LIDAR = {"sensors": ("imu", "lidar"), "lidar_channels": 16, "n_rays": 64}
+#: label -> (factory, action shape)
+WORKLOADS: dict[str, tuple[Callable[[], Any], tuple[int, ...]]] = {
+    "peer: HoverAviary KIN (rebuilt)": (HoverKinPeer, (1, 4)),
+    "ClutterFly-v0, IMU only": (lambda: gym.make("ClutterFly-v0"), (4,)),
+    "ClutterFly-v0 + LIDAR 16x64 at 30 Hz": (lambda: gym.make("ClutterFly-v0", **LIDAR), (4,)),
+    "ClutterFly-v0 + LIDAR 16x64 at 10 Hz": (
+        lambda: gym.make("ClutterFly-v0", **LIDAR, noise={"lidar": {"rate_hz": 10.0}}), (4,)),
+    "ClutterFly-v0 + depth camera 84x84": (
+        lambda: gym.make("ClutterFly-v0", sensors=("imu", "camera"), camera_size=(84, 84)), (4,)),
+    "peer: HoverAviary 64x48 RGB (rebuilt)": (make_drone_camera_workload, (1, 4)),
+}
+KIN_PEER, IMU, LIDAR30, LIDAR10, DEPTH, RGB_PEER = WORKLOADS
+TARGET = 2.0  # the issue's "at least 2x the peer"
+
+
+@dataclass
+class Block:
+    """One block of steps: seconds in ``step`` and in resets, wall-clock and process CPU, and the reset count."""
+
+    steps: int
+    step_wall: float
+    reset_wall: float
+    step_cpu: float
+    reset_cpu: float
+    resets: int
+
+    @property
+    def rate(self) -> float:
+        """Steps per wall-clock second, resets included."""
+        return self.steps / (self.step_wall + self.reset_wall)
+
+    @property
+    def cpu_rate(self) -> float:
+        """Steps per CPU second, resets included."""
+        return self.steps / (self.step_cpu + self.reset_cpu)
+
+    @property
+    def cpu_step_rate(self) -> float:
+        """Steps per CPU second in ``step`` alone."""
+        return self.steps / self.step_cpu
+
+
+def run_block(env, actions: np.ndarray) -> Block:
+    """Step ``env`` through ``actions``, resetting where an episode ends, timing steps and resets apart."""
+    wall, cpu = time.perf_counter, time.process_time
+    step_wall = reset_wall = step_cpu = reset_cpu = 0.0
+    resets = 0
+    for a in actions:
+        t0, c0 = wall(), cpu()
+        _, _, terminated, truncated, _ = env.step(a)
+        t1, c1 = wall(), cpu()
+        step_wall += t1 - t0
+        step_cpu += c1 - c0
+        if terminated or truncated:
+            env.reset()
+            reset_wall += wall() - t1
+            reset_cpu += cpu() - c1
+            resets += 1
+    return Block(len(actions), step_wall, reset_wall, step_cpu, reset_cpu, resets)
+
+
+def make_workloads(labels=None, seed: int = 0) -> dict[str, tuple[Any, tuple[int, ...]]]:
+    """The workloads named by ``labels`` (all by default), built and reset with ``seed``: label -> (env, shape)."""
+    out = {}
+    for label in labels or WORKLOADS:
+        factory, shape = WORKLOADS[label]
+        env = factory()
+        if isinstance(env, gym.Env):
+            env.reset(seed=seed)
+        else:  # the RGB peer's reset takes no seed: its scene and start are fixed
+            env.reset()
+        out[label] = (env, shape)
+    return out
+
+
+def pybullet_calls_per_step(env, shape: tuple[int, ...], rng: np.random.Generator, steps: int) -> float:
+    """Mean pybullet calls per ``step`` over ``steps`` random actions (resets, outside the count, not counted)."""
+    total = 0
+    for _ in range(steps):
+        a = rng.uniform(-1.0, 1.0, shape).astype(np.float32)
+        result: list = []
+        total += sum(count_pybullet_calls(lambda: result.extend(env.step(a))).values())
+        if result[2] or result[3]:
+            env.reset()
+    return total / steps
+
+
+def measure(workloads: dict[str, tuple[Any, tuple[int, ...]]], steps: int, rounds: int,
+            seed: int = 0) -> dict[str, list[Block]]:
+    """``rounds`` alternating rounds of one ``steps``-step block per workload; the blocks per workload."""
+    rngs = {label: np.random.default_rng([seed, i]) for i, label in enumerate(workloads)}
+
+    def block(label: str) -> Callable[[], Block]:
+        env, shape = workloads[label]
+        return lambda: run_block(env, rngs[label].uniform(-1.0, 1.0, (steps, *shape)).astype(np.float32))
+
+    return alternating_rounds({label: block(label) for label in workloads}, rounds)
+
+
+def median(blocks: list[Block], key: str) -> float:
+    return statistics.median(getattr(b, key) for b in blocks)
+
+
+# -- where an IMU-only step's time goes ---------------------------------------------------------------------------
+
+class PhaseTimers:
+    """Stopwatches wrapped around an env's parts; they run only while ``active``."""
+
+    def __init__(self) -> None:
+        self.seconds: Counter = Counter()
+        self.calls: Counter = Counter()
+        self.active = False
+
+    def wrap(self, name: str, fn: Callable) -> Callable:
+        clock = time.perf_counter
+
+        def timed(*args, **kwargs):
+            if not self.active:
+                return fn(*args, **kwargs)
+            t0 = clock()
+            try:
+                return fn(*args, **kwargs)
+            finally:
+                self.seconds[name] += clock() - t0
+                self.calls[name] += 1
+
+        return timed
+
+
+#: (row, indent): top-level phases partition the step; indented rows are parts of the row above them
+PHASES = (
+    ("before_tick: rate loop, mixer, rotor forces (per tick)", 0),
+    ("sim.step: pybullet stepSimulation (per tick)", 0),
+    ("robot.state: batched pybullet state reads", 0),
+    ("sim.contact_distances: pybullet contact points", 0),
+    ("checker.check: FCL clearance, contacts, swept audit", 0),
+    ("sync: move the FCL shapes", 1),
+    ("_measure: bounds and FCL distances", 1),
+    ("_contacts", 1),
+    ("_swept: the swept (tunneling) audit", 1),
+    ("_observe: sensors, goal, proprioception", 0),
+    ("sensors (IMU)", 1),
+    ("task.observe", 1),
+    ("robot.observe", 1),
+    ("task.evaluate: reward terms, termination", 0),
+)
+
+
+def phase_profile(steps: int, seed: int = 0) -> tuple[float, dict[str, tuple[float, float]]]:
+    """Time ``steps`` random-action steps of ClutterFly-v0 (IMU only) with stopwatches around its parts.
+
+    Returns the mean wall time of ``env.step`` (gym.make's wrappers included) in seconds, and per phase of
+    ``PHASES`` plus ``"rest"`` (action checks, info dict, wrappers: the step less the top-level phases) its mean
+    seconds and calls per step. Resets run with the stopwatches off.
+    """
+    env = gym.make("ClutterFly-v0")
+    env.reset(seed=seed)
+    u, t = env.unwrapped, PhaseTimers()
+    names = [name for name, _ in PHASES]
+    u._before_tick = t.wrap(names[0], u._before_tick)
+    u.sim.step = t.wrap(names[1], u.sim.step)
+    u.robot.state = t.wrap(names[2], u.robot.state)
+    u.sim.contact_distances = t.wrap(names[3], u.sim.contact_distances)
+    u.checker.check = t.wrap(names[4], u.checker.check)
+    for attr, name in zip(("sync", "_measure", "_contacts", "_swept"), names[5:9], strict=True):
+        setattr(u.checker, attr, t.wrap(name, getattr(u.checker, attr)))
+    u._observe = t.wrap(names[9], u._observe)
+    for sensor in u.sensors:
+        for attr in ("read", "observe", "info"):
+            setattr(sensor, attr, t.wrap(names[10], getattr(sensor, attr)))
+    u.task.observe = t.wrap(names[11], u.task.observe)
+    u.robot.observe = t.wrap(names[12], u.robot.observe)
+    u.task.evaluate = t.wrap(names[13], u.task.evaluate)
+    rng = np.random.default_rng(seed)
+    total = 0.0
+    try:
+        for _ in range(steps):
+            a = rng.uniform(-1.0, 1.0, 4).astype(np.float32)
+            t.active = True
+            t0 = time.perf_counter()
+            _, _, terminated, truncated, _ = env.step(a)
+            total += time.perf_counter() - t0
+            t.active = False
+            if terminated or truncated:
+                env.reset()
+    finally:
+        env.close()
+    phases = {name: (t.seconds[name] / steps, t.calls[name] / steps) for name in names}
+    top = sum(phases[name][0] for name, indent in PHASES if indent == 0)
+    phases["rest: action checks, info dict, gym.make wrappers"] = (total / steps - top, 0.0)
+    return total / steps, phases
+
+
+# -- report -------------------------------------------------------------------------------------------------------
+
+def verdict(ratio: float) -> str:
+    return f"{'met' if ratio >= TARGET else 'missed'} (target >= {TARGET:g}x)"
+
+
+def report(blocks: dict[str, list[Block]], calls: dict[str, float]) -> str:
+    peer_cpu = median(blocks[KIN_PEER], "cpu_rate")
+    lines = [table_header("workload", "steps/s, wall", "steps per CPU-s", "steps per CPU-s, step() only",
+                          "resets per 1,000 steps", "CPU ms per reset", "pybullet calls per step",
+                          "vs KIN peer (CPU)")]
+    for label, bs in blocks.items():
+        n = sum(b.steps for b in bs)
+        resets = sum(b.resets for b in bs)
+        reset_ms = 1e3 * sum(b.reset_cpu for b in bs) / resets if resets else math.nan
+        lines.append(f"| {label} | {median(bs, 'rate'):,.0f} | {median(bs, 'cpu_rate'):,.0f} | "
+                     f"{median(bs, 'cpu_step_rate'):,.0f} | {1e3 * resets / n:.0f} | {reset_ms:.1f} | "
+                     f"{calls[label]:.1f} | {median(bs, 'cpu_rate') / peer_cpu:.2f}x |")
+
+    def ratio(ours: str, peer: str, key: str) -> float:
+        return median(blocks[ours], key) / median(blocks[peer], key)
+
+    kin, kin_step = ratio(IMU, KIN_PEER, "cpu_rate"), ratio(IMU, KIN_PEER, "cpu_step_rate")
+    cam, cam_step = ratio(DEPTH, RGB_PEER, "cpu_rate"), ratio(DEPTH, RGB_PEER, "cpu_step_rate")
+    lines += [
+        "",
+        f"Kinematic: ClutterFly-v0 (IMU) / HoverAviary KIN = {kin:.2f}x per CPU-s with resets, {kin_step:.2f}x "
+        f"in step() alone: {verdict(kin)}.",
+        f"Camera: ClutterFly-v0 (84x84 depth) / HoverAviary 64x48 RGB = {cam:.2f}x with resets, {cam_step:.2f}x "
+        f"in step() alone: {verdict(cam)}.",
+    ]
+    imu_us = 1e6 / median(blocks[IMU], "cpu_step_rate")
+    for label, scans_per_step in ((LIDAR30, 1.0), (LIDAR10, 1.0 / 3.0)):
+        us = 1e6 / median(blocks[label], "cpu_step_rate")
+        lines.append(
+            f"{label}: {median(blocks[label], 'cpu_rate'):,.0f} steps per CPU-s with resets, "
+            f"{ratio(label, IMU, 'cpu_rate'):.2f}x the IMU-only env; the rays add {us - imu_us:,.0f} us "
+            f"of CPU a step (step() alone), {(us - imu_us) / scans_per_step:,.0f} us per 1,024-ray scan.")
+    return "\n".join(lines)
+
+
+def profile_report(step_s: float, phases: dict[str, tuple[float, float]]) -> str:
+    lines = [table_header("phase", "us per step", "share of step", "calls per step")]
+    indents = dict(PHASES)
+    for name, (seconds, calls) in phases.items():
+        pad = "&nbsp;&nbsp;" * indents.get(name, 0)
+        per_step = f"{calls:.0f}" if calls else ""
+        lines.append(f"| {pad}{name} | {1e6 * seconds:,.0f} | {seconds / step_s:.0%} | {per_step} |")
+    lines.append(f"| env.step, total | {1e6 * step_s:,.0f} | 100% | |")
+    return "\n".join(lines)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--steps", type=int, default=500, help="steps per block")
+    parser.add_argument("--rounds", type=int, default=6)
+    parser.add_argument("--warmup", type=int, default=50, help="untimed steps per workload first")
+    parser.add_argument("--profile-steps", type=int, default=1000)
+    parser.add_argument("--seed", type=int, default=0)
+    args = parser.parse_args()
+    started = time.perf_counter()
+    workloads = make_workloads(seed=args.seed)
+    rng = np.random.default_rng(args.seed + 1)
+    calls = {}
+    try:
+        for label, (env, shape) in workloads.items():
+            calls[label] = pybullet_calls_per_step(env, shape, rng, max(args.warmup, 30))
+        blocks = measure(workloads, args.steps, args.rounds, args.seed)
+    finally:
+        for env, _ in workloads.values():
+            env.close()
+    print(f"{args.rounds} alternating rounds of {args.steps} uniform-random-action steps per workload, resets "
+          f"counted; medians over blocks\n")
+    print(report(blocks, calls))
+    step_s, phases = phase_profile(args.profile_steps, args.seed)
+    print(f"\nWhere a ClutterFly-v0 (IMU only) step goes: {args.profile_steps} random-action steps, stopwatches "
+          f"around each part (wall time, resets excluded)\n")
+    print(profile_report(step_s, phases))
+    print(f"\n(benchmark took {time.perf_counter() - started:.0f} s)")
+
+
+if __name__ == "__main__":
+    main()
