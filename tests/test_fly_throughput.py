@@ -10,6 +10,8 @@ import pytest
 from benchmarks.fly_throughput import (
     IMU,
     KIN_PEER,
+    LIDAR10,
+    LIDAR30,
     PHASES,
     WORKLOADS,
     make_workloads,
@@ -17,6 +19,7 @@ from benchmarks.fly_throughput import (
     phase_profile,
     pybullet_calls_per_step,
     report,
+    time_scans,
 )
 from benchmarks.peers.hover import CALLS_PER_RESET, CALLS_PER_STEP, KIN_SHAPE, HoverKinPeer, count_pybullet_calls
 
@@ -75,6 +78,7 @@ def test_every_workload_gives_finite_positive_rates():
     try:
         calls = {label: pybullet_calls_per_step(env, shape, np.random.default_rng(0), 2)
                  for label, (env, shape) in workloads.items()}
+        scans = {label: time_scans(workloads[label][0]) for label in (LIDAR30, LIDAR10)}
         blocks = measure(workloads, steps=3, rounds=2)
     finally:
         for env, _ in workloads.values():
@@ -85,7 +89,9 @@ def test_every_workload_gives_finite_positive_rates():
         for b in bs:
             for rate in (b.rate, b.cpu_rate, b.cpu_step_rate):
                 assert math.isfinite(rate) and rate > 0.0, (label, b)
-    text = report(blocks, calls)
+    assert scans[LIDAR30].calls["scan"] == 6  # a 30 Hz LIDAR scans on every one of the 2 x 3 steps
+    assert 1 <= scans[LIDAR10].calls["scan"] <= 6 and scans[LIDAR30].seconds["scan"] > 0.0
+    text = report(blocks, calls, scans)
     assert text.count("\n| ") == len(WORKLOADS) and "Kinematic:" in text and "Camera:" in text
 
 
