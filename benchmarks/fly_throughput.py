@@ -12,9 +12,9 @@ audit every step); with a 16-channel x 64-ray LIDAR cast every control step (30 
 (the rate is the noise profile's ``lidar.rate_hz``, set through ``noise={"lidar": {"rate_hz": 10}}`` on the clean
 "none" profile: no noise is added, the scan is held between updates); with an 84x84 depth camera rendered every
 control step; and the RGB peer. Then the ratios against the issue's 2x targets, what the rays cost, and a
-per-phase profile of one IMU-only step.
+per-phase profile of the IMU-only step from a stopwatched copy of that env, run as one more block per round.
 
-    python -m benchmarks.fly_throughput [--steps 500] [--rounds 6] [--profile-steps 1000]
+    python -m benchmarks.fly_throughput [--steps 400] [--rounds 6]     # about 2 minutes on 2 shared cores
 """
 
 from __future__ import annotations
@@ -133,16 +133,22 @@ def time_scans(env) -> PhaseTimers:
     return timers
 
 
-def measure(workloads: dict[str, tuple[Any, tuple[int, ...]]], steps: int, rounds: int,
-            seed: int = 0) -> dict[str, list[Block]]:
-    """``rounds`` alternating rounds of one ``steps``-step block per workload; the blocks per workload."""
+def measure(workloads: dict[str, tuple[Any, tuple[int, ...]]], steps: int, rounds: int, seed: int = 0,
+            profile: StepProfile | None = None) -> dict[str, list[Block]]:
+    """``rounds`` alternating rounds of one ``steps``-step block per workload (and of ``profile``, if given, so
+    that its figures share the rounds' conditions); the blocks per workload."""
     rngs = {label: np.random.default_rng([seed, i]) for i, label in enumerate(workloads)}
 
     def block(label: str) -> Callable[[], Block]:
         env, shape = workloads[label]
         return lambda: run_block(env, rngs[label].uniform(-1.0, 1.0, (steps, *shape)).astype(np.float32))
 
-    return alternating_rounds({label: block(label) for label in workloads}, rounds)
+    measures: dict[str, Callable[[], Any]] = {label: block(label) for label in workloads}
+    if profile is not None:
+        measures["profile"] = lambda: profile.run(steps)
+    figures = alternating_rounds(measures, rounds)
+    figures.pop("profile", None)
+    return figures
 
 
 def median(blocks: list[Block], key: str) -> float:
@@ -195,51 +201,73 @@ PHASES = (
 )
 
 
-def phase_profile(steps: int, seed: int = 0) -> tuple[float, dict[str, tuple[float, float]]]:
-    """Time ``steps`` random-action steps of ClutterFly-v0 (IMU only) with stopwatches around its parts.
+class StepProfile:
+    """ClutterFly-v0 (IMU only) with a CPU stopwatch around each part of its step (``PHASES``).
 
-    Returns the mean process CPU time of ``env.step`` (gym.make's wrappers included) in seconds, and per phase
-    of ``PHASES`` plus ``"rest"`` (action checks, info dict, wrappers: the step less the top-level phases) its
-    mean CPU seconds and calls per step. Resets run with the stopwatches off. CPU time, because wall time on a
-    shared machine swings by 2x between runs; each stopwatch reading costs about 0.8 us (a system call), some
-    45 us over the ~30 timed calls of a step, mostly charged to the phases that hold them.
+    Process CPU time, because wall time on a shared machine swings by 2x between runs; each stopwatch reading
+    costs about 0.8 us (a system call), some 45 us over the ~30 timed calls of a step, mostly charged to the
+    phases that hold them. Resets run with the stopwatches off.
     """
-    env = gym.make("ClutterFly-v0")
-    env.reset(seed=seed)
-    u, t = env.unwrapped, PhaseTimers(time.process_time)
-    names = [name for name, _ in PHASES]
-    u._before_tick = t.wrap(names[0], u._before_tick)
-    u.sim.step = t.wrap(names[1], u.sim.step)
-    u.robot.state = t.wrap(names[2], u.robot.state)
-    u.sim.contact_distances = t.wrap(names[3], u.sim.contact_distances)
-    u.checker.check = t.wrap(names[4], u.checker.check)
-    for attr, name in zip(("sync", "_measure", "_contacts", "_swept"), names[5:9], strict=True):
-        setattr(u.checker, attr, t.wrap(name, getattr(u.checker, attr)))
-    u._observe = t.wrap(names[9], u._observe)
-    for sensor in u.sensors:
-        for attr in ("read", "observe", "info"):
-            setattr(sensor, attr, t.wrap(names[10], getattr(sensor, attr)))
-    u.task.observe = t.wrap(names[11], u.task.observe)
-    u.robot.observe = t.wrap(names[12], u.robot.observe)
-    u.task.evaluate = t.wrap(names[13], u.task.evaluate)
-    rng = np.random.default_rng(seed)
-    total = 0.0
-    try:
+
+    def __init__(self, seed: int = 0) -> None:
+        self.env = env = gym.make("ClutterFly-v0")
+        env.reset(seed=seed)
+        self.rng = np.random.default_rng([seed, len(WORKLOADS)])
+        self.steps, self.total = 0, 0.0
+        u, t = env.unwrapped, PhaseTimers(time.process_time)
+        self.timers = t
+        names = [name for name, _ in PHASES]
+        u._before_tick = t.wrap(names[0], u._before_tick)
+        u.sim.step = t.wrap(names[1], u.sim.step)
+        u.robot.state = t.wrap(names[2], u.robot.state)
+        u.sim.contact_distances = t.wrap(names[3], u.sim.contact_distances)
+        u.checker.check = t.wrap(names[4], u.checker.check)
+        for attr, name in zip(("sync", "_measure", "_contacts", "_swept"), names[5:9], strict=True):
+            setattr(u.checker, attr, t.wrap(name, getattr(u.checker, attr)))
+        u._observe = t.wrap(names[9], u._observe)
+        for sensor in u.sensors:
+            for attr in ("read", "observe", "info"):
+                setattr(sensor, attr, t.wrap(names[10], getattr(sensor, attr)))
+        u.task.observe = t.wrap(names[11], u.task.observe)
+        u.robot.observe = t.wrap(names[12], u.robot.observe)
+        u.task.evaluate = t.wrap(names[13], u.task.evaluate)
+
+    def run(self, steps: int) -> None:
+        """``steps`` uniform-random-action steps, timed; episodes that end are reset untimed."""
+        t, env = self.timers, self.env
         for _ in range(steps):
-            a = rng.uniform(-1.0, 1.0, 4).astype(np.float32)
+            a = self.rng.uniform(-1.0, 1.0, 4).astype(np.float32)
             t.active = True
             t0 = time.process_time()
             _, _, terminated, truncated, _ = env.step(a)
-            total += time.process_time() - t0
+            self.total += time.process_time() - t0
             t.active = False
             if terminated or truncated:
                 env.reset()
+        self.steps += steps
+
+    def result(self) -> tuple[float, dict[str, tuple[float, float]]]:
+        """The mean CPU seconds of ``env.step`` (gym.make's wrappers included), and per phase of ``PHASES`` plus
+        ``"rest"`` (action checks, info dict, wrappers: the step less the top-level phases) its mean CPU seconds
+        and calls per step."""
+        t, n = self.timers, self.steps
+        phases = {name: (t.seconds[name] / n, t.calls[name] / n) for name, _ in PHASES}
+        top = sum(phases[name][0] for name, indent in PHASES if indent == 0)
+        phases["rest: action checks, info dict, gym.make wrappers"] = (self.total / n - top, 0.0)
+        return self.total / n, phases
+
+    def close(self) -> None:
+        self.env.close()
+
+
+def phase_profile(steps: int, seed: int = 0) -> tuple[float, dict[str, tuple[float, float]]]:
+    """``StepProfile.result`` after ``steps`` steps of a fresh profiled env."""
+    profile = StepProfile(seed)
+    try:
+        profile.run(steps)
+        return profile.result()
     finally:
-        env.close()
-    phases = {name: (t.seconds[name] / steps, t.calls[name] / steps) for name in names}
-    top = sum(phases[name][0] for name, indent in PHASES if indent == 0)
-    phases["rest: action checks, info dict, gym.make wrappers"] = (total / steps - top, 0.0)
-    return total / steps, phases
+        profile.close()
 
 
 # -- report -------------------------------------------------------------------------------------------------------
@@ -302,30 +330,32 @@ def profile_report(step_s: float, phases: dict[str, tuple[float, float]]) -> str
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--steps", type=int, default=500, help="steps per block")
+    parser.add_argument("--steps", type=int, default=400, help="steps per block")
     parser.add_argument("--rounds", type=int, default=6)
     parser.add_argument("--warmup", type=int, default=50, help="untimed steps per workload first")
-    parser.add_argument("--profile-steps", type=int, default=1000)
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
     started = time.perf_counter()
     workloads = make_workloads(seed=args.seed)
     rng = np.random.default_rng(args.seed + 1)
-    calls = {}
+    calls, profile = {}, None
     try:
         for label, (env, shape) in workloads.items():
             calls[label] = pybullet_calls_per_step(env, shape, rng, max(args.warmup, 30))
         scans = {label: time_scans(workloads[label][0]) for label in (LIDAR30, LIDAR10)}
-        blocks = measure(workloads, args.steps, args.rounds, args.seed)
+        profile = StepProfile(args.seed)
+        blocks = measure(workloads, args.steps, args.rounds, args.seed, profile)
+        step_s, phases = profile.result()
     finally:
         for env, _ in workloads.values():
             env.close()
+        if profile is not None:
+            profile.close()
     print(f"{args.rounds} alternating rounds of {args.steps} uniform-random-action steps per workload, resets "
           f"counted; medians over blocks\n")
     print(report(blocks, calls, scans))
-    step_s, phases = phase_profile(args.profile_steps, args.seed)
-    print(f"\nWhere a ClutterFly-v0 (IMU only) step goes: {args.profile_steps} random-action steps, stopwatches "
-          f"around each part (process CPU time, resets excluded)\n")
+    print(f"\nWhere a ClutterFly-v0 (IMU only) step goes: a seventh workload in the same rounds, stopwatches around "
+          f"each part (process CPU time, resets excluded; {profile.steps:,} steps)\n")
     print(profile_report(step_s, phases))
     print(f"\n(benchmark took {time.perf_counter() - started:.0f} s)")
 
