@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from benchmarks.fly_throughput import (
+    FLY,
     IMU,
     KIN_PEER,
     LIDAR10,
@@ -80,6 +81,9 @@ def test_every_workload_gives_finite_positive_rates():
                  for label, (env, shape) in workloads.items()}
         scans = {label: time_scans(workloads[label][0]) for label in (LIDAR30, LIDAR10)}
         blocks = measure(workloads, steps=3, rounds=2)
+        # one action stream for every ClutterFly-v0 variant: the same flight, whatever the sensors
+        positions = [workloads[label][0].unwrapped.robot.state().position for label in FLY]
+        assert all(np.array_equal(p, positions[0]) for p in positions)
     finally:
         for env, _ in workloads.values():
             env.close()
