@@ -113,6 +113,18 @@ VISION_AVIARY_OBSTACLES = (
 )
 
 
+def apply_rotor_forces(cid: int, drone: int, rpm: np.ndarray) -> None:
+    """gym-pybullet-drones' ``BaseAviary._physics`` for one drone and one physics tick: each rotor's thrust
+    ``KF * rpm^2`` on links 0-3 and the summed drag torque on link 4 (the centre-of-mass link), link frames."""
+    forces = rpm ** 2 * KF
+    torques = rpm ** 2 * KM
+    z_torque = -torques[0] + torques[1] - torques[2] + torques[3]
+    for i in range(4):
+        pb.applyExternalForce(drone, i, forceObj=[0, 0, forces[i]], posObj=[0, 0, 0], flags=pb.LINK_FRAME,
+                              physicsClientId=cid)
+    pb.applyExternalTorque(drone, 4, torqueObj=[0, 0, z_torque], flags=pb.LINK_FRAME, physicsClientId=cid)
+
+
 @dataclass(frozen=True)
 class DroneCameraConfig:
     pyb_freq: int = 240
@@ -188,14 +200,7 @@ class DroneCameraWorkload:
         action = np.asarray(action, dtype=np.float64).reshape(1, 4)
         rpm = HOVER_RPM * (1 + 0.05 * action)  # ActionType.RPM
         for _ in range(self.substeps):
-            forces = rpm[0] ** 2 * KF
-            torques = rpm[0] ** 2 * KM
-            z_torque = -torques[0] + torques[1] - torques[2] + torques[3]
-            for i in range(4):
-                pb.applyExternalForce(drone, i, forceObj=[0, 0, forces[i]], posObj=[0, 0, 0],
-                                      flags=pb.LINK_FRAME, physicsClientId=cid)
-            pb.applyExternalTorque(drone, 4, torqueObj=[0, 0, z_torque], flags=pb.LINK_FRAME,
-                                   physicsClientId=cid)
+            apply_rotor_forces(cid, drone, rpm[0])
             pb.stepSimulation(physicsClientId=cid)
             self.last_clipped_action = rpm
         self._read_kinematics()

@@ -71,10 +71,11 @@ from gymnasium import spaces
 
 from benchmarks.harness import pb
 from benchmarks.peers.drone_body import write_drone
+from benchmarks.peers.drones import KF, apply_rotor_forces
 from clutter_gym.util.quiet import quiet_c_output
 
 URDF = os.path.join(os.path.dirname(__file__), "cf2x_hover.urdf")
-G, MASS, KF, KM = 9.8, 0.027, 3.16e-10, 7.94e-12
+G, MASS = 9.8, 0.027
 HOVER_RPM = math.sqrt(G * MASS / (4 * KF))
 PYB_FREQ, CTRL_FREQ = 240, 30
 SUBSTEPS = PYB_FREQ // CTRL_FREQ
@@ -163,14 +164,7 @@ class HoverKinPeer(gym.Env):
             if SUBSTEPS > 1 and self.physics in _PER_TICK_READS:
                 self._read_kinematics()
             for k in range(1):  # one drone
-                forces = np.array(clipped[k, :] ** 2) * KF
-                torques = np.array(clipped[k, :] ** 2) * KM
-                z_torque = -torques[0] + torques[1] - torques[2] + torques[3]
-                for i in range(4):
-                    pb.applyExternalForce(drone, i, forceObj=[0, 0, forces[i]], posObj=[0, 0, 0],
-                                          flags=pb.LINK_FRAME, physicsClientId=cid)
-                pb.applyExternalTorque(drone, 4, torqueObj=[0, 0, z_torque], flags=pb.LINK_FRAME,
-                                       physicsClientId=cid)
+                apply_rotor_forces(cid, drone, np.array(clipped[k, :]))
             pb.stepSimulation(physicsClientId=cid)
             self.last_clipped_action = clipped
         self._read_kinematics()
