@@ -1,0 +1,130 @@
+"""Robot actuation: joint motors and states, inverse kinematics, link dynamics, and external forces.
+
+Part of :class:`clutter_gym.sim.Sim` (a mixin: it uses the Sim's client id). pybullet clears external forces after
+every ``stepSimulation``: a robot that flies on them applies them before each physics tick
+(:class:`clutter_gym.interfaces.TickedRobot`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import pybullet as pb
+
+
+class Actuation:
+    """Motor commands, joint reads and forces on a Sim's robots (mixed into :class:`~clutter_gym.sim.Sim`)."""
+
+    def reset_joints(self, body: int, joints: Sequence[int], positions: Sequence[float] | None = None) -> None:
+        """Joint positions (rad or m; zero if not given) and zero joint velocities."""
+        for k, j in enumerate(joints):
+            pb.resetJointState(body, j, 0.0 if positions is None else positions[k], 0.0, physicsClientId=self._cid)
+
+    def set_joint_velocities(
+        self, body: int, joints: Sequence[int], velocities: Sequence[float], max_forces: Sequence[float]
+    ) -> None:
+        """Velocity-controlled motors: target joint velocities (rad/s) under a torque limit (N m)."""
+        pb.setJointMotorControlArray(
+            body,
+            joints,
+            pb.VELOCITY_CONTROL,
+            targetVelocities=velocities,
+            forces=max_forces,
+            physicsClientId=self._cid,
+        )
+
+    def set_joint_positions(
+        self,
+        body: int,
+        joints: Sequence[int],
+        positions: Sequence[float],
+        velocities: Sequence[float],
+        max_forces: Sequence[float],
+    ) -> None:
+        """Position-controlled motors: PD tracking of target positions and velocities under force limits."""
+        pb.setJointMotorControlArray(
+            body,
+            joints,
+            pb.POSITION_CONTROL,
+            targetPositions=positions,
+            targetVelocities=velocities,
+            forces=max_forces,
+            physicsClientId=self._cid,
+        )
+
+    def joint_states(self, body: int, joints: Sequence[int]) -> tuple[np.ndarray, np.ndarray]:
+        """(positions, velocities) of ``joints`` in one batched call."""
+        rows = pb.getJointStates(body, joints, physicsClientId=self._cid)
+        flat = np.array([r[:2] for r in rows])
+        return flat[:, 0], flat[:, 1]
+
+    def inverse_kinematics(
+        self,
+        body: int,
+        link: int,
+        position: Sequence[float],
+        orientation: Sequence[float],
+        lower: Sequence[float],
+        upper: Sequence[float],
+        rest: Sequence[float],
+    ) -> np.ndarray:
+        """Joint positions of every movable joint that put ``link`` at ``position``/``orientation`` (pybullet's
+        damped least squares, null space pulled towards ``rest`` within [lower, upper])."""
+        lower, upper, rest = ([float(v) for v in values] for values in (lower, upper, rest))
+        ranges = [u - lo for lo, u in zip(lower, upper)]
+        if not len(lower) == len(upper) == len(rest) == pb.computeDofCount(body, physicsClientId=self._cid):
+            raise ValueError("inverse_kinematics needs lower, upper and rest for every movable joint")
+        # plain lists: pybullet's IK reads numpy arrays out of bounds and crashes
+        return np.array(pb.calculateInverseKinematics(
+            body, link, [float(v) for v in position], [float(v) for v in orientation], lowerLimits=lower,
+            upperLimits=upper, jointRanges=ranges, restPoses=rest, physicsClientId=self._cid,
+        ))
+
+    def inertial_properties(self, body: int, links: Sequence[int]) -> list[tuple[float, float, tuple]]:
+        """(mass kg, lateral friction coefficient, inertia diagonal kg m^2) of each link (-1 = the base)."""
+        return [pb.getDynamicsInfo(body, link, physicsClientId=self._cid)[:3] for link in links]
+
+    def set_dynamics(
+        self, body: int, link: int, mass: float, inertia: Sequence[float], lateral_friction: float, restitution: float
+    ) -> None:
+        """Set a link's mass (kg), inertia diagonal (kg m^2), friction coefficient and restitution.
+
+        The inertia is passed explicitly: given a mass alone, pybullet recomputes the inertia from the collision
+        shape, which is zero for a link without one.
+        """
+        pb.changeDynamics(
+            body,
+            link,
+            mass=mass,
+            localInertiaDiagonal=inertia,
+            lateralFriction=lateral_friction,
+            restitution=restitution,
+            physicsClientId=self._cid,
+        )
+
+    def set_friction_anchors(self, body: int, links: Sequence[int], on: bool) -> None:
+        """Turn Bullet's friction anchors on or off for ``links``: with them on, a contact keeps the point where it
+        began and static friction pulls it back there, instead of re-anchoring every tick and letting solver
+        residue creep (docs/design-notes.md#standing-still)."""
+        for link in links:
+            pb.changeDynamics(body, link, frictionAnchor=int(on), physicsClientId=self._cid)
+        self.forget_contacts(body)  # a contact keeps the kind it began with: begin them again
+    def set_damping(self, body: int, linear: float, angular: float) -> None:
+        """Set a body's velocity damping (pybullet's default is 0.04 for both, which slows every free body:
+        a flying body gets its drag from its own model instead)."""
+        pb.changeDynamics(body, -1, linearDamping=linear, angularDamping=angular, physicsClientId=self._cid)
+
+    def apply_link_forces(self, body: int, links: Sequence[int], forces: Sequence[Sequence[float]]) -> None:
+        """Apply ``forces`` (N, one (fx, fy, fz) per link, in that link's frame) at the links' centres of mass for
+        the next physics tick. pybullet's link frame for forces is the link's inertial frame, so a force along a
+        rotor axis that passes through the link's centre of mass is the rotor's thrust."""
+        for link, force in zip(links, forces):
+            pb.applyExternalForce(body, link, force, (0.0, 0.0, 0.0), pb.LINK_FRAME, physicsClientId=self._cid)
+
+    def apply_base_wrench(self, body: int, force: Sequence[float], torque: Sequence[float]) -> None:
+        """Apply a world-frame ``force`` (N) at the base's centre of mass and a world-frame ``torque`` (N m) to the
+        base, for the next physics tick."""
+        position, _ = pb.getBasePositionAndOrientation(body, physicsClientId=self._cid)
+        pb.applyExternalForce(body, -1, force, position, pb.WORLD_FRAME, physicsClientId=self._cid)
+        pb.applyExternalTorque(body, -1, torque, pb.WORLD_FRAME, physicsClientId=self._cid)
