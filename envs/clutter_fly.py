@@ -26,6 +26,10 @@ SENSOR_LINK, IMU_LINK = "sensor_mount", "imu"
 MIN_HEIGHT = 2.0
 #: m/s^2, the Sim's gravity: the hover action the control term is measured from.
 GRAVITY = 9.81
+#: metres: clearance is resolved this far (or to ``clearance_margin``, if larger); farther reads this. The reward
+#: needs only the margin, and resolving the whole volume asked FCL about every shape and obstacle pair each step
+#: (docs/quadrotor.md, "Throughput").
+CLEARANCE_RANGE = 1.0
 
 
 class ClutterFlyEnv(ClutterEnv):
@@ -99,8 +103,8 @@ class ClutterFlyEnv(ClutterEnv):
 
     ## Info
 
-    ``reward_terms``, ``cost``, ``is_success``, ``min_clearance`` (m, FCL, negative = penetration, capped at the
-    volume's diagonal), ``closest_pair``, ``witness_points``, ``n_contacts``, ``max_penetration`` (m),
+    ``reward_terms``, ``cost``, ``is_success``, ``min_clearance`` (m, FCL, negative = penetration, capped at
+    1 m or ``clearance_margin``, whichever is larger), ``closest_pair``, ``witness_points``, ``n_contacts``, ``max_penetration`` (m),
     ``self_collision`` (always None: the airframe is rigid), ``tunneling`` (swept hits), ``pybullet_contacts`` and
     ``contact_disagreement``, ``lidar_ranges`` (m, with ``"lidar"``), ``noise_profile`` (at reset).
 
@@ -182,11 +186,10 @@ class ClutterFlyEnv(ClutterEnv):
             raise ValueError(f"aero must be a tuple of names from ('drag', 'ground_effect'), got {aero!r}")
         robot = Quadrotor(QuadrotorConfig(aero=tuple(aero)))
         spec = _volume_spec(volume_size, obstacle_density, ceiling)
-        diagonal = math.sqrt(sum(v * v for v in spec.size))
-        # the whole volume is in range: every step reports the distance to the nearest obstacle; the airframe is
-        # rigid (fixed joints only), so self-collision is off and no allowed-collision matrix is needed
+        # the airframe is rigid (fixed joints only), so self-collision is off and no allowed-collision matrix is needed
         checker = collision_checker(robot, TRACKED_LINKS, collision_fidelity, collision_padding, contact_tolerance,
-                                    diagonal, control_hz, self_collision=False, swept_speed=swept_speed)
+                                    max(CLEARANCE_RANGE, clearance_margin), control_hz, self_collision=False,
+                                    swept_speed=swept_speed)
         radius = bounding_radius(checker.model, robot.model)
         lidar = LidarConfig(n_rays=n_rays, fov=lidar_fov, max_range=lidar_range, n_channels=lidar_channels,
                             vertical_fov=lidar_vertical_fov, link=SENSOR_LINK)

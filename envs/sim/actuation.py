@@ -124,7 +124,9 @@ class Actuation:
 
     def apply_base_wrench(self, body: int, force: Sequence[float], torque: Sequence[float]) -> None:
         """Apply a world-frame ``force`` (N) at the base's centre of mass and a world-frame ``torque`` (N m) to the
-        base, for the next physics tick."""
-        position, _ = pb.getBasePositionAndOrientation(body, physicsClientId=self._cid)
-        pb.applyExternalForce(body, -1, force, position, pb.WORLD_FRAME, physicsClientId=self._cid)
+        base, for the next physics tick. A zero force is not sent (nor the base position read for it): it would add
+        nothing."""
+        if any(force):
+            position, _ = pb.getBasePositionAndOrientation(body, physicsClientId=self._cid)
+            pb.applyExternalForce(body, -1, force, position, pb.WORLD_FRAME, physicsClientId=self._cid)
         pb.applyExternalTorque(body, -1, torque, pb.WORLD_FRAME, physicsClientId=self._cid)
