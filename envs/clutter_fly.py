@@ -65,6 +65,7 @@ class ClutterFlyEnv(ClutterEnv):
     | ``camera_rgb`` | (h, w, 3) uint8 | colour image (only with "rgb" in ``camera_modes``) | - | [0, 255] |
     | ``camera_segmentation`` | (h, w) uint8 | class per pixel: nothing, ground, obstacle, robot, goal (only with "segmentation") | - | [0, 4] |
     | ``goal`` | (4,) | goal minus the base origin (x, y, z), then its length | m; body frame | +-volume diagonal, [0, volume diagonal] |
+    | ``subgoal`` | (3,) | the point ``subgoal_lookahead`` ahead on the shortest path through the known layout (the progress reward's path), minus the base origin; only with ``subgoal_lookahead > 0`` | m; body frame | +-subgoal_lookahead |
     | ``attitude`` | (3,) | the world's up axis in the body frame (z = cosine of the tilt) | -; body frame | [-1, 1] |
     | ``velocity`` | (6,) | linear velocity (v_x, v_y, v_z), body rates (p, q, r) | m/s, rad/s; body frame | +-20, +-6 |
     | ``rotor_speeds`` | (4,) | rotor speed / max rotor speed, rotors front right, rear right, rear left, front left | - | [0, 1] |
@@ -126,7 +127,12 @@ class ClutterFlyEnv(ClutterEnv):
     multiple of ``control_hz``); ``control_hz``; ``solver_iterations``; ``aero`` (subset of ("drag",
     "ground_effect")); ``success_radius`` m (0, 2]; ``clearance_margin`` m [0, 1]; ``max_tilt`` rad (0, pi];
     ``terminate_on_collision``; ``contact_tolerance`` m [0, 0.05]; ``collision_fidelity``; ``collision_padding`` m
-    [0, 1]; ``swept_speed`` m/s (``inf`` turns swept checks off); ``*_weight`` reward weights [0, 1e4].
+    [0, 1]; ``swept_speed`` m/s (``inf`` turns swept checks off); ``*_weight`` reward weights [0, 1e4];
+    ``subgoal_lookahead`` m [0, volume diagonal] (0: off).
+
+    ``subgoal_lookahead > 0`` makes the env map-based, as ClutterNav's option of that name: the ``subgoal`` entry
+    is a point that far ahead on the shortest path for the drone's bounding sphere through the known layout (the
+    path the progress reward measures), so a policy flies a planned path instead of searching the volume.
 
     Self-collision is not checked: every link of the airframe is fixed to the base, so no pair can move into
     another.
@@ -176,6 +182,7 @@ class ClutterFlyEnv(ClutterEnv):
         control_weight: float = 0.01,
         attitude_weight: float = 0.1,
         rate_weight: float = 0.01,
+        subgoal_lookahead: float = 0.0,
     ) -> None:
         check_numbers(ClutterFlyEnv.__init__, locals())
         check_env_settings(render_mode, physics_hz, control_hz, solver_iterations, contact_tolerance)
@@ -206,6 +213,7 @@ class ClutterFlyEnv(ClutterEnv):
             max_tilt=max_tilt,
             terminate_on_collision=terminate_on_collision,
             hover_action=robot.hover_action(GRAVITY),
+            subgoal_lookahead=subgoal_lookahead,
         )
         super().__init__(
             physics_hz=physics_hz,

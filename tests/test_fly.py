@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from clutter_gym.noise.profiles import PROFILE_NAMES
+from clutter_gym.training.baselines import CascadedFlyer
 
 SIZE = (4.0, 4.0, 2.0)  # a small volume: cheap path distances
 FULL_THRUST = np.array([1.0, 0.0, 0.0, 0.0])
@@ -150,6 +151,27 @@ def test_goal_observation_is_the_body_frame_vector_and_its_length(make_env):
     np.testing.assert_allclose(obs["goal"], [0.0, -1.0, 0.5, math.sqrt(1.25)], atol=1e-6)
 
 
+def test_the_subgoal_is_the_waypoint_ahead_on_the_path_in_the_body_frame(make_env):
+    env = fly_env(make_env, subgoal_lookahead=0.5)
+    pole = {"shape": "cylinder", "radius": 0.3, "height": 2.0, "position": [0.75, 0.75]}
+    obs, _ = env.reset(options={"scene": scene([pole], start=(0.0, 0.0, 1.0, 0.7))})
+    task, state = env.unwrapped.task, env.unwrapped.robot.state()
+    path = task.planned_path(state.position)
+    point = np.asarray(state.position) + state.rotation @ obs["subgoal"]
+    np.testing.assert_allclose(point, task._path_distance.waypoint(*state.position, 0.5), atol=1e-6)
+    distances = np.linalg.norm(path[:, None, :] - point, axis=2).min()
+    assert distances < 0.2  # on the path, within one segment of a listed point (0.2 m cells)
+    assert np.linalg.norm(obs["subgoal"]) <= 0.5 + 1e-6
+    assert env.observation_space["subgoal"].contains(obs["subgoal"])
+    assert "subgoal" not in fly_env(make_env).observation_space.spaces
+
+
+@pytest.mark.parametrize("value", [-0.1, 100.0, math.nan])
+def test_subgoal_lookahead_out_of_range_is_refused(make_env, value):
+    with pytest.raises(ValueError, match=r"subgoal_lookahead must be in \[0, 6(\.\d+)?\] metres"):
+        fly_env(make_env, subgoal_lookahead=value)
+
+
 def test_a_user_scene_round_trips(make_env):
     env = fly_env(make_env)
     pole = {"shape": "cylinder", "radius": 0.2, "height": 2.0, "position": [1.0, -1.0]}
@@ -251,3 +273,28 @@ def test_every_noise_profile_applies_to_every_sensor(make_env, profile):
         readings.append(rows[-1])
     differs = {key: not np.array_equal(readings[0][key], readings[1][key]) for key in ("imu", "lidar", "camera_depth")}
     assert all(differs.values()) == (profile != "none"), differs
+
+
+def test_the_cascaded_flyer_on_the_subgoal_flies_seeded_layouts_without_contact(make_env):
+    """The map-based planner reference: a position controller on the planned path's subgoal reaches the goal of
+    every one of five seeded layouts of the small volume, touching nothing; aimed at the goal itself (mapless) in
+    an empty volume it reaches it too."""
+    env = fly_env(make_env, subgoal_lookahead=0.5, obstacle_density=0.08)
+    flyer = CascadedFlyer.for_env(env, "subgoal")
+    for seed in range(5):
+        obs, _ = env.reset(seed=seed)
+        done, cost = False, 0.0
+        while not done:
+            obs, _, terminated, truncated, info = env.step(flyer(obs))
+            done, cost = terminated or truncated, max(cost, info["cost"])
+        assert info["is_success"] and cost == 0.0, seed
+    open_env = fly_env(make_env, obstacle_density=0.0)
+    mapless = CascadedFlyer.for_env(open_env)
+    obs, _ = open_env.reset(seed=0)
+    for _ in range(300):
+        obs, _, terminated, truncated, info = open_env.step(mapless(obs))
+        if terminated:
+            break
+    assert info["is_success"]
+    with pytest.raises(ValueError, match="has no 'subgoal' observation"):
+        CascadedFlyer.for_env(open_env, "subgoal")

@@ -70,6 +70,8 @@ class FlyTask:
             (0, pi].
         terminate_on_collision: end the episode (terminated) on the first unsafe step (contact or tunneling).
         hover_action: the action that holds a level hover; the control term charges the distance from it.
+        subgoal_lookahead: metres along the path behind the progress field to the ``subgoal`` observation
+            (0: no such entry), in [0, volume diagonal].
     """
 
     def __init__(
@@ -82,6 +84,7 @@ class FlyTask:
         max_tilt: float,
         terminate_on_collision: bool,
         hover_action: Sequence[float],
+        subgoal_lookahead: float = 0.0,
     ) -> None:
         if not (math.isfinite(success_radius) and 0.0 < success_radius <= 2.0):
             raise ValueError(f"success_radius must be in (0, 2] metres, got {success_radius!r}")
@@ -89,6 +92,10 @@ class FlyTask:
             raise ValueError(f"clearance_margin must be in [0, 1] metres, got {clearance_margin!r}")
         if not (math.isfinite(max_tilt) and 0.0 < max_tilt <= math.pi):
             raise ValueError(f"max_tilt must be in (0, pi] radians, got {max_tilt!r}")
+        diagonal = float(math.sqrt(sum(v * v for v in spec.size)))
+        if not (math.isfinite(subgoal_lookahead) and 0.0 <= subgoal_lookahead <= diagonal):
+            raise ValueError(f"subgoal_lookahead must be in [0, {diagonal:.4g}] metres (0: no subgoal entry), got "
+                             f"{subgoal_lookahead!r}")
         self.weights = weights
         self.spec = spec
         self.robot_radius = float(robot_radius)
@@ -97,10 +104,13 @@ class FlyTask:
         self.terminate_on_collision = bool(terminate_on_collision)
         self._min_tilt_cos = math.cos(max_tilt)
         self._hover = np.asarray(hover_action, dtype=np.float64)
-        self.max_goal_distance = float(math.sqrt(sum(v * v for v in spec.size)))
-        d = self.max_goal_distance
+        self.max_goal_distance = d = diagonal
         low = np.array([-d, -d, -d, 0.0], dtype=np.float32)
         self.spaces = {"goal": spaces.Box(low, np.full(4, d, dtype=np.float32), dtype=np.float32)}
+        self.subgoal_lookahead = float(subgoal_lookahead)
+        if self.subgoal_lookahead > 0.0:
+            self.spaces["subgoal"] = spaces.Box(-self.subgoal_lookahead, self.subgoal_lookahead, shape=(3,),
+                                                dtype=np.float32)
         self._goal = np.zeros(3)
         self._path_distance: VolumePathDistance | None = None
         self._previous_path = 0.0
@@ -118,15 +128,27 @@ class FlyTask:
         p = state.position
         return self._path_distance(float(p[0]), float(p[1]), float(p[2]))
 
+    def planned_path(self, point: Sequence[float]) -> np.ndarray:
+        """(k, 3) the path behind the progress field from ``point`` to the goal, metres."""
+        return self._path_distance.path(*point)
+
     def observe(self, state: RobotState, report: CollisionReport) -> dict[str, np.ndarray]:
         """``goal``: the goal minus the base origin in the body frame (x, y, z, m; each clipped to the volume's
-        diagonal), then its length (m, clipped the same)."""
-        offset = state.rotation.T @ (self._goal - np.asarray(state.position))
+        diagonal), then its length (m, clipped the same). ``subgoal`` (when enabled): the point
+        ``subgoal_lookahead`` ahead on the path behind the progress field (the goal itself when nearer) minus the
+        base origin, body frame, metres."""
+        position = np.asarray(state.position)
+        offset = state.rotation.T @ (self._goal - position)
         d = self.max_goal_distance
         out = np.empty(4, dtype=np.float32)
         out[:3] = np.clip(offset, -d, d)
         out[3] = min(float(np.linalg.norm(offset)), d)
-        return {"goal": out}
+        if self.subgoal_lookahead <= 0.0:
+            return {"goal": out}
+        point = self._path_distance.waypoint(*position.tolist(), self.subgoal_lookahead)
+        sub = state.rotation.T @ (np.asarray(point) - position)
+        bound = self.subgoal_lookahead
+        return {"goal": out, "subgoal": np.clip(sub, -bound, bound).astype(np.float32)}
 
     def evaluate(self, state: RobotState, report: CollisionReport, action: np.ndarray) -> StepOutcome:
         """Reward terms and termination after a step, from ground truth only."""

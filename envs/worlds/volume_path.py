@@ -25,6 +25,7 @@ from __future__ import annotations
 import functools
 import itertools
 import math
+from collections.abc import Iterator
 
 import numpy as np
 from scipy import ndimage
@@ -194,19 +195,37 @@ class VolumePathDistance:
         """(k, 3) the path behind the field's value at (x, y, z): the point, the cell centres, the goal (metres).
 
         Its first segment is certified only where the value is a bound (see the module docstring)."""
-        point = (float(x), float(y), float(z))
+        return np.array(list(self._chain((float(x), float(y), float(z)))))
+
+    def waypoint(self, x: float, y: float, z: float, lookahead: float) -> tuple[float, float, float]:
+        """The point ``lookahead`` metres along :meth:`path` from (x, y, z) (the goal if nearer), metres; walks
+        the path only as far as it needs."""
+        points = self._chain((float(x), float(y), float(z)))
+        previous, travelled = next(points), 0.0
+        for point in points:
+            step = math.dist(previous, point)
+            if travelled + step >= lookahead and step > 0.0:
+                t = (lookahead - travelled) / step
+                return tuple(a + t * (b - a) for a, b in zip(previous, point))
+            travelled += step
+            previous = point
+        return self._goal
+
+    def _chain(self, point: tuple[float, float, float]) -> Iterator[tuple[float, float, float]]:
+        """``point``, then the cell centres of its path (see :meth:`path`), then the goal."""
+        yield point
         best = self._best_corner(point)
         if best is not None:
             cell = best[0]
         else:
             cell = int(self._nearest_reachable[np.ravel_multi_index(cell_index(point, self._spec), self._clear.shape)])
-        if cell < 0:
-            return np.array([point, self._goal])
         n = self._clear.size
-        cells = []
-        while cell != n:
-            cells.append(cell)
-            cell = int(self._next[cell])
-        centres = self._cell_centres(np.array(cells, dtype=int)).reshape(-1, 3)
-        return np.concatenate([[point], centres, [self._goal]])
-
+        if cell >= 0:
+            _, ny, nz = self._clear.shape
+            cx, cy, cz = self._axes
+            while cell != n:
+                i, rest = divmod(cell, ny * nz)
+                j, k = divmod(rest, nz)
+                yield (cx[i], cy[j], cz[k])
+                cell = int(self._next[cell])
+        yield self._goal

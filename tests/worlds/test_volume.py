@@ -191,6 +191,26 @@ def test_a_wall_with_a_hole_makes_the_path_go_through_the_hole():
     assert field(*goal) == 0.0
 
 
+def test_the_waypoint_is_the_point_that_far_along_the_path():
+    """On the hole-in-the-wall path: the waypoint lies on the path's polyline at the asked arc length; past the
+    path's end it is the goal. In open space it is the straight line's point to within a cell's diagonal (the
+    path runs over cell centres beyond the clearance grid's cap)."""
+    wall = wall_with_opening((0.0, 0.0), math.pi / 2, 10.0, 0.2, 4.0, (7.0, 1.2, 1.5, 1.2))
+    start, goal = (-2.0, -2.0, 1.0), (2.0, -2.0, 1.0)
+    field = VolumePathDistance(VolumeScene(wall, (*start, 0.0), goal), SPEC, R)
+    path = field.path(*start)
+    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(path, axis=0), axis=1))])
+    for lookahead in (0.05, 0.5, 1.7, 0.5 * arc[-1]):
+        k = int(np.searchsorted(arc, lookahead)) - 1
+        t = (lookahead - arc[k]) / (arc[k + 1] - arc[k])
+        np.testing.assert_allclose(field.waypoint(*start, lookahead), path[k] + t * (path[k + 1] - path[k]),
+                                   atol=1e-12)
+    assert field.waypoint(*start, arc[-1] + 1.0) == goal
+    open_field = VolumePathDistance(VolumeScene((), (0.0, 0.0, 1.0, 0.0), (3.0, 4.0, 1.0)), SPEC, R)
+    gap = math.dist(open_field.waypoint(0.0, 0.0, 1.0, 0.5), (0.3, 0.4, 1.0))
+    assert gap <= float(np.linalg.norm(SPEC.cell_size))
+
+
 def test_without_a_certified_cell_the_field_stays_finite():
     """A start touching an obstacle (no centre around it certified) still gets a finite value above the straight
     line, and cells cut off from the goal take their nearest reachable value plus the gap."""
