@@ -32,7 +32,7 @@ from gymnasium import spaces
 
 from clutter_gym.training.config import TrainConfig, deep_merge
 from clutter_gym.training.memory import frame_space, push_frame
-from clutter_gym.training.residual import residual_action
+from clutter_gym.training.residual import residual_action, subgoal_pursuit
 from clutter_gym.training.run_dir import MODEL_FILE, NORMALIZER_FILE, IncompatibleRunError, RunDir
 
 if TYPE_CHECKING:
@@ -58,6 +58,7 @@ class Agent:
         self.step = int(model.num_timesteps)
         self.observation_space = frame_space(model.observation_space, config.frame_stack)
         self._normalizer = normalizer if normalizer is not None and normalizer.norm_obs else None
+        self._pursuit = subgoal_pursuit(config.env_id, config.residual_gain) if config.residual_gain else None
 
     def predict(self, obs: dict[str, np.ndarray] | np.ndarray, state: Any = None,
                 deterministic: bool = True) -> tuple[np.ndarray, Any]:
@@ -84,8 +85,8 @@ class Agent:
             action = action[0] if single else action
         else:
             action, _ = self.model.predict(obs, deterministic=deterministic)
-        if self.config.residual_gain:
-            action = residual_action(raw, action, self.config.residual_gain)
+        if self._pursuit is not None:
+            action = residual_action(raw, action, self._pursuit)
         return action, state
 
     def make_env(self, noise: str | dict[str, Any] | None = None, render_mode: str | None = None,

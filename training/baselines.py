@@ -105,3 +105,87 @@ class StraightLineReacher:
     def __call__(self, obs: Mapping[str, np.ndarray]) -> np.ndarray:
         offset = np.asarray(obs["target"], dtype=float) - np.asarray(obs["ee_position"], dtype=float)
         return np.clip(offset / self.max_ee_step, -1.0, 1.0).astype(np.float32)
+
+
+class CascadedFlyer:
+    """A cascaded position controller for ClutterFly's rate actions: the way a flight stack's position mode flies.
+
+    The target point (``obs[goal_key]``, body frame) sets a velocity towards it (``position_gain`` x the offset, at
+    most ``max_speed``), the velocity error an acceleration (``velocity_gain`` x error, at most ``max_accel``), and
+    that acceleration plus gravity the thrust vector: its length along body z is the collective thrust, and body
+    rates ``attitude_gain`` x (body z cross the thrust direction) tilt the airframe onto it. Yaw is held. It reads
+    only the observation (target offset, ``velocity``, ``attitude``), as a policy would, one or a batch (rows).
+    Without obstacle sensing it flies straight at its target: with ``goal_key="goal"`` a mapless reference that
+    meets every obstacle on the line; with ``"subgoal"`` (an env made with ``subgoal_lookahead > 0``) the map-based
+    planner reference, and the pursuit a residual ClutterFly policy adds its actions to.
+
+    Args:
+        hover_thrust: collective thrust of a level hover as a fraction of the maximum.
+        rate_scale: body rates (rad/s) of action +1 about x, y, z.
+        gravity: m/s^2.
+        goal_key: ``"goal"`` or ``"subgoal"``.
+        position_gain: commanded speed per metre of offset, 1/s.
+        velocity_gain: commanded acceleration per m/s of velocity error, 1/s.
+        max_speed: m/s.
+        max_accel: m/s^2.
+        attitude_gain: body rate per radian of tilt error, 1/s.
+    """
+
+    def __init__(self, hover_thrust: float, rate_scale: tuple[float, float, float], gravity: float,
+                 goal_key: str = "goal", position_gain: float = 1.5, velocity_gain: float = 3.0,
+                 max_speed: float = 1.0, max_accel: float = 4.0, attitude_gain: float = 6.0) -> None:
+        if goal_key not in ("goal", "subgoal"):
+            raise ValueError(f"goal_key must be 'goal' or 'subgoal', got {goal_key!r}")
+        self.hover_thrust, self.rate_scale, self.gravity = hover_thrust, np.asarray(rate_scale, float), gravity
+        self.goal_key = goal_key
+        self.position_gain, self.velocity_gain = position_gain, velocity_gain
+        self.max_speed, self.max_accel, self.attitude_gain = max_speed, max_accel, attitude_gain
+
+    @classmethod
+    def for_env(cls, env: gym.Env, goal_key: str = "goal", **gains: float) -> CascadedFlyer:
+        """Configured from a ClutterFly env's quadrotor (rate control).
+
+        Raises:
+            ValueError: the env is not a rate-controlled ClutterFly, or has no ``goal_key`` observation.
+        """
+        robot = env.unwrapped.robot
+        if getattr(getattr(robot, "config", None), "control", None) != "rates" or not hasattr(robot, "hover_action"):
+            raise ValueError("CascadedFlyer needs a ClutterFly env with rate control")
+        if goal_key not in env.observation_space.spaces:
+            raise ValueError(f"the env has no {goal_key!r} observation"
+                             + (" (make it with subgoal_lookahead > 0)" if goal_key == "subgoal" else ""))
+        return cls._for_robot(robot, env.unwrapped.sim.gravity, goal_key, **gains)
+
+    @classmethod
+    def nominal(cls, goal_key: str = "subgoal", **gains: float) -> CascadedFlyer:
+        """Configured for ClutterFly's quadrotor as every ClutterFly env builds it (no env needed)."""
+        from clutter_gym.clutter_fly import GRAVITY
+        from clutter_gym.robots import Quadrotor
+
+        return cls._for_robot(Quadrotor(), GRAVITY, goal_key, **gains)
+
+    @classmethod
+    def _for_robot(cls, robot, gravity: float, goal_key: str, **gains: float) -> CascadedFlyer:
+        c = robot.config
+        hover = 0.5 * (float(robot.hover_action(gravity)[0]) + 1.0)
+        return cls(hover, (c.max_roll_rate, c.max_pitch_rate, c.max_yaw_rate), gravity, goal_key, **gains)
+
+    def __call__(self, obs: Mapping[str, np.ndarray]) -> np.ndarray:
+        offset = np.asarray(obs[self.goal_key], dtype=float)[..., :3]
+        velocity = np.asarray(obs["velocity"], dtype=float)[..., :3]
+        up = np.asarray(obs["attitude"], dtype=float)
+        wanted = _capped(self.position_gain * offset, self.max_speed)
+        accel = _capped(self.velocity_gain * (wanted - velocity), self.max_accel)
+        thrust = accel + self.gravity * up  # the specific force the rotors must give, body frame
+        direction = thrust / np.maximum(np.linalg.norm(thrust, axis=-1, keepdims=True), 1e-9)
+        collective = self.hover_thrust * thrust[..., 2:3] / self.gravity
+        rates = self.attitude_gain * np.stack([-direction[..., 1], direction[..., 0], np.zeros_like(up[..., 0])],
+                                              axis=-1)  # turns body z onto the thrust direction
+        action = np.concatenate([2.0 * collective - 1.0, rates / self.rate_scale], axis=-1)
+        return np.clip(action, -1.0, 1.0).astype(np.float32)
+
+
+def _capped(vectors: np.ndarray, bound: float) -> np.ndarray:
+    """Each vector (last axis) scaled down to length ``bound`` if longer."""
+    norm = np.linalg.norm(vectors, axis=-1, keepdims=True)
+    return vectors * np.minimum(1.0, bound / np.maximum(norm, 1e-12))

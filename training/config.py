@@ -18,6 +18,8 @@ from typing import Any
 
 import yaml
 
+from clutter_gym.training.residual import PURSUIT_ENVS
+
 HYPERPARAMS_FILE = "ppo.yml"
 #: First evaluation seed by default: far from the seeds training starts its envs with (seed, seed + 1, ...).
 EVAL_SEED = 1_000_000
@@ -115,9 +117,9 @@ class TrainConfig:
             fixed layouts (``ceil(N / n_envs)`` each; see :mod:`clutter_gym.training.layout_pool`), so per-layout
             work such as the ClutterReach subgoal's plan is done once. Validation and evaluation are unaffected.
         residual_gain: 0: the policy's action is the env's; g > 0: the env's action is
-            ``clip(clip(g * subgoal) + policy action)`` (both clips to [-1, 1]), a residual policy on a pursuit of
-            the subgoal (ClutterReach-v0 with ``subgoal_lookahead > 0`` only; see
-            :mod:`clutter_gym.training.residual`).
+            ``clip(pursuit(obs) + policy action, -1, 1)``, a residual policy on a pursuit of the subgoal with gain
+            g (ClutterReach-v0 or ClutterFly-v0 with ``subgoal_lookahead > 0``; the pursuits and what their gain
+            means: :mod:`clutter_gym.training.residual`).
         env_kwargs: extra ``gym.make`` keyword arguments. Its ``noise`` entry, if any, holds noise-section
             overrides (``{"lidar": {"range_sigma": 0.02}}``) applied on top of whichever profile the env is
             made under, for training and evaluation alike.
@@ -161,8 +163,8 @@ class TrainConfig:
         _check_range("frame_stack", self.frame_stack, 1, 32)
         _check_range("train_layouts", self.train_layouts, 0, 10**7)
         _check_range("residual_gain", self.residual_gain, 0.0, 1000.0)
-        if self.residual_gain and not (self.env_id == "ClutterReach-v0" and self.env_kwargs.get("subgoal_lookahead")):
-            raise ValueError("residual_gain > 0 needs env_id ClutterReach-v0 with env_kwargs.subgoal_lookahead > 0")
+        if self.residual_gain and not (self.env_id in PURSUIT_ENVS and self.env_kwargs.get("subgoal_lookahead")):
+            raise ValueError(f"residual_gain > 0 needs env_id in {PURSUIT_ENVS} with env_kwargs.subgoal_lookahead > 0")
         check_env_kwargs(self.env_id, self.noise, self.env_kwargs)
         if self.ppo.batch_size > self.ppo.n_steps * self.n_envs:
             raise ValueError(f"ppo.batch_size must be in [2, n_steps * n_envs = {self.ppo.n_steps * self.n_envs}], "

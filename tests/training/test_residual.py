@@ -1,4 +1,5 @@
-"""The residual policy on the ClutterReach subgoal pursuit: the wrapper and a loaded agent add the same term."""
+"""The residual policy on a subgoal pursuit (ClutterReach, ClutterFly): the wrapper and a loaded agent add the same
+term."""
 
 from __future__ import annotations
 
@@ -7,8 +8,9 @@ import pytest
 from helpers import SHELF_SEED
 
 from clutter_gym.training import load
+from clutter_gym.training.baselines import CascadedFlyer
 from clutter_gym.training.config import config_for
-from clutter_gym.training.residual import SubgoalResidual, pursuit, residual_action
+from clutter_gym.training.residual import SubgoalResidual, residual_action, subgoal_pursuit
 from clutter_gym.training.train import start, train
 
 
@@ -19,7 +21,8 @@ def test_the_wrapper_steps_the_env_with_pursuit_plus_residual(make_env):
     same, _ = wrapped.reset(seed=SHELF_SEED)
     residual = np.full(7, 0.1, dtype=np.float32)
     expected = np.clip(np.clip(15.0 * obs["subgoal"], -1.0, 1.0) + residual, -1.0, 1.0)
-    np.testing.assert_allclose(residual_action(obs, residual, 15.0), expected, rtol=1e-6)
+    np.testing.assert_allclose(residual_action(obs, residual, subgoal_pursuit("ClutterReach-v0", 15.0)), expected,
+                               rtol=1e-6)
     a, *_ = plain.step(expected)
     b, *_ = wrapped.step(residual)
     np.testing.assert_array_equal(a["joint_position"], b["joint_position"])
@@ -28,7 +31,7 @@ def test_the_wrapper_steps_the_env_with_pursuit_plus_residual(make_env):
 def test_a_zero_residual_is_the_pursuit_that_reaches_the_shelf_target(make_env):
     env = SubgoalResidual(make_env("ClutterReach-v0", subgoal_lookahead=0.2), gain=15.0)
     obs, _ = env.reset(seed=SHELF_SEED)
-    assert np.abs(pursuit(obs, 15.0)).max() == 1.0  # 0.2 rad ahead saturates some joint: full speed along the path
+    assert np.abs(env.pursuit(obs)).max() == 1.0  # 0.2 rad ahead saturates some joint: full speed along the path
     done = False
     while not done:
         obs, _, terminated, truncated, info = env.step(np.zeros(7, dtype=np.float32))
@@ -36,12 +39,13 @@ def test_a_zero_residual_is_the_pursuit_that_reaches_the_shelf_target(make_env):
     assert info["is_success"]
 
 
-def test_the_wrapper_needs_a_subgoal_shaped_like_the_actions(make_env):
+def test_the_wrapper_needs_an_env_with_a_subgoal_pursuit(make_env):
     with pytest.raises(ValueError, match="needs an env with a 'subgoal' observation"):
         SubgoalResidual(make_env("ClutterReach-v0"), gain=15.0)
-    with pytest.raises(ValueError, match="same shape"):
+    with pytest.raises(ValueError, match=r"subgoal pursuit, one of \('ClutterReach-v0', 'ClutterFly-v0'\); "
+                                         "got 'ClutterNav-v0'"):
         SubgoalResidual(make_env("ClutterNav-v0", subgoal_lookahead=0.5), gain=15.0)
-    with pytest.raises(ValueError, match="residual_gain > 0 needs env_id ClutterReach-v0"):
+    with pytest.raises(ValueError, match=r"residual_gain > 0 needs env_id in \('ClutterReach-v0', 'ClutterFly-v0'\)"):
         config_for("ClutterReach-v0", {"env_kwargs": {"subgoal_lookahead": 0.0}})
     with pytest.raises(ValueError, match="residual_gain"):
         config_for("ClutterNav-v0", {"residual_gain": 10.0})
@@ -58,7 +62,8 @@ def test_a_loaded_residual_agent_adds_the_pursuit(tmp_path):
     env.close()
     action, _ = agent.predict(obs)
     raw, _ = agent.model.predict(agent._normalizer.normalize_obs(obs), deterministic=True)
-    np.testing.assert_allclose(action, residual_action(obs, raw, agent.config.residual_gain), rtol=1e-6)
+    pursuit = subgoal_pursuit("ClutterReach-v0", agent.config.residual_gain)
+    np.testing.assert_allclose(action, residual_action(obs, raw, pursuit), rtol=1e-6)
     batch = {k: np.stack([v, v]) for k, v in obs.items()}
     actions, _ = agent.predict(batch)
     np.testing.assert_allclose(actions[0], action, atol=1e-6)
@@ -70,3 +75,18 @@ def test_the_report_says_the_reach_agent_is_a_residual_on_a_planner():
     line = _observation_line(config_for("ClutterReach-v0"))
     assert "**Map-based agent.**" in line and "0.1 rad ahead on a joint-space path" in line
     assert "residuals on a pursuit" in line and "costmap" not in line
+
+
+def test_the_fly_pursuit_is_the_cascaded_flyer_on_the_subgoal_for_one_observation_or_a_batch(make_env):
+    env = SubgoalResidual(make_env("ClutterFly-v0", volume_size=(4.0, 4.0, 2.0), subgoal_lookahead=0.5), gain=1.5)
+    obs, _ = env.reset(seed=3)
+    flyer = CascadedFlyer.for_env(env, "subgoal")
+    np.testing.assert_allclose(env.pursuit(obs), flyer(obs), atol=1e-7)
+    for _ in range(10):
+        obs, *_ = env.step(np.zeros(4, dtype=np.float32))
+    batch = {k: np.stack([v, np.zeros_like(v)]) for k, v in obs.items()}
+    batch["attitude"][1] = (0.0, 0.0, 1.0)  # level, at rest, on its target: the hover action
+    actions = env.pursuit(batch)
+    np.testing.assert_allclose(actions[0], flyer(obs), atol=1e-7)
+    hover = env.unwrapped.robot.hover_action(env.unwrapped.sim.gravity)
+    np.testing.assert_allclose(actions[1], hover, atol=1e-6)
