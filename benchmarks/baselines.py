@@ -1,4 +1,4 @@
-"""Baseline tables for ClutterNav-v0 and ClutterReach-v0: scripted and learned policies, success and collision
+"""Baseline tables for ClutterNav-v0, ClutterReach-v0 and ClutterFly-v0: scripted and learned policies, success and collision
 rates with 95% intervals at three clutter levels and several noise profiles, on the same held-out layouts for
 every row.
 
@@ -7,6 +7,9 @@ ClutterNav-v0 rows: the mapless potential field; the map-based planner reference
 ClutterReach-v0 rows: scripted IK, the end effector heading straight for the target (``control="ee_position"``);
 the joint-space planner reference (RRT-Connect on the known layout, then path tracking in joint velocities); the
 pursuit of the ``subgoal`` on that path that the shipped PPO residual policy adds its actions to.
+ClutterFly-v0 rows: a cascaded position controller flying straight at the goal (mapless); the same controller on
+the ``subgoal`` of the shortest path through the known layout (the map-based planner reference, and the pursuit
+the shipped PPO residual policy adds its actions to).
 Then one row per trained run given with ``--run NAME=RUN_DIR`` (its own env settings; the clutter level and the
 profile changed per cell). Episode ``i`` of every cell is reset with seed ``EVAL_SEED + i``, so rows are compared
 on identical layouts.
@@ -14,6 +17,7 @@ on identical layouts.
     python -m benchmarks.baselines --run "PPO subgoal=out/learning/seed0/run" [--episodes 50] [--out docs/baselines]
     python -m benchmarks.baselines --env ClutterReach-v0 --run "PPO=runs/ClutterReach-v0/none-seed0"
     python -m benchmarks.baselines --env ClutterReach-v0 --no-scripted --run "another row=RUN_DIR"
+    python -m benchmarks.baselines --env ClutterFly-v0 --run "PPO residual=runs/ClutterFly-v0/none-seed0"
 """
 
 from __future__ import annotations
@@ -29,17 +33,19 @@ import gymnasium as gym
 import clutter_gym  # noqa: F401  (registers the envs)
 from benchmarks.harness import table_header
 from clutter_gym.training import load
-from clutter_gym.training.baselines import PotentialFieldNavigator, StraightLineReacher
+from clutter_gym.training.baselines import CascadedFlyer, PotentialFieldNavigator, StraightLineReacher
 from clutter_gym.training.config import EVAL_SEED, config_for
 from clutter_gym.training.evaluate import rollouts, summarize
 from clutter_gym.training.joint_planner import JointPlannerReacher
-from clutter_gym.training.residual import pursuit
+from clutter_gym.training.residual import subgoal_pursuit
 from clutter_gym.util.atomic import write_text_atomically
 
 #: The subgoal lookahead the planner reference runs with, metres.
 PLANNER_LOOKAHEAD = 0.5
 #: The shipped ClutterReach settings: the subgoal pursuit row runs with their lookahead and gain.
 REACH = config_for("ClutterReach-v0")
+#: The shipped ClutterFly settings: the planner reference runs with their lookahead.
+FLY = config_for("ClutterFly-v0")
 
 #: Per env: the gym.make argument that sets the clutter, its default levels, and the scripted rows as
 #: (name, extra gym.make arguments, policy factory from the env).
@@ -59,7 +65,16 @@ TABLES: dict[str, dict[str, Any]] = {
             ("planner reference (map-based: RRT-Connect in joint space)", {}, JointPlannerReacher),
             ("subgoal pursuit (map-based: the PPO residual's base alone)",
              {"subgoal_lookahead": REACH.env_kwargs["subgoal_lookahead"]},
-             lambda env: lambda obs: pursuit(obs, REACH.residual_gain)),
+             lambda env: subgoal_pursuit("ClutterReach-v0", REACH.residual_gain)),
+        ],
+    },
+    "ClutterFly-v0": {
+        "knob": "obstacle_density", "levels": [0.05, 0.1, 0.15],
+        "scripted": [
+            ("cascaded flyer on the goal (mapless, scripted)", {}, CascadedFlyer.for_env),
+            ("planner reference (map-based: the flyer on the subgoal; the PPO residual's base)",
+             {"subgoal_lookahead": FLY.env_kwargs["subgoal_lookahead"]},
+             lambda env: CascadedFlyer.for_env(env, "subgoal", position_gain=FLY.residual_gain)),
         ],
     },
 }
@@ -98,7 +113,8 @@ def main() -> None:
                         help="a trained run to add as a row (repeatable)")
     parser.add_argument("--episodes", type=int, default=50)
     parser.add_argument("--levels", type=float, nargs="+", default=None,
-                        help="clutter levels (obstacle_density for ClutterNav, n_obstacles for ClutterReach)")
+                        help="clutter levels (obstacle_density for ClutterNav and ClutterFly, n_obstacles for "
+                             "ClutterReach)")
     parser.add_argument("--profiles", nargs="+", default=["none", "nominal", "harsh"])
     parser.add_argument("--out", default=None, help="folder for baselines.md and .json (default out/baselines/ENV)")
     parser.add_argument("--no-scripted", action="store_true",

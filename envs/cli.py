@@ -15,19 +15,26 @@ import gymnasium as gym
 import clutter_gym  # noqa: F401  (registers the envs)
 from clutter_gym.noise.profiles import PROFILE_NAMES, profile_description, profile_table_markdown, resolve_noise
 from clutter_gym.training import commands as training_commands
-from clutter_gym.training.baselines import PotentialFieldNavigator
+from clutter_gym.training.baselines import CascadedFlyer, PotentialFieldNavigator
 from clutter_gym.training.commands import UserError, positive_int
 from clutter_gym.util.video import write_video
 
-DEMO_ENVS = ("ClutterNav-v0",)  # the envs PotentialFieldNavigator can drive
+#: Per demo env: its gym.make arguments, the scripted policy for the env, and the policy's name.
+DEMOS = {
+    "ClutterNav-v0": ({}, PotentialFieldNavigator.for_env, "scripted potential-field policy"),
+    "ClutterFly-v0": ({"subgoal_lookahead": 0.5}, lambda env: CascadedFlyer.for_env(env, "subgoal"),
+                      "scripted position controller on the planned path"),
+}
+DEMO_ENVS = tuple(DEMOS)
 
 
 def demo(args: argparse.Namespace) -> dict:
-    """Roll out the scripted potential-field policy, write a GIF and return the episode summary."""
-    env = gym.make(args.env, render_mode="rgb_array", noise=args.noise)
+    """Roll out the env's scripted policy, write a GIF and return the episode summary."""
+    kwargs, make_policy, name = DEMOS[args.env]
+    env = gym.make(args.env, render_mode="rgb_array", noise=args.noise, **kwargs)
     try:
         obs, info = env.reset(seed=args.seed)
-        policy = PotentialFieldNavigator.for_env(env)
+        policy = make_policy(env)
         frames = [env.render()]
         episode_return, contact_steps, min_clearance = 0.0, 0, info["min_clearance"]
         step_time, steps, terminated, truncated = 0.0, 0, False, False
@@ -49,6 +56,7 @@ def demo(args: argparse.Namespace) -> dict:
         env.close()
     return {
         "env": args.env,
+        "policy": name,
         "seed": args.seed,
         "noise": args.noise,
         "steps": steps,
@@ -62,7 +70,7 @@ def demo(args: argparse.Namespace) -> dict:
 
 
 def _print_demo(summary: dict) -> None:
-    print(f"{summary['env']} seed {summary['seed']}, noise {summary['noise']!r}: scripted potential-field policy")
+    print(f"{summary['env']} seed {summary['seed']}, noise {summary['noise']!r}: {summary['policy']}")
     print(f"  steps          {summary['steps']}  ({'goal reached' if summary['success'] else 'goal not reached'})")
     print(f"  return         {summary['return']:.2f}")
     print(f"  contact steps  {summary['contact_steps']}")
@@ -84,12 +92,11 @@ def build_parser() -> argparse.ArgumentParser:
                     "profiles, and PPO training, evaluation, sim-to-real sweeps and the main job's report.")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     p = sub.add_parser("demo", help="roll out a scripted policy, write an episode GIF and print a summary",
-                       description="Roll out the scripted potential-field policy, write an episode GIF and print "
-                                   "a summary.")
-    p.add_argument("--env", choices=DEMO_ENVS, default="ClutterNav-v0",
-                   help="env id (the scripted policy drives the ground robot)")
+                       description="Roll out a scripted policy (ClutterNav: a potential field; ClutterFly: a position "
+                                   "controller on the planned path), write an episode GIF and print a summary.")
+    p.add_argument("--env", choices=DEMO_ENVS, default="ClutterNav-v0", help="env id")
     p.add_argument("--seed", type=int, default=0, help="reset seed (the layout)")
-    p.add_argument("--max-steps", type=positive_int, default=400, help="stop the episode after this many steps")
+    p.add_argument("--max-steps", type=positive_int, default=600, help="stop the episode after this many steps")
     p.add_argument("--frame-every", type=positive_int, default=2, help="keep every k-th frame in the GIF")
     p.add_argument("--out", default="out/demo", help="folder for the GIF")
     p.add_argument("--noise", choices=PROFILE_NAMES, default="none", help="sensor/actuation noise profile")

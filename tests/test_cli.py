@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import json
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 import yaml
@@ -152,10 +154,18 @@ def test_report_refuses_a_run_with_other_settings(tmp_path, capsys):
     assert "env_kwargs.obstacle_density: 0.05 in the run, 0.1 asked" in err and "another --out" in err
 
 
-@pytest.mark.parametrize("env_id", ["ClutterReach-v0", "ClutterFly-v0"])
-def test_demo_refuses_envs_its_scripted_policy_cannot_drive(env_id, capsys):
-    """The potential-field policy drives the ground robot only: other ids are refused by argparse, in one line."""
+def test_demo_refuses_envs_without_a_scripted_policy(capsys):
+    """Scripted policies drive the ground robot and the quadrotor: the arm's id is refused by argparse, in one line."""
     with pytest.raises(SystemExit) as exit_info:
-        build_parser().parse_args(["demo", "--env", env_id])
+        build_parser().parse_args(["demo", "--env", "ClutterReach-v0"])
     err = capsys.readouterr().err.strip()
-    assert exit_info.value.code == 2 and "--env" in err and "ClutterNav-v0" in err and len(err.splitlines()) == 1
+    assert exit_info.value.code == 2 and "--env" in err and "ClutterFly-v0" in err and len(err.splitlines()) == 1
+
+
+def test_the_fly_demo_flies_the_planned_path_to_the_goal_and_writes_a_gif(tmp_path, capsys):
+    assert main(["demo", "--env", "ClutterFly-v0", "--seed", "1", "--frame-every", "10", "--out", str(tmp_path),
+                 "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["policy"] == "scripted position controller on the planned path"
+    assert summary["success"] and summary["contact_steps"] == 0 and summary["steps"] < 600
+    assert Path(summary["gif"]).stat().st_size > 0

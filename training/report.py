@@ -161,6 +161,14 @@ def _observation_line(config) -> str:
                      f"{config.residual_gain:g}): the env is driven by the pursuit plus the policy's correction, so "
                      "the planner carries most of the skill; the baseline table has the pursuit alone.")
         line += " It does not solve the mapless task; train without `subgoal_lookahead` for that."
+    elif lookahead and config.env_id == "ClutterFly-v0":
+        line = (f"**Map-based agent.** Besides the flight controller's state and the goal, the policy is told the "
+                f"subgoal: the point {lookahead} m ahead on the shortest path through the known layout.")
+        if config.residual_gain:
+            line += (" Its actions are residuals on a cascaded position controller flying to that subgoal "
+                     f"(`residual_gain` {config.residual_gain:g}, the controller's position gain): the planner and "
+                     "the controller carry most of the skill; the baseline table has them alone.")
+        line += " It does not solve the mapless task; train without `subgoal_lookahead` for that."
     elif lookahead:
         line = (f"**Map-based agent.** Besides the LIDAR and the goal, the policy is told the subgoal: the point "
                 f"{lookahead} m ahead on the path a costmap planner finds over the known layout. It does not solve "

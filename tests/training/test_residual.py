@@ -90,3 +90,11 @@ def test_the_fly_pursuit_is_the_cascaded_flyer_on_the_subgoal_for_one_observatio
     np.testing.assert_allclose(actions[0], flyer(obs), atol=1e-7)
     hover = env.unwrapped.robot.hover_action(env.unwrapped.sim.gravity)
     np.testing.assert_allclose(actions[1], hover, atol=1e-6)
+
+
+def test_the_report_says_the_fly_agent_is_a_residual_on_a_position_controller():
+    from clutter_gym.training.report import _observation_line
+
+    line = _observation_line(config_for("ClutterFly-v0"))
+    assert "**Map-based agent.**" in line and "0.5 m ahead on the shortest path" in line
+    assert "residuals on a cascaded position controller" in line and "LIDAR" not in line
