@@ -2,9 +2,10 @@
 justified by its row.
 
 Choices: collision fidelity (every level, and sphere counts; Panda and diffbot), physics rate and solver iterations,
-LIDAR ray count, cylinder tessellation, camera image size, noise profile. Each section comes from the benchmark
-module that owns the measurement (``collision_fidelity``, ``physics_rate``, ``lidar_resolution``,
-``cylinder_rays``, ``camera_resolution``, ``noise_cost``), and a headline from ``throughput`` opens the report.
+LIDAR ray count, cylinder tessellation, camera image size, noise profile, ClutterFly-v0's aerodynamics. Each
+section comes from the benchmark module that owns the measurement (``collision_fidelity``, ``physics_rate``,
+``lidar_resolution``, ``cylinder_rays``, ``camera_resolution``, ``noise_cost``, ``aero_cost``), and a headline
+from ``throughput`` opens the report.
 Writes ``docs/speed-vs-error.md`` and one plot per choice in ``docs/speed-vs-error/``.
 
     python -m benchmarks.speed_vs_error            # or: python3 tasks.py bench (about 3 min on 2 cores)
@@ -24,6 +25,7 @@ import gymnasium as gym
 import numpy as np
 
 from benchmarks import (
+    aero_cost,
     camera_resolution,
     collision_fidelity,
     cylinder_rays,
@@ -182,6 +184,50 @@ def noise_choice(quick: bool, seed: int) -> Choice:
     return Choice("noise", "Noise profile", "`noise`", "steps/s", True, "LIDAR deviation (mm)", rows, method, why)
 
 
+def aero_choice(quick: bool) -> Choice:
+    measured = aero_cost.rows(2 if quick else 8)
+    flights = aero_cost.FLIGHTS
+    spawn = measured[0]["spawn_height"]
+    lift_low = f"hover lift at {1e3 * aero_cost.LOW_START_Z:.0f} mm (% of g)"
+    lift_spawn = f"hover lift at {spawn:.1f} m (% of g)"
+    rows = [Row(r["label"] + (" (reference)" if r["reference"] else ""), r["rate"], r["error_mm"], r["default"],
+                {"mean error (mm)": r["mean_mm"], **{f"{f.name} max (mm)": r[f"{f.name}_mm"] for f in flights},
+                 lift_low: 100 * r["lift_low"], lift_spawn: 100 * r["lift_spawn"]}) for r in measured]
+    off, drag, ground, both = measured
+    cruise, low = flights
+    method = (f"ClutterFly-v0 without sensors, flown closed loop by the scripted position controller "
+              f"(`CascadedFlyer`, aimed at the goal) through two flights in an empty volume: a cruise of "
+              f"{np.linalg.norm(np.subtract(cruise.goal, cruise.start[:3])):.0f} m at {cruise.start[2]:.0f} m height "
+              f"at up to {cruise.max_speed:.0f} m/s, and a low flight of "
+              f"{np.linalg.norm(np.subtract(low.goal, low.start[:3])):.0f} m at {low.max_speed:.0f} m/s from a "
+              f"start {1e3 * low.start[2]:.0f} mm up (just above the drone's bounding radius, the lowest start a scene "
+              f"allows) to a hover {1e3 * low.goal[2]:.0f} mm up, {cruise.steps} and "
+              f"{low.steps} steps including the arrival. Error: the largest distance of the base from the fullest "
+              f"model's (`('drag', 'ground_effect')`) at equal steps over both flights (the mean and each "
+              f"flight's largest as extra columns). Speed: steps per CPU-second of `env.step` over the same flights, "
+              f"median of alternating rounds. Hover lift: the open-loop vertical acceleration of one control step of "
+              f"the hover command from rest, as a share of g, at the low start and at the lowest height the scene "
+              f"generator spawns at ({spawn:.1f} m), less that without `aero`. `python -m benchmarks.aero_cost` "
+              f"prints the table alone.")
+    at = {r["label"]: {f.name: r[f"{f.name}_mm"] for f in flights} for r in measured}
+    no_drag, no_ground = at[ground["label"]], at[drag["label"]]  # the rows that leave drag, ground effect out
+    why = (f"Off is the default. At the heights the env spawns at (>= {spawn:.1f} m) ground effect lifts a hover "
+           f"by {100 * ground['lift_spawn']:.3f}% of its weight, and leaving it out of the cruise moves the path by "
+           f"{no_ground[cruise.name]:.2f} mm; turn it on for flight within a few rotor radii of the floor (take-off, "
+           f"landing, skimming): at {1e3 * aero_cost.LOW_START_Z:.0f} mm it lifts a hover by "
+           f"{100 * ground['lift_low']:.2f}%, and leaving it out of the low flight costs {no_ground[low.name]:.0f} mm "
+           f"(with it, the position loop holds the hover higher). Drag is not negligible in closed loop: it slows "
+           f"the position loop, which has no integrator, so without it the drone flies up to "
+           f"{no_drag[cruise.name]:.0f} mm from the reference in the {cruise.max_speed:.0f} m/s cruise and "
+           f"{no_drag[low.name]:.0f} mm at {low.max_speed:.0f} m/s. Steps per CPU-second against off: drag "
+           f"{drag['rate'] / off['rate']:.2f}x, ground effect {ground['rate'] / off['rate']:.2f}x, both "
+           f"{both['rate'] / off['rate']:.2f}x. Turn drag on when a policy or controller is to hold a speed or "
+           f"transfer to a real Crazyflie; off keeps the plain rigid-body model the gym-pybullet-drones peer flies "
+           f"by default.")
+    return Choice("aero", "Aerodynamics (ClutterFly-v0)", "`aero`", "steps per CPU-s", True, "max error (mm)", rows,
+                  method, why)
+
+
 def headline(quick: bool, seed: int) -> list[str]:
     """The ClutterNav-v0 step against its raw pybullet floor and panda-gym's PandaReach-v3, and the reset time."""
     peer = throughput.make_peer()
@@ -236,6 +282,7 @@ def main() -> None:
         ("cylinders", lambda: [cylinder_choice()]),
         ("camera size", lambda: [camera_choice(args.quick, args.seed)]),
         ("noise profiles", lambda: [noise_choice(args.quick, args.seed)]),
+        ("aerodynamics", lambda: [aero_choice(args.quick)]),
     ]
     choices: list[Choice] = []
     for name, measure in sections:
