@@ -1,6 +1,6 @@
-"""Baseline tables for ClutterNav-v0, ClutterReach-v0 and ClutterFly-v0: scripted and learned policies, success and collision
-rates with 95% intervals at three clutter levels and several noise profiles, on the same held-out layouts for
-every row.
+"""Baseline tables for ClutterNav-v0, ClutterReach-v0 and ClutterFly-v0: scripted and learned policies, success
+and collision rates with 95% intervals at three clutter levels and several noise profiles, on the same held-out
+layouts for every row.
 
 ClutterNav-v0 rows: the mapless potential field; the map-based planner reference (the same field steering for the
 ``subgoal`` waypoint of the costmap planner, an upper bound of what the map allows a simple controller).
