@@ -137,16 +137,22 @@ def plot_learning_curve(run: RunDir, path: Path) -> Path | None:
     return save_figure(fig, path)
 
 
-#: The main job's target on clean sensors: success rate at least, collision rate at most, wall time at most.
-TARGET = {"success_rate": 0.90, "collision_rate": 0.05, "minutes": 15.0}
+#: Per env, the target on clean sensors: success rate at least, collision rate at most, wall time of training and
+#: evaluation at most. ClutterNav-v0's is the main job's; ClutterFly-v0's is its own issue's.
+TARGETS = {
+    "ClutterNav-v0": {"success_rate": 0.90, "collision_rate": 0.05, "minutes": 15.0},
+    "ClutterReach-v0": {"success_rate": 0.90, "collision_rate": 0.05, "minutes": 15.0},
+    "ClutterFly-v0": {"success_rate": 0.80, "collision_rate": 0.10, "minutes": 15.0},
+}
 
 
-def _verdict(metrics: dict, seconds: float) -> str:
+def _verdict(env_id: str, metrics: dict, seconds: float) -> str:
+    target = TARGETS[env_id]
     success, collision = metrics["success_rate"]["value"], metrics["collision_rate"]["value"]
-    met = success >= TARGET["success_rate"] and collision <= TARGET["collision_rate"]
-    timed = seconds / 60 <= TARGET["minutes"]
-    return (f"Target on clean sensors, at least {TARGET['success_rate']:.0%} success and at most "
-            f"{TARGET['collision_rate']:.0%} collision episodes within {TARGET['minutes']:.0f} minutes: "
+    met = success >= target["success_rate"] and collision <= target["collision_rate"]
+    timed = seconds / 60 <= target["minutes"]
+    return (f"Target on clean sensors, at least {target['success_rate']:.0%} success and at most "
+            f"{target['collision_rate']:.0%} collision episodes within {target['minutes']:.0f} minutes: "
             f"**{'met' if met and timed else 'missed'}** ({success:.0%} success, {collision:.0%} collisions, "
             f"{seconds / 60:.1f} min of training and evaluation).")
 
@@ -219,7 +225,7 @@ def render_report(run: RunDir, summaries: dict, curve: Path | None, train_s: flo
         "",
     ]
     if "none" in summaries:
-        lines += [_verdict(summaries["none"]["metrics"], run.training_time()["seconds"] + eval_s), ""]
+        lines += [_verdict(config.env_id, summaries["none"]["metrics"], run.training_time()["seconds"] + eval_s), ""]
     if curve is not None:
         lines += [f"![learning curve]({curve.name})", ""]
     lines += ["![evaluation episodes, clean sensors](episode.gif)", ""]

@@ -242,3 +242,15 @@ def test_episode_captions_say_what_the_collision_monitor_did():
     assert _monitor_text({}) == ""  # no monitor
     assert _monitor_text({"safety_scale": 0.25, "safety_recovery": False}) == " | monitor: speed x0.25"
     assert _monitor_text({"safety_scale": 0.0, "safety_recovery": True}) == " | monitor: recovery spin"
+
+
+def test_the_verdict_holds_each_env_to_its_own_target():
+    from clutter_gym import ENV_IDS
+    from clutter_gym.training.report import TARGETS, _verdict
+
+    assert set(TARGETS) == set(ENV_IDS)
+    metrics = {"success_rate": {"value": 0.85}, "collision_rate": {"value": 0.08}}
+    assert "**met**" in _verdict("ClutterFly-v0", metrics, 600.0) and "at least 80% success" in _verdict(
+        "ClutterFly-v0", metrics, 600.0)
+    assert "**missed**" in _verdict("ClutterNav-v0", metrics, 600.0)
+    assert "**missed**" in _verdict("ClutterFly-v0", metrics, 16 * 60.0)
