@@ -183,7 +183,7 @@ class Quadrotor:
         alloc = allocation(hubs[:, :2], np.array(ROTOR_SPIN), c.torque_coefficient / c.thrust_coefficient)
         self.mixer = Mixer(alloc, self.rotors.min_thrust, self.rotors.max_thrust)
         self._hubs = tuple(map(tuple, hubs.tolist()))  # each rotor hub from the centre of mass, body frame, m
-        self._rate_scale = np.array([c.max_roll_rate, c.max_pitch_rate, c.max_yaw_rate])
+        self._rate_scale = (c.max_roll_rate, c.max_pitch_rate, c.max_yaw_rate)
         self._rates = c.control == "rates"
         self._drag = "drag" in c.aero
         self._ground_effect = "ground_effect" in c.aero
@@ -192,11 +192,11 @@ class Quadrotor:
         self._controller: RateController | None = None
         self._decay = 0.0
         self._thrust_scale = 1.0  # the episode's motor strength
-        # the rotors' state and commands as Python floats (before_tick's rotor arithmetic is on floats)
+        # per-tick state and commands as Python floats (before_tick's arithmetic is on floats)
         self._speeds = [0.0] * 4
         self._speed_command = [0.0] * 4
         self._thrust_command = 0.0
-        self._rate_command = np.zeros(3)
+        self._rate_command = [0.0] * 3
 
     @property
     def urdf_path(self) -> Path:
@@ -292,19 +292,22 @@ class Quadrotor:
             command = c.min_rotor_speed + 0.5 * (a + 1.0) * (c.max_rotor_speed - c.min_rotor_speed)
             self._speed_command = command.tolist()
         else:
-            self._thrust_command = 0.5 * (a[0] + 1.0) * 4.0 * self.rotors.max_thrust
-            self._rate_command = a[1:4] * self._rate_scale
+            self._thrust_command = float(0.5 * (a[0] + 1.0) * 4.0 * self.rotors.max_thrust)
+            self._rate_command = [u * scale for u, scale in zip(a[1:4].tolist(), self._rate_scale)]
 
     def before_tick(self) -> None:
         """One physics tick of actuation: inner loop, motor lag, then rotor forces and the body torque for the
         next ``stepSimulation`` (which clears them). Rotor speeds advance first, so a tick's forces come from the
-        speeds at its end."""
+        speeds at its end.
+
+        All on Python floats: the vectors are 3 and 4 long, where numpy's cost per call outweighs the arithmetic.
+        """
         sim, rotors, scale = self._sim, self.rotors, self._thrust_scale
         com, rot, lin, ang = sim.base_state(self._body)
         rot = rot.ravel().tolist()  # row by row
         if self._rates:
-            torque = self._controller.torque(self._rate_command, np.array(_to_body(rot, ang)))
-            command = rotors.speed_for_thrust(self.mixer.mix(self._thrust_command, torque).tolist())
+            torque = self._controller.torque(self._rate_command, _to_body(rot, ang))
+            command = rotors.speed_for_thrust(self.mixer.thrusts(self._thrust_command, torque))
         else:
             command = self._speed_command
         self._speeds = speeds = rotors.step(self._speeds, command, self._decay)
