@@ -304,7 +304,6 @@ class Quadrotor:
         """
         sim, rotors, scale = self._sim, self.rotors, self._thrust_scale
         com, rot, lin, ang = sim.base_state(self._body)
-        rot = rot.ravel().tolist()  # row by row
         if self._rates:
             torque = self._controller.torque(self._rate_command, _to_body(rot, ang))
             command = rotors.speed_for_thrust(self.mixer.thrusts(self._thrust_command, torque))
