@@ -174,7 +174,7 @@ def body_checker(shape: str, settings: Settings) -> CollisionChecker:
 def body_state(sim: Sim, body: int) -> RobotState:
     position, rotation, linear, angular = sim.base_state(body)
     none = LinkStates(np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros((0, 3)), np.zeros((0, 3)))
-    return RobotState(np.asarray(position), rotation, linear, angular, none, (), {}, body)
+    return RobotState(np.asarray(position), np.reshape(rotation, (3, 3)), linear, angular, none, (), {}, body)
 
 
 def free_body_run(settings: Settings, shape: str, speed: float, thickness: float, offset: float, *, rigid: bool,

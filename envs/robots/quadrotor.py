@@ -179,11 +179,12 @@ class Quadrotor:
         }
         self.rotors = c.rotor_model()
         self.model = rigid_body(self.urdf_path)
-        self._spin = np.array(ROTOR_SPIN)
-        self._hubs = np.array([self.model.frames[n][0] - self.model.com for n in ROTOR_LINKS])
-        alloc = allocation(self._hubs[:, :2], self._spin, c.torque_coefficient / c.thrust_coefficient)
+        hubs = np.array([self.model.frames[n][0] - self.model.com for n in ROTOR_LINKS])
+        alloc = allocation(hubs[:, :2], np.array(ROTOR_SPIN), c.torque_coefficient / c.thrust_coefficient)
         self.mixer = Mixer(alloc, self.rotors.min_thrust, self.rotors.max_thrust)
-        self._rate_scale = np.array([c.max_roll_rate, c.max_pitch_rate, c.max_yaw_rate])
+        self._hubs = tuple(map(tuple, hubs.tolist()))  # each rotor hub from the centre of mass, body frame, m
+        self._rate_scale = (c.max_roll_rate, c.max_pitch_rate, c.max_yaw_rate)
+        self._rates = c.control == "rates"
         self._drag = "drag" in c.aero
         self._ground_effect = "ground_effect" in c.aero
         self._sim: Sim | None = None
@@ -191,10 +192,11 @@ class Quadrotor:
         self._controller: RateController | None = None
         self._decay = 0.0
         self._thrust_scale = 1.0  # the episode's motor strength
-        self._speeds = np.zeros(4)
-        self._speed_command = np.zeros(4)
+        # per-tick state and commands as Python floats (before_tick's arithmetic is on floats)
+        self._speeds = [0.0] * 4
+        self._speed_command = [0.0] * 4
         self._thrust_command = 0.0
-        self._rate_command = np.zeros(3)
+        self._rate_command = [0.0] * 3
 
     @property
     def urdf_path(self) -> Path:
@@ -206,8 +208,8 @@ class Quadrotor:
 
     @property
     def rotor_speeds(self) -> np.ndarray:
-        """Current rotor speeds, rad/s, in ``ROTOR_LINKS`` order (a copy)."""
-        return self._speeds.copy()
+        """Current rotor speeds, rad/s, in ``ROTOR_LINKS`` order (a new array)."""
+        return np.array(self._speeds)
 
     def hover_speed(self, gravity: float) -> float:
         """Rotor speed (rad/s) at which the four nominal rotors carry the nominal weight."""
@@ -265,7 +267,7 @@ class Quadrotor:
         if sample == self._dynamics:
             return
         scale_link_dynamics(self._sim, self._body, self._nominal, sample)
-        self._thrust_scale = sample.motor_scale
+        self._thrust_scale = float(sample.motor_scale)
         self._dynamics = sample
 
     def reset_to(self, start: tuple[float, float, float, float]) -> None:
@@ -278,8 +280,8 @@ class Quadrotor:
         self._sim.forget_contacts(self._body)
         self._controller.reset()
         hovering = self.config.start_hovering
-        self._speeds = np.full(4, self.hover_speed(self._gravity) if hovering else self.config.min_rotor_speed)
-        self._speeds = np.clip(self._speeds, self.config.min_rotor_speed, self.config.max_rotor_speed)
+        speed = self.hover_speed(self._gravity) if hovering else self.config.min_rotor_speed
+        self._speeds = [min(max(speed, self.config.min_rotor_speed), self.config.max_rotor_speed)] * 4
         self.apply_action(self.hover_action(self._gravity) if hovering else -np.ones(4))
 
     def apply_action(self, action: np.ndarray) -> None:
@@ -287,32 +289,41 @@ class Quadrotor:
         a = np.asarray(action, dtype=float)
         c = self.config
         if c.control == "motors":
-            self._speed_command = c.min_rotor_speed + 0.5 * (a + 1.0) * (c.max_rotor_speed - c.min_rotor_speed)
+            command = c.min_rotor_speed + 0.5 * (a + 1.0) * (c.max_rotor_speed - c.min_rotor_speed)
+            self._speed_command = command.tolist()
         else:
-            self._thrust_command = 0.5 * (a[0] + 1.0) * 4.0 * self.rotors.max_thrust
-            self._rate_command = a[1:4] * self._rate_scale
+            self._thrust_command = float(0.5 * (a[0] + 1.0) * 4.0 * self.rotors.max_thrust)
+            self._rate_command = [u * scale for u, scale in zip(a[1:4].tolist(), self._rate_scale)]
 
     def before_tick(self) -> None:
         """One physics tick of actuation: inner loop, motor lag, then rotor forces and the body torque for the
         next ``stepSimulation`` (which clears them). Rotor speeds advance first, so a tick's forces come from the
-        speeds at its end."""
-        sim = self._sim
+        speeds at its end.
+
+        All on Python floats: the vectors are 3 and 4 long, where numpy's cost per call outweighs the arithmetic.
+        """
+        sim, rotors, scale = self._sim, self.rotors, self._thrust_scale
         com, rot, lin, ang = sim.base_state(self._body)
-        if self.config.control == "rates":
-            torque = self._controller.torque(self._rate_command, rot.T @ np.asarray(ang))
-            command = self.rotors.speed_for_thrust(self.mixer.mix(self._thrust_command, torque))
+        if self._rates:
+            torque = self._controller.torque(self._rate_command, _to_body(rot, ang))
+            command = rotors.speed_for_thrust(self.mixer.thrusts(self._thrust_command, torque))
         else:
             command = self._speed_command
-        self._speeds = speeds = self.rotors.step(self._speeds, command, self._decay)
-        thrust = self.rotors.thrust(speeds) * self._thrust_scale
-        if self._ground_effect and rot[2, 2] > 0.0:  # upright: the rotors blow towards the ground
-            heights = com[2] + rot[2] @ self._hubs.T
-            thrust = thrust * ground_effect_gain(heights, self.config.rotor_radius)
-        sim.apply_link_forces(self._body, self._rotor_links, [(0.0, 0.0, f) for f in thrust.tolist()])
-        yaw = self.rotors.yaw_torque(speeds, self._spin) * self._thrust_scale
-        force = rot @ rotor_drag(rot.T @ np.asarray(lin), speeds, self.config.drag_xy, self.config.drag_z) \
-            if self._drag else _ZERO
-        sim.apply_base_wrench(self._body, force, (yaw * rot[0, 2], yaw * rot[1, 2], yaw * rot[2, 2]))
+        self._speeds = speeds = rotors.step(self._speeds, command, self._decay)
+        thrusts = [f * scale for f in rotors.thrust(speeds)]
+        if self._ground_effect and rot[8] > 0.0:  # upright: the rotors blow towards the ground
+            _, _, z = com
+            ux, uy, uz = rot[6:9]  # the world's up axis in the body frame
+            heights = [z + (ux * x + uy * y + uz * h) for x, y, h in self._hubs]
+            thrusts = [f * gain for f, gain in zip(thrusts, ground_effect_gain(heights, self.config.rotor_radius))]
+        sim.apply_link_forces(self._body, self._rotor_links, [(0.0, 0.0, f) for f in thrusts])
+        yaw = rotors.yaw_torque(speeds, ROTOR_SPIN) * scale
+        if self._drag:
+            drag = rotor_drag(_to_body(rot, lin), speeds, self.config.drag_xy, self.config.drag_z)
+            force = _to_world(rot, drag)
+        else:
+            force = _ZERO
+        sim.apply_base_wrench(self._body, force, (yaw * rot[2], yaw * rot[5], yaw * rot[8]))
 
     def state(self) -> RobotState:
         """Ground-truth state from batched pybullet reads."""
@@ -331,7 +342,23 @@ class Quadrotor:
         rot = state.rotation
         body = np.concatenate([rot.T @ np.asarray(state.linear_velocity), rot.T @ np.asarray(state.angular_velocity)])
         return {
-            "rotor_speeds": (self._speeds / self.config.max_rotor_speed).astype(np.float32),
+            "rotor_speeds": (np.array(self._speeds) / self.config.max_rotor_speed).astype(np.float32),
             "attitude": np.clip(rot[2], -1.0, 1.0).astype(np.float32),
             "velocity": np.clip(body, -self._velocity_bound, self._velocity_bound).astype(np.float32),
         }
+
+
+def _to_body(rot: tuple[float, ...], v: tuple[float, float, float]) -> tuple[float, float, float]:
+    """``R^T v``: world-frame ``v`` in the body frame, ``rot`` the body's rotation matrix row by row (9 floats)."""
+    x, y, z = v
+    return (rot[0] * x + rot[3] * y + rot[6] * z,
+            rot[1] * x + rot[4] * y + rot[7] * z,
+            rot[2] * x + rot[5] * y + rot[8] * z)
+
+
+def _to_world(rot: tuple[float, ...], v: tuple[float, float, float]) -> tuple[float, float, float]:
+    """``R v``: body-frame ``v`` in the world frame, ``rot`` the body's rotation matrix row by row (9 floats)."""
+    x, y, z = v
+    return (rot[0] * x + rot[1] * y + rot[2] * z,
+            rot[3] * x + rot[4] * y + rot[5] * z,
+            rot[6] * x + rot[7] * y + rot[8] * z)

@@ -1,6 +1,8 @@
-"""A quadrotor's inner loop: body-rate PI control and the mixer from thrust and torques to rotor thrusts (numpy).
+"""A quadrotor's inner loop: body-rate PI control and the mixer from thrust and torques to rotor thrusts.
 
-It runs once per physics tick. The rate loop turns a body-rate setpoint into a torque,
+It runs once per physics tick, on 3-vectors and four rotors, so it works on Python floats: numpy's cost per call
+is many times that of the arithmetic at these sizes. Matrices are turned into tuples of rows once, when a
+controller or mixer is made. The rate loop turns a body-rate setpoint into a torque,
 ``tau = J (kp * e + ki * integral(e)) + w x J w`` with ``e = w_ref - w`` in the body frame: gains are in 1/s and
 1/s^2 and scaled by the inertia ``J``, as PX4 and Betaflight scale theirs by the airframe, so the same gains give
 the same closed loop on any inertia. The gyroscopic term ``w x J w`` cancels the coupling between the axes.
@@ -13,9 +15,12 @@ when the thrust saturates, as in PX4's mixer.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+
+Vector3 = tuple[float, float, float]
 
 
 @dataclass(frozen=True)
@@ -40,31 +45,50 @@ class RateController:
         inertia: (3, 3) inertia about the centre of mass in body axes, kg m^2.
         gains: the loop's gains.
         dt: period of one update, seconds (the physics tick).
+
+    Attributes:
+        inertia: ``inertia`` as three rows of floats.
+        integral: the integrated rate error, rad, per axis.
     """
 
     def __init__(self, inertia: np.ndarray, gains: RateGains, dt: float) -> None:
-        self.inertia = np.asarray(inertia, dtype=float)
-        self.kp = np.asarray(gains.kp, dtype=float)
-        self.ki = np.asarray(gains.ki, dtype=float)
+        self.inertia = tuple(tuple(row) for row in np.asarray(inertia, dtype=float).tolist())
+        self.kp = tuple(float(k) for k in gains.kp)
+        self.ki = tuple(float(k) for k in gains.ki)
         self.dt = dt
         self.limit = gains.integral_limit
-        self.integral = np.zeros(3)
+        self.integral: Vector3 = (0.0, 0.0, 0.0)
 
     def reset(self) -> None:
         """Empty the integrator (a new episode)."""
-        self.integral[:] = 0.0
+        self.integral = (0.0, 0.0, 0.0)
 
-    def torque(self, rate_ref: np.ndarray, rate: np.ndarray) -> np.ndarray:
+    def torque(self, rate_ref: Sequence[float], rate: Sequence[float]) -> Vector3:
         """Body torque (N m, body frame) for the setpoint ``rate_ref`` at the measured body rate ``rate`` (rad/s)."""
-        error = rate_ref - rate
-        integral = self.integral + error * self.dt
-        self.integral = integral = np.minimum(np.maximum(integral, -self.limit), self.limit)
-        j = self.inertia
-        momentum = j @ rate
-        p, q, r = rate.tolist()
-        hx, hy, hz = momentum.tolist()
-        gyroscopic = np.array([q * hz - r * hy, r * hx - p * hz, p * hy - q * hx])  # rate x (J rate)
-        return j @ (self.kp * error + self.ki * integral) + gyroscopic
+        dt, limit = self.dt, self.limit
+        p, q, r = rate
+        ref_p, ref_q, ref_r = rate_ref
+        ep, eq, er = ref_p - p, ref_q - q, ref_r - r
+        ip, iq, ir = self.integral
+        ip, iq, ir = _clip(ip + ep * dt, limit), _clip(iq + eq * dt, limit), _clip(ir + er * dt, limit)
+        self.integral = ip, iq, ir
+        (kp_p, kp_q, kp_r), (ki_p, ki_q, ki_r) = self.kp, self.ki
+        # the angular acceleration the gains ask for, then J times it, plus rate x (J rate)
+        tp, tq, tr = _times(self.inertia, (kp_p * ep + ki_p * ip, kp_q * eq + ki_q * iq, kp_r * er + ki_r * ir))
+        hp, hq, hr = _times(self.inertia, rate)
+        return tp + (q * hr - r * hq), tq + (r * hp - p * hr), tr + (p * hq - q * hp)
+
+
+def _clip(x: float, limit: float) -> float:
+    """``x`` within [-limit, limit]."""
+    return -limit if x < -limit else limit if x > limit else x
+
+
+def _times(matrix: tuple[Vector3, Vector3, Vector3], v: Sequence[float]) -> Vector3:
+    """``matrix @ v`` for a 3x3 matrix given as rows."""
+    x, y, z = v
+    (a, b, c), (d, e, f), (g, h, i) = matrix
+    return a * x + b * y + c * z, d * x + e * y + f * z, g * x + h * y + i * z
 
 
 def allocation(positions: np.ndarray, spin: np.ndarray, torque_ratio: float) -> np.ndarray:
@@ -90,39 +114,47 @@ class Mixer:
 
     def __init__(self, allocation_matrix: np.ndarray, min_thrust: float, max_thrust: float) -> None:
         inverse = np.linalg.inv(allocation_matrix)
-        self._collective = inverse[:, 0]
-        self._roll_pitch = inverse[:, 1:3]
-        self._yaw = inverse[:, 3]
+        self._collective = tuple(inverse[:, 0].tolist())
+        self._torque_rows = tuple(map(tuple, inverse[:, 1:].tolist()))  # per rotor: N per roll, pitch, yaw N m
         self.min_thrust = min_thrust
         self.max_thrust = max_thrust
 
-    def mix(self, thrust: float, torque: np.ndarray) -> np.ndarray:
+    def mix(self, thrust: float, torque: Sequence[float]) -> np.ndarray:
+        """:meth:`thrusts` as an array."""
+        return np.array(self.thrusts(float(thrust), [float(t) for t in torque]))
+
+    def thrusts(self, thrust: float, torque: Sequence[float]) -> list[float]:
         """Rotor thrusts (N) for ``thrust`` (N, collective) and ``torque`` (N m, body frame).
 
         Within the range every demand is met exactly. Outside it: roll and pitch are scaled down (in ratio) until
         their spread fits the range; yaw is then scaled down until it fits beside them; last the collective is
         moved as little as needed to bring every rotor into the range.
         """
-        span = self.max_thrust - self.min_thrust
-        rp = self._roll_pitch @ torque[:2]
-        yaw = self._yaw * torque[2]
-        differential = rp + yaw
-        if differential.max() - differential.min() > span:
-            rp_spread = rp.max() - rp.min()
+        lo, hi = self.min_thrust, self.max_thrust
+        span = hi - lo
+        tx, ty, tz = torque
+        differential = [a * tx + b * ty + c * tz for a, b, c in self._torque_rows]  # roll and pitch, + yaw
+        if max(differential) - min(differential) > span:
+            rp = [a * tx + b * ty for a, b, _ in self._torque_rows]
+            yaw = [c * tz for _, _, c in self._torque_rows]
+            rp_spread = max(rp) - min(rp)
             if rp_spread > span:
-                differential = rp * (span / rp_spread)
+                scale = span / rp_spread
+                differential = [r * scale for r in rp]
             else:
                 # the spread is the largest pairwise difference (rp_i - rp_j) + k (yaw_i - yaw_j): keep the
                 # largest yaw scale k in [0, 1] for which every pair fits the span
-                rise = yaw[:, None] - yaw[None, :]
-                room = span - (rp[:, None] - rp[None, :])
-                growing = rise > 0.0
-                differential = rp + yaw * max(0.0, float((room[growing] / rise[growing]).min()))
-        thrusts = thrust * self._collective + differential
-        low, high = thrusts.min(), thrusts.max()
+                k = min((span - (rp_i - rp_j)) / (yaw_i - yaw_j)
+                        for rp_i, yaw_i in zip(rp, yaw) for rp_j, yaw_j in zip(rp, yaw) if yaw_i > yaw_j)
+                k = max(0.0, k)
+                differential = [r + y * k for r, y in zip(rp, yaw)]
+        thrusts = [thrust * c + d for c, d in zip(self._collective, differential)]
+        low, high = min(thrusts), max(thrusts)
         # one common shift brings every rotor into range: the differential part fits the span by construction
-        if low < self.min_thrust:
-            thrusts = np.minimum(thrusts + (self.min_thrust - low), self.max_thrust)  # min: rounding
-        elif high > self.max_thrust:
-            thrusts = np.maximum(thrusts - (high - self.max_thrust), self.min_thrust)
+        if low < lo:
+            shift = lo - low
+            thrusts = [min(f + shift, hi) for f in thrusts]  # min: rounding
+        elif high > hi:
+            shift = high - hi
+            thrusts = [max(f - shift, lo) for f in thrusts]
         return thrusts

@@ -1,7 +1,9 @@
 """Rotor model of a quadrotor: quadratic thrust and drag torque, first-order motor lag, speed limits.
 
-Pure functions of rotor speeds (rad/s) on plain arrays, testable without a simulator. The coefficients, their
-sources and the conversions from the published units are in docs/quadrotor.md.
+Pure functions of rotor speeds (rad/s), testable without a simulator. They take and give one Python float per
+rotor (any sequence in, lists out): they run on four rotors every physics tick, where numpy's cost per call is
+many times that of the arithmetic. The coefficients, their sources and the conversions from the published units
+are in docs/quadrotor.md.
 
 Conventions: a rotor's thrust acts along its axis, the body +z. ``spin`` is +1 for a rotor that turns
 counter-clockwise seen from above (angular velocity along +z) and -1 for clockwise; the air's drag on the propeller
@@ -11,9 +13,8 @@ reacts on the body as a torque about +z of ``-spin * km * w^2`` (a counter-clock
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
-
-import numpy as np
 
 
 @dataclass(frozen=True)
@@ -53,25 +54,34 @@ class RotorModel:
         """Thrust of one rotor at ``min_speed``, N."""
         return self.thrust_coefficient * self.min_speed**2
 
-    def thrust(self, speed: np.ndarray) -> np.ndarray:
+    def thrust(self, speeds: Sequence[float]) -> list[float]:
         """Thrust of each rotor, N, along its axis: ``kf * w^2``."""
-        return self.thrust_coefficient * np.square(speed)
+        kf = self.thrust_coefficient
+        return [kf * (w * w) for w in speeds]
 
-    def yaw_torque(self, speed: np.ndarray, spin: np.ndarray) -> float:
+    def yaw_torque(self, speeds: Sequence[float], spin: Sequence[float]) -> float:
         """Total drag-reaction torque on the body about its z axis, N m: ``-sum(spin * km * w^2)``."""
-        return -self.torque_coefficient * float(np.dot(spin, np.square(speed)))
+        return -self.torque_coefficient * sum([s * (w * w) for s, w in zip(spin, speeds)])
 
-    def speed_for_thrust(self, thrust: np.ndarray) -> np.ndarray:
-        """Rotor speeds (rad/s) that give ``thrust`` (N, per rotor), within the speed limits."""
-        speed = np.sqrt(np.maximum(thrust, 0.0) / self.thrust_coefficient)
-        return np.clip(speed, self.min_speed, self.max_speed)
+    def speed_for_thrust(self, thrusts: Sequence[float]) -> list[float]:
+        """Rotor speeds (rad/s) that give ``thrusts`` (N, per rotor), within the speed limits."""
+        kf, lo, hi = self.thrust_coefficient, self.min_speed, self.max_speed
+        speeds = []
+        for f in thrusts:
+            w = math.sqrt((0.0 if f < 0.0 else f) / kf)
+            speeds.append(lo if w < lo else hi if w > hi else w)
+        return speeds
 
     def decay(self, dt: float) -> float:
         """exp(-dt / tau): the fraction of a speed error left after ``dt`` seconds (0 without lag)."""
         return math.exp(-dt / self.time_constant) if self.time_constant > 0.0 else 0.0
 
-    def step(self, speed: np.ndarray, command: np.ndarray, decay: float) -> np.ndarray:
-        """Rotor speeds after one period of a constant, limit-clipped ``command``: the exact solution of
+    def step(self, speeds: Sequence[float], commands: Sequence[float], decay: float) -> list[float]:
+        """Rotor speeds after one period of constant, limit-clipped ``commands``: the exact solution of
         ``dw/dt = (command - w) / tau`` over the period whose :meth:`decay` is ``decay``."""
-        target = np.clip(command, self.min_speed, self.max_speed)
-        return target + (speed - target) * decay
+        lo, hi = self.min_speed, self.max_speed
+        out = []
+        for w, command in zip(speeds, commands):
+            target = lo if command < lo else hi if command > hi else command
+            out.append(target + (w - target) * decay)
+        return out

@@ -62,6 +62,7 @@ def floating_base_state(sim: Sim, body: int, com_offset: np.ndarray, tracked: li
         link_index: pybullet index of every link by URDF name.
     """
     com, rot, lin, ang = sim.base_state(body)
+    rot = np.reshape(rot, (3, 3))
     return RobotState(
         position=np.asarray(com) - rot @ com_offset,
         rotation=rot,

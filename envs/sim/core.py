@@ -282,11 +282,13 @@ class Sim(Actuation, ObstacleBodies, Rendering):
         for _ in range(n):
             pb.stepSimulation(physicsClientId=self._cid)
 
-    def base_state(self, body: int) -> tuple[tuple, np.ndarray, tuple, tuple]:
-        """(centre-of-mass position, rotation matrix, linear velocity, angular velocity), world frame."""
+    def base_state(self, body: int) -> tuple[tuple, tuple, tuple, tuple]:
+        """(centre-of-mass position, rotation matrix, linear velocity, angular velocity), world frame, as pybullet's
+        tuples of floats: the rotation matrix row by row (9 floats; ``np.reshape(rotation, (3, 3))`` makes the
+        matrix). A flying robot reads it every physics tick, where numpy's cost per call outweighs the arithmetic."""
         pos, quat = pb.getBasePositionAndOrientation(body, physicsClientId=self._cid)
         lin, ang = pb.getBaseVelocity(body, physicsClientId=self._cid)
-        return pos, np.array(pb.getMatrixFromQuaternion(quat)).reshape(3, 3), lin, ang
+        return pos, pb.getMatrixFromQuaternion(quat), lin, ang
 
     def link_states(self, body: int, links: Sequence[int]) -> LinkStates:
         """The states of ``links`` (pybullet link indices, each >= 0; the base is :meth:`base_state`'s), in their order,
