@@ -157,23 +157,28 @@ def _verdict(env_id: str, metrics: dict, seconds: float) -> str:
             f"{seconds / 60:.1f} min of training and evaluation).")
 
 
+#: Per map-based env with a subgoal pursuit: what else the policy sees, the lookahead's unit, the path, the pursuit
+#: a residual policy acts on, and who carries the skill then.
+_MAP_BASED = {
+    "ClutterReach-v0": ("its joints, clearances and the target", "rad",
+                        "on a joint-space path planned over the known layout", "a pursuit of that subgoal",
+                        "the planner carries most of the skill; the baseline table has the pursuit alone"),
+    "ClutterFly-v0": ("the flight controller's state and the goal", "m",
+                      "on the shortest path through the known layout",
+                      "a cascaded position controller flying to that subgoal",
+                      "the planner and the controller carry most of the skill; the baseline table has them alone"),
+}
+
+
 def _observation_line(config) -> str:
     lookahead = config.env_kwargs.get("subgoal_lookahead", 0.0)
-    if lookahead and config.env_id == "ClutterReach-v0":
-        line = (f"**Map-based agent.** Besides its joints, clearances and the target, the policy is told the "
-                f"subgoal: the point {lookahead} rad ahead on a joint-space path planned over the known layout.")
+    if lookahead and config.env_id in _MAP_BASED:
+        sees, unit, path, pursuit, skill = _MAP_BASED[config.env_id]
+        line = (f"**Map-based agent.** Besides {sees}, the policy is told the subgoal: the point {lookahead} "
+                f"{unit} ahead {path}.")
         if config.residual_gain:
-            line += (" Its actions are residuals on a pursuit of that subgoal (`residual_gain` "
-                     f"{config.residual_gain:g}): the env is driven by the pursuit plus the policy's correction, so "
-                     "the planner carries most of the skill; the baseline table has the pursuit alone.")
-        line += " It does not solve the mapless task; train without `subgoal_lookahead` for that."
-    elif lookahead and config.env_id == "ClutterFly-v0":
-        line = (f"**Map-based agent.** Besides the flight controller's state and the goal, the policy is told the "
-                f"subgoal: the point {lookahead} m ahead on the shortest path through the known layout.")
-        if config.residual_gain:
-            line += (" Its actions are residuals on a cascaded position controller flying to that subgoal "
-                     f"(`residual_gain` {config.residual_gain:g}, the controller's position gain): the planner and "
-                     "the controller carry most of the skill; the baseline table has them alone.")
+            line += (f" Its actions are residuals on {pursuit} (`residual_gain` {config.residual_gain:g}): the env "
+                     f"is driven by the pursuit plus the policy's correction, so {skill}.")
         line += " It does not solve the mapless task; train without `subgoal_lookahead` for that."
     elif lookahead:
         line = (f"**Map-based agent.** Besides the LIDAR and the goal, the policy is told the subgoal: the point "
