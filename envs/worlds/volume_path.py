@@ -53,11 +53,14 @@ def _forward_moves() -> tuple[tuple[int, int, int], ...]:
 MOVES = _forward_moves()
 
 
-def _shifted(n: int, d: int) -> tuple[slice, slice]:
-    """(source, target) slices along one axis of length ``n`` for a move of ``d`` cells."""
-    if d >= 0:
-        return slice(0, max(n - d, 0)), slice(d, n)
-    return slice(-d, n), slice(0, max(n + d, 0))
+@functools.cache
+def _moves(h: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Every move (both directions; cells), its length (metres, for cell edges ``h``), the distinct lengths and
+    each move's index among them."""
+    moves = np.array([*MOVES, *(tuple(-d for d in m) for m in MOVES)])
+    lengths = np.linalg.norm(moves * np.array(h), axis=1)
+    classes, class_of = np.unique(np.round(lengths, 12), return_inverse=True)
+    return moves, lengths, classes, class_of
 
 
 class VolumePathDistance:
@@ -67,9 +70,6 @@ class VolumePathDistance:
         scene: the episode's layout (obstacles and goal).
         spec: volume size and grid resolution.
         robot_radius: the robot's bounding radius, metres.
-
-    Attributes:
-        values: (nx, ny, nz) the field at the cell centres, metres (finite everywhere).
     """
 
     def __init__(self, scene: VolumeScene, spec: VolumeSpec, robot_radius: float) -> None:
@@ -90,35 +90,51 @@ class VolumePathDistance:
         self._distance_flat = distance[:n]
         self._distance = self._distance_flat.reshape(shape)
         self._next = predecessors[:n]  # each cell's next node on its way to the goal (node n)
-        self.values, self._nearest_reachable = self._fill_unreachable()
+
+    @property
+    def values(self) -> np.ndarray:
+        """(nx, ny, nz) the field at the cell centres, metres (finite everywhere)."""
+        return self._filled[0]
+
+    @functools.cached_property
+    def _filled(self) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`_fill_unreachable`, on first use: a robot that never leaves the certified cells never needs it."""
+        return self._fill_unreachable()
 
     def _graph(self, links: np.ndarray, link_lengths: np.ndarray) -> csr_matrix:
         """The search graph: every certified move between cell centres (both directions), and the goal node's links
         out of it (the search starts there, so no edge needs to lead into it), built row by row straight into CSR
-        form."""
+        form (a row's moves in :func:`_moves` order, which decides the search's ties)."""
         clear, shape = self._clear, self._clear.shape
         n = clear.size
-        moves = np.array([*MOVES, *(tuple(-d for d in m) for m in MOVES)])
-        lengths = np.linalg.norm(moves * self._h, axis=1)
-        classes, class_of = np.unique(np.round(lengths, 12), return_inverse=True)
+        moves, lengths, classes, class_of = _moves(tuple(self._h_list))
         pad = 2  # the longest move spans two cells along an axis
         free = np.zeros((len(classes), *(k + 2 * pad for k in shape)), dtype=bool)
         inner = (slice(pad, -pad),) * 3
         for c, length in enumerate(classes):  # centres certified for a move of this length
             free[(c, *inner)] = clear > self._r + 0.5 * length
-        ok = np.empty((n, len(moves)), dtype=bool)  # ok[i, k]: move k from cell i is an edge
+        # ok[k, i]: move k from cell i is an edge; one contiguous plane per move, then transposed to rows of cells
+        ok = np.empty((len(moves), *shape), dtype=bool)
         for k, (move, c) in enumerate(zip(moves, class_of)):
             target = tuple(slice(pad + d, pad + d + m) for d, m in zip(move, shape))
-            np.logical_and(free[(c, *inner)], free[(c, *target)], out=ok[:, k].reshape(shape))
-        edges = np.flatnonzero(ok).astype(np.int32)  # row by row (int32: the search's own index type)
+            np.logical_and(free[(c, *inner)], free[(c, *target)], out=ok[k])
+        rows = np.ascontiguousarray(ok.reshape(len(moves), n).T)
+        edges = np.flatnonzero(rows).astype(np.int32)  # row by row (int32: the search's own index type)
         sources = edges // np.int32(len(moves))
         kinds = edges - sources * np.int32(len(moves))
         offsets = (moves @ np.array([shape[1] * shape[2], shape[2], 1])).astype(np.int32)
-        indptr = np.zeros(n + 2, dtype=np.int32)
-        np.cumsum(ok.sum(axis=1, dtype=np.int32), out=indptr[1:-1])
+        indptr = np.empty(n + 2, dtype=np.int32)
+        indptr[0] = 0
+        np.cumsum(rows.sum(axis=1, dtype=np.int32), out=indptr[1:-1])
         indptr[-1] = len(edges) + len(links)
-        indices = np.concatenate([sources + offsets[kinds], links.astype(np.int32)])
-        data = np.concatenate([lengths[kinds], link_lengths])
+        # np.take with mode="clip" writes straight into ``out`` (mode="raise" buffers it); every kind is in range
+        indices = np.empty(len(edges) + len(links), dtype=np.int32)
+        np.take(offsets, kinds, out=indices[:len(edges)], mode="clip")
+        indices[:len(edges)] += sources
+        indices[len(edges):] = links
+        data = np.empty(len(indices))
+        np.take(lengths, kinds, out=data[:len(edges)], mode="clip")
+        data[len(edges):] = link_lengths
         return csr_matrix((data, indices, indptr), shape=(n + 1, n + 1))
 
     def _around(self, point: tuple[float, float, float]) -> list[tuple[int, float, tuple[float, float, float]]]:
@@ -218,7 +234,7 @@ class VolumePathDistance:
         if best is not None:
             cell = best[0]
         else:
-            cell = int(self._nearest_reachable[np.ravel_multi_index(cell_index(point, self._spec), self._clear.shape)])
+            cell = int(self._filled[1][np.ravel_multi_index(cell_index(point, self._spec), self._clear.shape)])
         n = self._clear.size
         if cell >= 0:
             _, ny, nz = self._clear.shape
