@@ -2,8 +2,8 @@
 
 It flies on forces alone: before every physics tick (:meth:`Quadrotor.before_tick`) the inner loop turns the held
 command into rotor speed commands, the motors follow them with a first-order lag, and each rotor's thrust is
-applied to its own link, with the rotors' drag-reaction torque on the body. Attitude therefore comes from the
-physics engine, never from setting a pose. Coefficients, limits and their sources: docs/quadrotor.md.
+applied at its hub, with the rotors' drag-reaction torque on the body. Attitude therefore comes from the physics
+engine, never from setting a pose. Coefficients, limits and their sources: docs/quadrotor.md.
 """
 
 from __future__ import annotations
@@ -20,9 +20,9 @@ from clutter_gym.noise.dynamics import DynamicsSample
 from clutter_gym.robots.aero import AERO_EFFECTS, ground_effect_gain, rotor_drag
 from clutter_gym.robots.dynamics import scale_link_dynamics
 from clutter_gym.robots.rate_loop import Mixer, RateController, RateGains, allocation
-from clutter_gym.robots.rigid_body import rigid_body
+from clutter_gym.robots.rigid_body import RigidFrames, rigid_body
 from clutter_gym.robots.rotors import RotorModel
-from clutter_gym.robots.state import RobotState, floating_base_state
+from clutter_gym.robots.state import RobotState
 from clutter_gym.sim import Sim
 from clutter_gym.util.checks import is_number
 from clutter_gym.util.transforms import quat_to_matrix, yaw_quat
@@ -179,10 +179,13 @@ class Quadrotor:
         }
         self.rotors = c.rotor_model()
         self.model = rigid_body(self.urdf_path)
+        self._frames = RigidFrames(self.model, TRACKED_LINKS)
         hubs = np.array([self.model.frames[n][0] - self.model.com for n in ROTOR_LINKS])
         alloc = allocation(hubs[:, :2], np.array(ROTOR_SPIN), c.torque_coefficient / c.thrust_coefficient)
         self.mixer = Mixer(alloc, self.rotors.min_thrust, self.rotors.max_thrust)
         self._hubs = tuple(map(tuple, hubs.tolist()))  # each rotor hub from the centre of mass, body frame, m
+        base_com = self.model.link_coms[self.model.root]  # pybullet's base frame origin
+        self._rotor_points = [tuple(self.model.frames[n][0] - base_com) for n in ROTOR_LINKS]  # where thrust acts
         self._rate_scale = (c.max_roll_rate, c.max_pitch_rate, c.max_yaw_rate)
         self._rates = c.control == "rates"
         self._drag = "drag" in c.aero
@@ -240,8 +243,6 @@ class Quadrotor:
         sim.hide_from_rays(self._body)
         self.link_index = sim.link_indices(self._body)
         self.link_names = TRACKED_LINKS
-        self._tracked = tuple(self.link_index[name] for name in TRACKED_LINKS)
-        self._rotor_links = [self.link_index[name] for name in ROTOR_LINKS]
         self._com_offset = sim.base_inertial_offset(self._body)
         dt = 1.0 / sim.physics_hz
         self._decay = self.rotors.decay(dt)
@@ -316,7 +317,7 @@ class Quadrotor:
             ux, uy, uz = rot[6:9]  # the world's up axis in the body frame
             heights = [z + (ux * x + uy * y + uz * h) for x, y, h in self._hubs]
             thrusts = [f * gain for f, gain in zip(thrusts, ground_effect_gain(heights, self.config.rotor_radius))]
-        sim.apply_link_forces(self._body, self._rotor_links, [(0.0, 0.0, f) for f in thrusts])
+        sim.apply_base_forces(self._body, [(0.0, 0.0, f) for f in thrusts], self._rotor_points)
         yaw = rotors.yaw_torque(speeds, ROTOR_SPIN) * scale
         if self._drag:
             drag = rotor_drag(_to_body(rot, lin), speeds, self.config.drag_xy, self.config.drag_z)
@@ -326,9 +327,20 @@ class Quadrotor:
         sim.apply_base_wrench(self._body, force, (yaw * rot[2], yaw * rot[5], yaw * rot[8]))
 
     def state(self) -> RobotState:
-        """Ground-truth state from batched pybullet reads."""
-        return floating_base_state(self._sim, self._body, self._com_offset, self._tracked, self.link_names,
-                                   self.link_index)
+        """Ground-truth state from one pybullet read of the base: the airframe is rigid, so the tracked links'
+        states follow from the base's (:class:`RigidFrames`)."""
+        com, rot, lin, ang = self._sim.base_state(self._body)
+        rot = np.reshape(rot, (3, 3))
+        return RobotState(
+            position=np.asarray(com) - rot @ self._com_offset,
+            rotation=rot,
+            linear_velocity=lin,
+            angular_velocity=ang,
+            links=self._frames.link_states(com, rot, lin, ang),
+            link_names=self.link_names,
+            link_index=self.link_index,
+            body=self._body,
+        )
 
     def observe(self, state: RobotState) -> dict[str, np.ndarray]:
         """Proprioception, as a flight controller's state estimate gives it (ground truth here):

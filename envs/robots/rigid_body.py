@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from clutter_gym.collision.urdf_geometry import parse_floats, parse_urdf
+from clutter_gym.sim import LinkStates
 from clutter_gym.util.transforms import quat_to_matrix, rpy_quat
 
 _INERTIA_KEYS = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
@@ -29,6 +30,9 @@ class RigidBody:
         frames: each link's frame origin (3,) and rotation (3, 3) (columns: the link's axes), by link name.
         link_inertias: each link's mass (kg) and inertia (3, 3) (kg m^2) in its inertial frame, as the URDF gives
             them, by link name (links without an ``<inertial>`` element are left out).
+        link_coms: each link's centre of mass (3,), metres (its frame origin for a link without ``<inertial>``),
+            by link name.
+        root: the root link's name (the link at the identity frame).
     """
 
     mass: float
@@ -36,6 +40,47 @@ class RigidBody:
     inertia: np.ndarray
     frames: dict[str, tuple[np.ndarray, np.ndarray]]
     link_inertias: dict[str, tuple[float, np.ndarray]]
+    link_coms: dict[str, np.ndarray]
+    root: str
+
+
+class RigidFrames:
+    """States of chosen links of a rigid body from its root link's state alone: every link's pose and velocity
+    follow from the root's, so nothing more needs reading from the physics engine (the same values as pybullet's
+    link reads, to rounding).
+
+    Args:
+        body: the body's mass properties and link frames.
+        links: names of the links, the rows of :meth:`link_states`.
+    """
+
+    def __init__(self, body: RigidBody, links: tuple[str, ...]) -> None:
+        root_com = body.link_coms[body.root]
+        self._root_com = root_com
+        self._origins = np.array([body.frames[n][0] for n in links])
+        self._axes = np.array([body.frames[n][1] for n in links])
+        self._levers = np.array([body.link_coms[n] for n in links]) - root_com  # from the root's centre of mass
+
+    def link_states(self, root_com: tuple[float, float, float], rotation: np.ndarray,
+                    linear_velocity: tuple[float, float, float], angular_velocity: tuple[float, float, float]
+                    ) -> LinkStates:
+        """The links' states (as :meth:`Sim.link_states` gives them).
+
+        Args:
+            root_com: the root link's own centre of mass (pybullet's base position), world frame, metres.
+            rotation: (3, 3) the root link's orientation.
+            linear_velocity: velocity of ``root_com``, m/s.
+            angular_velocity: rad/s, the same for every link.
+        """
+        origin = np.asarray(root_com) - rotation @ self._root_com
+        wx, wy, wz = angular_velocity
+        spin = np.array([[0.0, -wz, wy], [wz, 0.0, -wx], [-wy, wx, 0.0]])  # w x v = spin @ v (np.cross costs more)
+        return LinkStates(
+            position=origin + self._origins @ rotation.T,
+            rotation=np.matmul(rotation, self._axes),
+            linear_velocity=np.asarray(linear_velocity) + self._levers @ (spin @ rotation).T,
+            angular_velocity=np.array([angular_velocity] * len(self._origins), dtype=float),
+        )
 
 
 def _origin(element, where: str) -> tuple[np.ndarray, np.ndarray]:
@@ -74,10 +119,12 @@ def rigid_body(urdf: str | Path) -> RigidBody:
 
     masses, centres, inertias = [], [], []
     link_inertias: dict[str, tuple[float, np.ndarray]] = {}
+    link_coms: dict[str, np.ndarray] = {}
     for link in root.findall("link"):
         name = link.attrib["name"]
         p, r = frame(name)
         inertial = link.find("inertial")
+        link_coms[name] = p
         if inertial is None:
             continue
         where = f"{urdf.name} link {name!r} inertial"
@@ -92,6 +139,7 @@ def rigid_body(urdf: str | Path) -> RigidBody:
         axes = r @ rot
         masses.append(mass)
         centres.append(p + r @ xyz)
+        link_coms[name] = centres[-1]
         inertias.append(axes @ local @ axes.T)
     total = float(sum(masses))
     com = sum(m * c for m, c in zip(masses, centres)) / total
@@ -99,4 +147,5 @@ def rigid_body(urdf: str | Path) -> RigidBody:
     for m, c, i in zip(masses, centres, inertias):
         d = c - com
         inertia += i + m * (d @ d * np.eye(3) - np.outer(d, d))
-    return RigidBody(mass=total, com=com, inertia=inertia, frames=frames, link_inertias=link_inertias)
+    return RigidBody(mass=total, com=com, inertia=inertia, frames=frames, link_inertias=link_inertias,
+                     link_coms=link_coms, root=next(n for n in frames if n not in parents))

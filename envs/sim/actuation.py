@@ -115,12 +115,18 @@ class Actuation:
         a flying body gets its drag from its own model instead)."""
         pb.changeDynamics(body, -1, linearDamping=linear, angularDamping=angular, physicsClientId=self._cid)
 
-    def apply_link_forces(self, body: int, links: Sequence[int], forces: Sequence[Sequence[float]]) -> None:
-        """Apply ``forces`` (N, one (fx, fy, fz) per link, in that link's frame) at the links' centres of mass for
-        the next physics tick. pybullet's link frame for forces is the link's inertial frame, so a force along a
-        rotor axis that passes through the link's centre of mass is the rotor's thrust."""
-        for link, force in zip(links, forces):
-            pb.applyExternalForce(body, link, force, (0.0, 0.0, 0.0), pb.LINK_FRAME, physicsClientId=self._cid)
+    def apply_base_forces(self, body: int, forces: Sequence[Sequence[float]], points: Sequence[Sequence[float]]
+                          ) -> None:
+        """Apply ``forces`` (N, (fx, fy, fz) each, base frame) at ``points`` (m, from the base's centre of mass, base
+        frame) for the next physics tick.
+
+        The base, not the links the points belong to: pybullet turns a link-frame force on a link with that link's
+        pose as of the start of the last tick (it refreshes the cached link poses before integrating), so the force
+        would point one tick behind the body, a spurious tilt of rate x dt; the base's pose is always current. On a
+        rigid body a force acts the same wherever along the body it is applied.
+        """
+        for force, point in zip(forces, points):
+            pb.applyExternalForce(body, -1, force, point, pb.LINK_FRAME, physicsClientId=self._cid)
 
     def apply_base_wrench(self, body: int, force: Sequence[float], torque: Sequence[float]) -> None:
         """Apply a world-frame ``force`` (N) at the base's centre of mass and a world-frame ``torque`` (N m) to the
