@@ -183,9 +183,8 @@ class Quadrotor:
         hubs = np.array([self.model.frames[n][0] - self.model.com for n in ROTOR_LINKS])
         alloc = allocation(hubs[:, :2], np.array(ROTOR_SPIN), c.torque_coefficient / c.thrust_coefficient)
         self.mixer = Mixer(alloc, self.rotors.min_thrust, self.rotors.max_thrust)
-        self._hubs = tuple(map(tuple, hubs.tolist()))  # each rotor hub from the centre of mass, body frame, m
-        base_com = self.model.link_coms[self.model.root]  # pybullet's base frame origin
-        self._rotor_points = [tuple(self.model.frames[n][0] - base_com) for n in ROTOR_LINKS]  # where thrust acts
+        base_com = self.model.link_coms[self.model.root]  # pybullet's base position: forces and heights from there
+        self._hubs = [tuple(self.model.frames[n][0] - base_com) for n in ROTOR_LINKS]  # body frame, m
         self._rate_scale = (c.max_roll_rate, c.max_pitch_rate, c.max_yaw_rate)
         self._rates = c.control == "rates"
         self._drag = "drag" in c.aero
@@ -317,7 +316,7 @@ class Quadrotor:
             ux, uy, uz = rot[6:9]  # the world's up axis in the body frame
             heights = [z + (ux * x + uy * y + uz * h) for x, y, h in self._hubs]
             thrusts = [f * gain for f, gain in zip(thrusts, ground_effect_gain(heights, self.config.rotor_radius))]
-        sim.apply_base_forces(self._body, [(0.0, 0.0, f) for f in thrusts], self._rotor_points)
+        sim.apply_base_forces(self._body, [(0.0, 0.0, f) for f in thrusts], self._hubs)
         yaw = rotors.yaw_torque(speeds, ROTOR_SPIN) * scale
         if self._drag:
             drag = rotor_drag(_to_body(rot, lin), speeds, self.config.drag_xy, self.config.drag_z)
