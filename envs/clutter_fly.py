@@ -193,10 +193,11 @@ class ClutterFlyEnv(ClutterEnv):
             raise ValueError(f"aero must be a tuple of names from ('drag', 'ground_effect'), got {aero!r}")
         robot = Quadrotor(QuadrotorConfig(aero=tuple(aero)))
         spec = _volume_spec(volume_size, obstacle_density, ceiling)
-        # the airframe is rigid (fixed joints only), so self-collision is off and no allowed-collision matrix is needed
+        # the airframe is rigid (fixed joints only), so self-collision is off and no allowed-collision matrix is
+        # needed; the task reads only the robot's clearance, so no link's own is resolved
         checker = collision_checker(robot, TRACKED_LINKS, collision_fidelity, collision_padding, contact_tolerance,
                                     max(CLEARANCE_RANGE, clearance_margin), control_hz, self_collision=False,
-                                    swept_speed=swept_speed)
+                                    swept_speed=swept_speed, per_link=False)
         radius = bounding_radius(checker.model, robot.model)
         lidar = LidarConfig(n_rays=n_rays, fov=lidar_fov, max_range=lidar_range, n_channels=lidar_channels,
                             vertical_fov=lidar_vertical_fov, link=SENSOR_LINK)

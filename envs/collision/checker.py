@@ -6,7 +6,11 @@ obstacle) pair from below in one numpy pass, then:
 
 1. each moving shape asks FCL about its obstacles in order of their bounds, until no bound can beat the best
    exact distance: every link's clearance (capped at ``clearance_range``), its witness points and the closest
-   obstacle, exactly as if every pair were measured;
+   obstacle, exactly as if every pair were measured. A checker made with ``per_link=False`` (for a task that needs
+   only the robot's clearance) instead takes every (shape, obstacle) pair in one order of their bounds and stops at
+   the first bound that cannot beat the best distance: the same minimum, nearest pair and witness points, with
+   typically one or two FCL queries a step instead of one or more per shape, and only the shapes it measures moved
+   in FCL;
 2. pairs within ``contact_tolerance`` are enumerated as contacts with their penetration depth;
 3. enabled self pairs (the ACM) are tested, after a bounding-ball filter;
 4. shapes that moved faster than ``swept_speed`` are swept from their previous pose (``fcl.continuousCollide``,
@@ -66,9 +70,9 @@ class CollisionReport:
     Attributes:
         min_clearance: signed distance from the robot to the nearest obstacle, metres; negative = penetration.
         link_clearance: (L,) signed distance per link with geometry (``CollisionChecker.links``), capped at the
-            clearance range.
+            clearance range; None from a checker made with ``per_link=False``.
         directions: (L, 3) unit vectors from each link's witness point to its obstacle's, world frame (zero
-            where the link is out of range or penetrating).
+            where the link is out of range or penetrating); None from a checker made with ``per_link=False``.
         closest: (link, obstacle index) of the nearest pair, or None beyond the range.
         witness: (2, 3) witness points (on the link, on the obstacle) of that pair, world frame, or None.
         contacts: robot-link/obstacle pairs within the contact tolerance.
@@ -79,8 +83,8 @@ class CollisionReport:
     """
 
     min_clearance: float
-    link_clearance: np.ndarray
-    directions: np.ndarray
+    link_clearance: np.ndarray | None
+    directions: np.ndarray | None
     closest: tuple[str, int] | None
     witness: np.ndarray | None
     contacts: tuple[Contact, ...]
@@ -111,6 +115,8 @@ class CollisionChecker:
         dt: time between two checks (the control period), seconds.
         fixed_links: links that never move relative to the world (an arm's fixed base): left out of the
             environment queries, where they would only measure their own mounting, but kept for self-collision.
+        per_link: resolve every link's clearance and direction (``CollisionReport.link_clearance``); False measures
+            only the robot's nearest pair, for tasks that need no more (the module docstring).
     """
 
     def __init__(
@@ -122,8 +128,10 @@ class CollisionChecker:
         swept_speed: float = 0.2,
         dt: float = 0.05,
         fixed_links: Sequence[str] = (),
+        per_link: bool = True,
     ) -> None:
         self.model = model
+        self.per_link = bool(per_link)
         self.links = tuple(link for link in model.links if link not in fixed_links)
         moving = [i for i, s in enumerate(model.shapes) if s.link not in fixed_links]
         #: the moving shapes of every link in ``self.links``
@@ -137,6 +145,7 @@ class CollisionChecker:
         self.dt = dt
         self._moving = np.array(moving, dtype=int)
         self._limits_array = clearance_range + model.padding[self._moving]  # unpadded range per moving shape
+        self._moving_padding = model.padding[self._moving][:, None]
         self._radii = np.array([s.radius for s in model.shapes])  # about each shape's origin
         #: (moving shapes, 1) radii of their enclosing balls, widened by the slack (:meth:`_lower_bounds`)
         self._slack_radii = (model.ball_radius[self._moving] + BOUND_SLACK)[:, None]
@@ -179,7 +188,10 @@ class CollisionChecker:
             self._rows = np.array([names.index(n) for n in self.model.link_names])
         rot = np.concatenate((state.rotation[None], state.links.rotation))[self._rows]
         pos = np.concatenate((state.position[None], state.links.position))[self._rows]
-        self.model.sync(pos, rot)
+        if self.per_link:
+            self.model.sync(pos, rot)
+        else:  # the nearest-pair query moves only the shapes it measures
+            self.model.set_poses(pos, rot)
 
     def clearance(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Per shape: signed distance (capped at the range), obstacle index (-1 beyond it) and witness points.
@@ -280,7 +292,7 @@ class CollisionChecker:
 
         ``obstacles`` come in ascending order of their lower bounds ``lower``.
         """
-        shape, solid = self.model.objects[i], self.model.solid_objects[i]  # not a lazy sphere: placed by sync
+        shape, solid = self.model.object(i), self.model.solid_object(i)  # not a lazy sphere
         best, nearest, witness = limit, -1, None
         for j, bound in zip(obstacles, lower):
             if bound >= best:
@@ -299,8 +311,42 @@ class CollisionChecker:
             pybullet_contacts: (other body id, contact distance) of the robot's pybullet contact points.
         """
         self.sync(state)
-        distance, other, points, candidates, bound = self._measure()
-        model = self.model
+        link_clearance = directions = None
+        if self.per_link:
+            distance, other, points, candidates, bound = self._measure()
+            link_clearance, directions = self._links(distance, other, points)
+            k = int(np.argmin(distance))
+            nearest = (float(distance[k]), k, int(other[k]), points[k].copy() if other[k] >= 0 else None)
+            lower = distance[self._moving]
+        elif self._obstacles:
+            candidates, bound = self._lower_bounds()
+            nearest = self._nearest_pair(candidates, bound)
+            lower = (bound - self._moving_padding).min(axis=1, initial=np.inf)
+        else:
+            candidates, bound = np.zeros(0, int), np.zeros((len(self._moving), 0))
+            nearest, lower = (NO_OBSTACLE_CLEARANCE, -1, -1, None), np.full(len(self._moving), np.inf)
+        clearance, k, obstacle, witness = nearest
+        touching_before = self._touching
+        contacts = self._contacts(lower, candidates, bound)
+        tunneling = self._swept(candidates, bound, touching_before)
+        tol = self.contact_tolerance
+        n_pb = sum(1 for body, d in pybullet_contacts if d <= tol and body in self._obstacle_bodies)
+        return CollisionReport(
+            min_clearance=clearance if self._obstacles else NO_OBSTACLE_CLEARANCE,
+            link_clearance=link_clearance,
+            directions=directions,
+            closest=(self.model.shapes[k].link, obstacle) if obstacle >= 0 else None,
+            witness=witness,
+            contacts=contacts,
+            self_collision=self.model.self_collision(),
+            tunneling=tunneling,
+            pybullet_contacts=n_pb,
+            disagreement=bool(contacts) != (n_pb > 0),
+        )
+
+    def _links(self, distance: np.ndarray, other: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Per link: the clearance of its nearest shape (capped at the range), and the unit vector from that shape's
+        witness point to its obstacle's (zero where out of range or penetrating)."""
         nearest = self._link_shape  # each link reports its nearest shape
         if nearest is None:
             nearest = np.array([s[int(np.argmin(distance[s]))] for s in self._link_shapes])
@@ -310,51 +356,67 @@ class CollisionChecker:
         norms = np.sqrt(np.add.reduce(gap * gap, axis=1))  # np.linalg.norm(gap, axis=1) without its dispatch
         pointing = (other[nearest] >= 0) & (link_clearance > 0.0) & (norms > 0.0)
         directions = np.divide(gap, norms[:, None], out=np.zeros_like(gap), where=pointing[:, None])
-        k = int(np.argmin(distance))
-        found = other[k] >= 0
-        touching_before = self._touching
-        contacts = self._contacts(distance, points, candidates, bound)
-        tunneling = self._swept(candidates, bound, touching_before)
-        tol = self.contact_tolerance
-        n_pb = sum(1 for body, d in pybullet_contacts if d <= tol and body in self._obstacle_bodies)
-        return CollisionReport(
-            min_clearance=float(distance[k]) if self._obstacles else NO_OBSTACLE_CLEARANCE,
-            link_clearance=link_clearance,
-            directions=directions,
-            closest=(model.shapes[k].link, int(other[k])) if found else None,
-            witness=points[k].copy() if found else None,
-            contacts=contacts,
-            self_collision=model.self_collision(),
-            tunneling=tunneling,
-            pybullet_contacts=n_pb,
-            disagreement=bool(contacts) != (n_pb > 0),
-        )
+        return link_clearance, directions
 
-    def _contacts(self, distance: np.ndarray, points: np.ndarray, candidates: np.ndarray, bound: np.ndarray
-                  ) -> tuple[Contact, ...]:
-        """Contacts of the shapes whose nearest obstacle is within the tolerance.
+    def _nearest_pair(self, candidates: np.ndarray, bound: np.ndarray) -> tuple[float, int, int, np.ndarray | None]:
+        """(padded signed distance, shape, obstacle index, witness points) of the robot's nearest pair within the
+        clearance range; (the range, -1, -1, None) when no pair is in it.
+
+        Pairs are measured in ascending order of their padded lower bounds until a bound exceeds the best distance,
+        so no unmeasured pair can be nearer. Among equal distances the lowest shape index wins, and for one shape the
+        pair met first, as :meth:`_measure` and :meth:`check` pick them.
+        """
+        model, moving = self.model, self._moving
+        padded = bound - self._moving_padding  # lower bounds on the padded distances
+        rows, columns = np.nonzero(padded < self.clearance_range)
+        best, shape, obstacle, result = self.clearance_range, -1, -1, None
+        if rows.size == 0:
+            return best, shape, obstacle, None
+        lower = padded[rows, columns]
+        order = np.lexsort((rows, lower))
+        shapes, obstacles = moving[rows[order]].tolist(), candidates[columns[order]].tolist()
+        for i, j, b in zip(shapes, obstacles, lower[order].tolist()):
+            if b > best:
+                break
+            if model.lazy[i]:  # a sphere of a sphere set: its bound is its distance, witness points found below
+                d, found = b + BOUND_SLACK, None
+            else:
+                d, found = signed_distance(model.object(i), self._obstacles[j], model.solid_object(i))
+                d -= model.padding[i]
+            if d < best or (d == best and i < shape):
+                best, shape, obstacle, result = d, i, j, found
+        if shape < 0:
+            return best, shape, obstacle, None
+        if result is None:
+            _, result = signed_distance(model.object(shape), self._obstacles[obstacle])
+        return best, shape, obstacle, np.asarray(result.nearest_points, dtype=float)
+
+    def _contacts(self, lower: np.ndarray, candidates: np.ndarray, bound: np.ndarray) -> tuple[Contact, ...]:
+        """Contacts of the moving shapes; ``lower`` (per moving shape) bounds each one's padded clearance from below,
+        and shapes above the tolerance are skipped.
 
         A shape can touch several obstacles at once: every candidate obstacle whose lower bound is within the
         tolerance is measured. A contact's depth is minus the padded signed distance, the same measure as the
-        clearance; ``fcl.collide`` gives only its position, as its own depth estimates run deep on convex shapes.
+        clearance; ``fcl.collide`` gives only its position (its own depth estimates run deep on convex shapes), and
+        where the shapes touch without overlapping, the midpoint of the pair's witness points is the position.
         """
         model, out, tol = self.model, [], self.contact_tolerance
         self._touching = touching = set()
-        for row, i in enumerate(self._moving):
-            if distance[i] > tol:
-                continue
+        for row in np.flatnonzero(lower <= tol).tolist():
+            i = int(self._moving[row])
             obj = model.solid_object(i)  # a BVH's contacts are not meaningful; its hull's are
-            for j in np.sort(candidates[bound[row] - model.padding[i] <= tol]):
-                d = self._pair_distance(i, j)
+            for j in np.sort(candidates[bound[row] - model.padding[i] <= tol]).tolist():
+                d, found = signed_distance(obj, self._obstacles[j])
+                d -= model.padding[i]
                 if d > tol:
                     continue
                 result = fcl.CollisionResult()
-                where = points[i].mean(axis=0)
+                where = np.mean(found.nearest_points, axis=0)
                 if fcl.collide(obj, self._obstacles[j], self._contact_request, result):
                     deepest = max(result.contacts, key=lambda c: c.penetration_depth)
                     where = np.asarray(deepest.pos, dtype=float)
-                out.append(Contact(model.shapes[i].link, int(j), max(0.0, -d), where))
-                touching.add((int(i), int(j)))
+                out.append(Contact(model.shapes[i].link, j, max(0.0, -d), where))
+                touching.add((i, j))
         return tuple(out)
 
     def _pair_distance(self, shape: int, obstacle: int) -> float:

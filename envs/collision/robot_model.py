@@ -79,6 +79,7 @@ class RobotCollisionModel:
         #: its FCL object is placed only when asked for (:meth:`object`), which most steps never do
         self.lazy = self.exact if self.exact.sum() >= SPHERE_SET else np.zeros(len(self.shapes), dtype=bool)
         self._eager = [(o, i) for i, o in enumerate(self.objects) if not self.lazy[i]]
+        self._stale = [False] * len(self.shapes)  # objects not yet placed at the poses of the last set_poses
         self.position = np.zeros((len(self.shapes), 3))
         self.rotation = np.broadcast_to(np.eye(3), (len(self.shapes), 3, 3)).copy()
         self._collide_request = fcl.CollisionRequest()
@@ -127,6 +128,7 @@ class RobotCollisionModel:
     def sync(self, positions: np.ndarray, rotations: np.ndarray) -> None:
         """Move every FCL object to its link's pose (``positions`` (L, 3), ``rotations`` (L, 3, 3) by row)."""
         self.position, self.rotation = self.world_poses(positions, rotations)
+        self._stale = [False] * len(self.shapes)
         rotation, position = self.rotation, self.position
         for obj, i in self._eager:
             obj.setRotation(rotation[i])
@@ -134,16 +136,29 @@ class RobotCollisionModel:
         for obj, hull in self._hulls:
             hull.setTransform(obj.getTransform())
 
+    def set_poses(self, positions: np.ndarray, rotations: np.ndarray) -> None:
+        """:meth:`sync`, except that each FCL object is moved only when :meth:`object` or :meth:`solid_object` first
+        asks for it: a query that measures a few shapes moves only those (:attr:`objects` may be out of date)."""
+        self.position, self.rotation = self.world_poses(positions, rotations)
+        self._stale = [True] * len(self.shapes)
+
     def object(self, i: int) -> fcl.CollisionObject:
         """Shape ``i``'s FCL object at the synced pose."""
         obj = self.objects[i]
         if self.lazy[i]:
             obj.setTranslation(self.position[i])
+        elif self._stale[i]:
+            obj.setRotation(self.rotation[i])
+            obj.setTranslation(self.position[i])
+            if self.solid_objects[i] is not obj:
+                self.solid_objects[i].setTransform(obj.getTransform())
+            self._stale[i] = False
         return obj
 
     def solid_object(self, i: int) -> fcl.CollisionObject:
         """Shape ``i``'s object for depth and swept queries (a mesh's hull) at the synced pose."""
-        return self.object(i) if self.lazy[i] else self.solid_objects[i]
+        obj = self.object(i)
+        return obj if self.lazy[i] else self.solid_objects[i]
 
     def ball_centres(self) -> np.ndarray:
         """(n, 3) world centres of the shapes' enclosing balls (radii :attr:`ball_radius`) at the synced poses."""

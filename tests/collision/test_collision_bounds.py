@@ -220,3 +220,47 @@ def test_moved_obstacles_keep_exact_point_distances_at_any_orientation():
                 assert expected == pytest.approx(exact, abs=1e-6)
             else:
                 assert expected <= 1e-6
+
+
+# ------------------------------------------------------------------------ the nearest pair alone (per_link=False)
+@pytest.mark.parametrize("fidelity, padding", [("primitive", 0.0), ("mesh", 0.01), ("spheres", 0.005)])
+def test_nearest_pair_checker_reports_what_the_per_link_checker_does(make_env, fidelity, padding):
+    """ClutterFly-v0 measures only the robot's nearest pair. Along random-action flights through generated volumes
+    (crashes into the floor and the clutter included), a per-link checker of the same model, given the same scenes
+    and states, must report the same clearance, nearest pair, witness points, contacts and swept hits."""
+    env = make_env("ClutterFly-v0", volume_size=(6.0, 6.0, 3.0), obstacle_density=0.15,
+                   collision_fidelity=fidelity, collision_padding=padding)
+    checker = env.unwrapped.checker
+    assert not checker.per_link
+    reference = CollisionChecker(
+        RobotCollisionModel(checker.model.shapes, checker.model.link_names, padding), checker._base_link,
+        contact_tolerance=checker.contact_tolerance, clearance_range=checker.clearance_range,
+        swept_speed=checker.swept_speed, dt=checker.dt)
+    set_scene, check = checker.set_scene, checker.check
+    checker.set_scene = lambda obstacles, bodies: (reference.set_scene(obstacles, bodies), set_scene(obstacles, bodies))
+    seen = {"in range": 0, "contacts": 0, "tunneling": 0}
+
+    def compared(state, pybullet_contacts=()):
+        got, expected = check(state, pybullet_contacts), reference.check(state, pybullet_contacts)
+        assert got.min_clearance == expected.min_clearance
+        assert got.closest == expected.closest
+        np.testing.assert_array_equal(got.witness, expected.witness)
+        assert [(c.link, c.obstacle, c.depth) for c in got.contacts] == [
+            (c.link, c.obstacle, c.depth) for c in expected.contacts]
+        for a, b in zip(got.contacts, expected.contacts):
+            np.testing.assert_array_equal(a.position, b.position)
+        assert got.tunneling == expected.tunneling
+        assert got.link_clearance is None and got.directions is None
+        seen["in range"] += got.closest is not None
+        seen["contacts"] += got.in_contact
+        seen["tunneling"] += got.tunneling > 0
+        return got
+
+    checker.check = compared
+    rng = np.random.default_rng(3)
+    env.reset(seed=3)
+    for _ in range(600):
+        _, _, terminated, truncated, _ = env.step(rng.uniform(-1.0, 1.0, 4))
+        if terminated or truncated:
+            env.reset()
+    assert seen["in range"] > 300 and seen["contacts"] > 3, seen
