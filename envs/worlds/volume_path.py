@@ -9,7 +9,8 @@ space (26 neighbours alone: 13%). In open space every move is an edge; next to o
 down to the 6 face moves, which is the connectivity the generator certified reachability with.
 
 The goal joins the graph as one more node, linked to those of the eight cell centres around it whose segment to it
-is certified the same way; the search (Dijkstra, ``scipy.sparse.csgraph``) runs once per episode from it. A query
+is certified the same way; the search (Dijkstra on the grid in place, ``worlds/grid_search.py``) runs once per
+episode from it. A query
 point p takes the least of D(c) + |p - c| over the eight centres c around it whose segment to p is certified. Each
 such value is the length of a collision-free path for the sphere, so the field is an upper bound on the true
 shortest path length wherever a certified centre exists: at least wherever p's clearance exceeds r plus a cell's
@@ -29,9 +30,8 @@ from collections.abc import Iterator
 
 import numpy as np
 from scipy import ndimage
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import dijkstra
 
+from clutter_gym.worlds.grid_search import FROM_SOURCE, search_grid
 from clutter_gym.worlds.volume_grid import cell_index, scene_clearance
 from clutter_gym.worlds.volume_scene import VolumeScene
 from clutter_gym.worlds.volume_spec import VolumeSpec
@@ -54,13 +54,10 @@ MOVES = _forward_moves()
 
 
 @functools.cache
-def _moves(h: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Every move (both directions; cells), its length (metres, for cell edges ``h``), the distinct lengths and
-    each move's index among them."""
+def _moves(h: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
+    """Every move (both directions; cells) and its length (metres, for cell edges ``h``)."""
     moves = np.array([*MOVES, *(tuple(-d for d in m) for m in MOVES)])
-    lengths = np.linalg.norm(moves * np.array(h), axis=1)
-    classes, class_of = np.unique(np.round(lengths, 12), return_inverse=True)
-    return moves, lengths, classes, class_of
+    return moves, np.linalg.norm(moves * np.array(h), axis=1)
 
 
 class VolumePathDistance:
@@ -83,13 +80,10 @@ class VolumePathDistance:
         # above r + |p - c| for every centre c around a point p, so the cap never decides a certificate
         self._clear = scene_clearance(scene, spec, robot_radius + 2.0 * float(self._h.max()))
         self._clear_flat = self._clear.ravel()
-        shape = self._clear.shape
-        n = math.prod(shape)
         links, link_lengths = self._goal_links()
-        distance, predecessors = dijkstra(self._graph(links, link_lengths), indices=n, return_predecessors=True)
-        self._distance_flat = distance[:n]
-        self._distance = self._distance_flat.reshape(shape)
-        self._next = predecessors[:n]  # each cell's next node on its way to the goal (node n)
+        self._distance_flat, self._next = search_grid(self._clear, self._r, *_moves(tuple(self._h_list)), links,
+                                                      link_lengths)  # _next: each cell's next cell towards the goal
+        self._distance = self._distance_flat.reshape(self._clear.shape)
 
     @property
     def values(self) -> np.ndarray:
@@ -100,42 +94,6 @@ class VolumePathDistance:
     def _filled(self) -> tuple[np.ndarray, np.ndarray]:
         """:meth:`_fill_unreachable`, on first use: a robot that never leaves the certified cells never needs it."""
         return self._fill_unreachable()
-
-    def _graph(self, links: np.ndarray, link_lengths: np.ndarray) -> csr_matrix:
-        """The search graph: every certified move between cell centres (both directions), and the goal node's links
-        out of it (the search starts there, so no edge needs to lead into it), built row by row straight into CSR
-        form (a row's moves in :func:`_moves` order, which decides the search's ties)."""
-        clear, shape = self._clear, self._clear.shape
-        n = clear.size
-        moves, lengths, classes, class_of = _moves(tuple(self._h_list))
-        pad = 2  # the longest move spans two cells along an axis
-        free = np.zeros((len(classes), *(k + 2 * pad for k in shape)), dtype=bool)
-        inner = (slice(pad, -pad),) * 3
-        for c, length in enumerate(classes):  # centres certified for a move of this length
-            free[(c, *inner)] = clear > self._r + 0.5 * length
-        # ok[k, i]: move k from cell i is an edge; one contiguous plane per move, then transposed to rows of cells
-        ok = np.empty((len(moves), *shape), dtype=bool)
-        for k, (move, c) in enumerate(zip(moves, class_of)):
-            target = tuple(slice(pad + d, pad + d + m) for d, m in zip(move, shape))
-            np.logical_and(free[(c, *inner)], free[(c, *target)], out=ok[k])
-        rows = np.ascontiguousarray(ok.reshape(len(moves), n).T)
-        edges = np.flatnonzero(rows).astype(np.int32)  # row by row (int32: the search's own index type)
-        sources = edges // np.int32(len(moves))
-        kinds = edges - sources * np.int32(len(moves))
-        offsets = (moves @ np.array([shape[1] * shape[2], shape[2], 1])).astype(np.int32)
-        indptr = np.empty(n + 2, dtype=np.int32)
-        indptr[0] = 0
-        np.cumsum(rows.sum(axis=1, dtype=np.int32), out=indptr[1:-1])
-        indptr[-1] = len(edges) + len(links)
-        # np.take with mode="clip" writes straight into ``out`` (mode="raise" buffers it); every kind is in range
-        indices = np.empty(len(edges) + len(links), dtype=np.int32)
-        np.take(offsets, kinds, out=indices[:len(edges)], mode="clip")
-        indices[:len(edges)] += sources
-        indices[len(edges):] = links
-        data = np.empty(len(indices))
-        np.take(lengths, kinds, out=data[:len(edges)], mode="clip")
-        data[len(edges):] = link_lengths
-        return csr_matrix((data, indices, indptr), shape=(n + 1, n + 1))
 
     def _around(self, point: tuple[float, float, float]) -> list[tuple[int, float, tuple[float, float, float]]]:
         """(flat index, distance from ``point`` in metres, centre) of each of the (up to eight distinct) cell centres
@@ -235,11 +193,10 @@ class VolumePathDistance:
             cell = best[0]
         else:
             cell = int(self._filled[1][np.ravel_multi_index(cell_index(point, self._spec), self._clear.shape)])
-        n = self._clear.size
         if cell >= 0:
             _, ny, nz = self._clear.shape
             cx, cy, cz = self._axes
-            while cell != n:
+            while cell != FROM_SOURCE:
                 i, rest = divmod(cell, ny * nz)
                 j, k = divmod(rest, nz)
                 yield (cx[i], cy[j], cz[k])
