@@ -7,7 +7,9 @@ import math
 import numpy as np
 import pytest
 
+from benchmarks.fly_floor import FlyFloor
 from benchmarks.fly_throughput import (
+    FLOOR,
     FLY,
     IMU,
     KIN_PEER,
@@ -76,17 +78,19 @@ def test_peer_truncation_rules(peer):
 def test_every_workload_gives_finite_positive_rates():
     workloads = make_workloads()
     assert list(workloads) == list(WORKLOADS)
+    floor = FlyFloor(0)
     try:
         calls = {label: pybullet_calls_per_step(env, shape, np.random.default_rng(0), 2)
                  for label, (env, shape) in workloads.items()}
         scans = {label: time_scans(workloads[label][0]) for label in (LIDAR30, LIDAR10)}
-        blocks = measure(workloads, steps=3, rounds=2)
+        blocks = measure(workloads, steps=3, rounds=2, floor=floor)
         # one action stream for every ClutterFly-v0 variant: the same flight, whatever the sensors
         positions = [workloads[label][0].unwrapped.robot.state().position for label in FLY]
         assert all(np.array_equal(p, positions[0]) for p in positions)
     finally:
         for env, _ in workloads.values():
             env.close()
+        floor.close()
     assert calls[KIN_PEER] == CALLS_PER_STEP and calls[IMU] > 0
     for label, bs in blocks.items():
         assert len(bs) == 2, label
@@ -97,6 +101,22 @@ def test_every_workload_gives_finite_positive_rates():
     assert 1 <= scans[LIDAR10].calls["scan"] <= 6 and scans[LIDAR30].seconds["scan"] > 0.0
     text = report(blocks, calls, scans)
     assert text.count("\n| ") == len(WORKLOADS) and "Kinematic:" in text and "Camera:" in text
+    assert FLOOR in blocks and "Floor:" in text
+
+
+def test_the_floor_replays_the_recorded_flight_exactly():
+    """The twin, given the recorder's forces tick by tick and reset where its episodes ended, retraces its flight:
+    the same scenes, the same physics, the same final state to the bit."""
+    floor = FlyFloor(0)
+    try:
+        wall, cpu, resets = floor.run(np.random.default_rng(3).uniform(-1.0, 1.0, (300, 4)).astype(np.float32))
+        flown, replayed = floor.recorder.unwrapped.robot.state(), floor.twin.unwrapped.robot.state()
+    finally:
+        floor.close()
+    assert resets >= 1 and wall > 0.0 and cpu > 0.0
+    for a, b in ((flown.position, replayed.position), (flown.rotation, replayed.rotation),
+                 (flown.linear_velocity, replayed.linear_velocity)):
+        np.testing.assert_array_equal(a, b)
 
 
 def test_phase_profile_accounts_for_the_step():
