@@ -34,6 +34,8 @@ ROTOR_SPIN = (1.0, -1.0, 1.0, -1.0)
 #: Links whose states are read every control step: every link with collision geometry, the IMU and the sensor mount.
 TRACKED_LINKS = ("battery", "arm_1", "arm_2", "arm_3", "arm_4", *ROTOR_LINKS, "imu", "sensor_mount")
 CONTROL_MODES = ("rates", "motors")
+#: The whole airframe's colour in renders (the URDF's "frame" material): a merged body's base takes one colour.
+AIRFRAME_COLOUR = (0.15, 0.15, 0.15, 1.0)
 #: Bound of the observed body-frame linear velocity, m/s (faster readings are clipped).
 MAX_OBSERVED_SPEED = 20.0
 
@@ -227,22 +229,28 @@ class Quadrotor:
         return np.full(4, 2.0 * level - 1.0)
 
     def load(self, sim: Sim) -> int:
-        """Load the URDF into ``sim`` with its own inertias, switch off velocity damping and look up links.
+        """Load the URDF into ``sim`` as one rigid body with its own inertia, and switch off velocity damping.
 
-        pybullet recomputes every link's inertia from its collision shapes when it loads a URDF, which is wrong for
-        a link whose mass is not spread like its collision primitive (a rotor's motor and propeller); the URDF's
-        values are set back here, and they are the nominal values :meth:`apply_dynamics` scales.
+        The airframe's links are merged into one pybullet body (``Sim.load_urdf(merge_fixed_links=True)``): its
+        fixed joints add nothing but cost, and the tracked links' states follow from the base's
+        (:class:`RigidFrames`). pybullet recomputes the inertia from the collision shapes when it loads a URDF; the
+        URDF's values are set back here, and they are the nominal values :meth:`apply_dynamics` scales.
 
         Raises:
-            ValueError: a link's URDF inertia has products of inertia (pybullet takes principal moments only).
+            ValueError: a link's URDF inertia has products of inertia (pybullet takes principal moments only), or
+                the merged body's centre of mass is not the URDF's (mass on a link other than the base).
         """
         self._sim = sim
-        self._body = sim.load_urdf("robot", self.urdf_path)
+        self._body = sim.load_urdf("robot", self.urdf_path, merge_fixed_links=True)
         sim.set_damping(self._body, 0.0, 0.0)
+        sim.paint(self._body, AIRFRAME_COLOUR)  # one colour: a camera hides the merged body and shows it again
         sim.hide_from_rays(self._body)
         self.link_index = sim.link_indices(self._body)
         self.link_names = TRACKED_LINKS
         self._com_offset = sim.base_inertial_offset(self._body)
+        if np.abs(self._com_offset - self.model.com).max() > 1e-9:
+            raise ValueError(f"{self.urdf}: the merged body's centre of mass {self._com_offset.tolist()} is not the "
+                             f"URDF's {self.model.com.tolist()}: put the airframe's mass on {self.base_link}")
         dt = 1.0 / sim.physics_hz
         self._decay = self.rotors.decay(dt)
         self._controller = RateController(self.model.inertia, self.config.rate_gains(), dt)

@@ -144,7 +144,11 @@ class Camera:
     def render(self, sim: Sim, state: RobotState) -> dict[str, np.ndarray]:
         """The clean images of the requested modes (depth in metres, 0 where nothing is within [near, far])."""
         c = self.config
-        eye, rotation = sim.link_frame(state.body, state.link_index[c.link])
+        if c.link in state.link_names:  # where the state has it: a merged rigid body's links have no pybullet frame
+            row = state.link(c.link)
+            eye, rotation = state.links.position[row], state.links.rotation[row]
+        else:
+            eye, rotation = sim.link_frame(state.body, state.link_index[c.link])
         view = _view_matrix(eye, rotation)
         rgb, buffer, ids = sim.camera_image(
             c.width, c.height, view, self.projection, "segmentation" in c.modes, behind=state.body

@@ -1,4 +1,4 @@
-"""2D or multi-channel scanning LIDAR: one ``rayTestBatch`` per scan, cast in the mount link's frame."""
+"""2D or multi-channel scanning LIDAR: one ``rayTestBatch`` per scan, cast from the mount link's frame."""
 
 from __future__ import annotations
 
@@ -104,8 +104,10 @@ class Lidar:
         self._dirs = np.stack([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)], axis=1)
         self._d_dirs = np.stack([-np.cos(el) * np.sin(az), np.cos(el) * np.cos(az), 0 * el], axis=1)  # d/d azimuth
         self._centre = np.array([0.0, 0.0, c.mount_height])
-        self.ray_starts = (self._centre + c.min_range * self._dirs).tolist()  # constant: pybullet moves them
-        self.ray_ends = (self._centre + c.max_range * self._dirs).tolist()  # with the mount link
+        self._starts = self._centre + c.min_range * self._dirs  # mount frame
+        self._ends = self._centre + c.max_range * self._dirs
+        # as lists too, for pybullet to move with a mount link of its own (it converts lists faster than arrays)
+        self.ray_starts, self.ray_ends = self._starts.tolist(), self._ends.tolist()
         self._span = c.max_range - c.min_range
         self._episode = LidarEpisode()
 
@@ -114,11 +116,19 @@ class Lidar:
 
     def read_clean(self, sim: Sim, state: RobotState, starts: np.ndarray | None = None, ends: np.ndarray | None = None):
         """Exact ranges (metres) from the mount origin, ``max_range`` where nothing is hit; the beams given by
-        ``starts`` and ``ends`` (mount frame) or the scan's own."""
-        link = state.link_index[self.config.link]
-        if starts is None or ends is None:
-            starts, ends = self.ray_starts, self.ray_ends
-        fractions = sim.ray_hit_fractions(starts, ends, body=state.body, link=link)
+        ``starts`` and ``ends`` (mount frame) or the scan's own.
+
+        A mount among the state's tracked links is placed where the state has it (a link of a rigid body merged
+        into one pybullet body has no pybullet frame); any other is pybullet's link, which moves the rays itself.
+        """
+        if self.config.link in state.link_names:
+            row = state.link(self.config.link)
+            origin, axes = state.links.position[row], state.links.rotation[row]
+            starts, ends = (self._starts, self._ends) if starts is None or ends is None else (starts, ends)
+            fractions = sim.ray_hit_fractions(starts @ axes.T + origin, ends @ axes.T + origin)
+        else:
+            starts, ends = (self.ray_starts, self.ray_ends) if starts is None or ends is None else (starts, ends)
+            fractions = sim.ray_hit_fractions(starts, ends, body=state.body, link=state.link_index[self.config.link])
         return (self.config.min_range + fractions * self._span).reshape(self.config.shape)
 
     def read(self, sim: Sim, state: RobotState, rng: np.random.Generator) -> np.ndarray:

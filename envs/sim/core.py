@@ -169,7 +169,8 @@ class Sim(Actuation, ObstacleBodies, Rendering):
         return self._register(name, self._static_bodies(shape, visual, [(0.0, 0.0, 0.0)])[0])
 
     def load_urdf(
-        self, name: str, path: str | Path, position: Sequence[float] = (0.0, 0.0, 0.0), fixed_base: bool = False
+        self, name: str, path: str | Path, position: Sequence[float] = (0.0, 0.0, 0.0), fixed_base: bool = False,
+        merge_fixed_links: bool = False,
     ) -> int:
         """Load a URDF once and address it by ``name``; returns its body id.
 
@@ -182,6 +183,11 @@ class Sim(Actuation, ObstacleBodies, Rendering):
             path: the URDF file.
             position: base position in metres, world frame.
             fixed_base: fix the base to the world.
+            merge_fixed_links: make links joined by fixed joints one body (``URDF_MERGE_FIXED_LINKS``), with all
+                their collision shapes and visuals: a rigid robot then costs one body a physics tick, not one per
+                link. pybullet puts the merged centre of mass at the mass-weighted mean of the links' frame origins
+                (not of their centres of mass), so merge only a URDF whose mass sits on links at their centres of
+                mass (a rigid airframe's whole mass on its base); the merged links no longer have link indices.
 
         Raises:
             FileNotFoundError: ``path`` does not exist.
@@ -192,10 +198,8 @@ class Sim(Actuation, ObstacleBodies, Rendering):
             raise FileNotFoundError(f"URDF not found: {path}")
         try:
             with quiet_c_output():
-                body = pb.loadURDF(
-                    str(path), position, useFixedBase=fixed_base, flags=pb.URDF_USE_IMPLICIT_CYLINDER,
-                    physicsClientId=self._cid,
-                )
+                flags = pb.URDF_USE_IMPLICIT_CYLINDER | (pb.URDF_MERGE_FIXED_LINKS if merge_fixed_links else 0)
+                body = pb.loadURDF(str(path), position, useFixedBase=fixed_base, flags=flags, physicsClientId=self._cid)
         except pb.error as exc:
             raise ValueError(f"pybullet could not load URDF {path}: {exc}") from exc
         self._body_ids.add(body)

@@ -116,16 +116,24 @@ class Rendering:
         """(link, rgba) of each link of ``body`` with a visual shape (read once, cached).
 
         Raises:
-            ValueError: a link has several visual shapes: pybullet's ``changeVisualShape`` ignores its shape index,
-                so they could not get their colours back.
+            ValueError: a link has visual shapes of several colours: pybullet's ``changeVisualShape`` ignores its
+                shape index, so they could not get their colours back (:meth:`paint` gives them one).
         """
         if body not in self._visuals:
-            links = [data[1] for data in pb.getVisualShapeData(body, physicsClientId=self._cid)]
+            shapes = pb.getVisualShapeData(body, physicsClientId=self._cid)
+            colours = dict.fromkeys((data[1], data[7]) for data in shapes)  # (link, colour) pairs, once each
+            links = [link for link, _ in colours]
             if len(set(links)) != len(links):
-                raise ValueError(f"body {body} has a link with several visual shapes; give each its own link")
-            colours = [data[7] for data in pb.getVisualShapeData(body, physicsClientId=self._cid)]
-            self._visuals[body] = list(zip(links, colours))
+                raise ValueError(f"body {body} has a link with visual shapes of several colours; paint it one colour")
+            self._visuals[body] = list(colours)
         return self._visuals[body]
+
+    def paint(self, body: int, rgba: Sequence[float]) -> None:
+        """Give every visual shape of ``body`` the colour ``rgba`` (channels in [0, 1]); a link made of several
+        visual shapes (a merged rigid body's base) can only be hidden and shown again in one colour."""
+        for link in range(-1, pb.getNumJoints(body, physicsClientId=self._cid)):
+            pb.changeVisualShape(body, link, rgbaColor=rgba, physicsClientId=self._cid)
+        self._visuals.pop(body, None)
 
     def use_egl(self) -> None:
         """Render camera images with the EGL (OpenGL, headless) plugin instead of TinyRenderer.

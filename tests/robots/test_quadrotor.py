@@ -21,7 +21,7 @@ from clutter_gym.robots.aero import ground_effect_gain, rotor_drag
 from clutter_gym.robots.quadrotor import ROTOR_SPIN
 from clutter_gym.robots.rate_loop import Mixer, allocation
 from clutter_gym.robots.rigid_body import rigid_body
-from clutter_gym.sim import Sim
+from clutter_gym.sim import Sim, pb
 
 HZ = 240.0
 DT = 1.0 / HZ
@@ -85,6 +85,42 @@ def test_urdf_mass_properties_are_the_stated_closed_forms_and_crazyflie_sized(si
         urdf_mass, urdf_inertia = body.link_inertias[names[link]]
         assert mass == urdf_mass
         np.testing.assert_array_equal(inertia, np.diag(urdf_inertia))
+
+
+def _box(m: float, x: float, y: float, z: float) -> np.ndarray:
+    return m * np.diag([y * y + z * z, x * x + z * z, x * x + y * y]) / 12.0
+
+
+def _cylinder(m: float, r: float, h: float) -> np.ndarray:
+    return m * np.diag([(3 * r * r + h * h) / 12.0, (3 * r * r + h * h) / 12.0, r * r / 2.0])
+
+
+def test_base_link_carries_the_parts_closed_forms_composed(sims):
+    """The URDF header's parts (PCB, battery, four arms, four propeller discs and motors) composed with the
+    parallel-axis theorem give base_link's mass, centre of mass and inertia, which pybullet's merged body holds."""
+    a = 0.046 / math.sqrt(2.0)
+    parts = [(0.009, np.zeros(3), _box(0.009, 0.035, 0.035, 0.0016)),
+             (0.0072, np.array([0.0, 0.0, -0.010]), _box(0.0072, 0.032, 0.020, 0.0075))]
+    for yaw, (sx, sy) in zip((-0.25, -0.75, 0.75, 0.25), ((1, -1), (-1, -1), (-1, 1), (1, 1))):
+        c, s = math.cos(math.pi * yaw), math.sin(math.pi * yaw)
+        turn = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+        parts.append((0.0005, turn @ [0.027, 0.0, 0.0], turn @ _box(0.0005, 0.030, 0.005, 0.0016) @ turn.T))
+        hub = np.array([sx * a, sy * a, 0.018])
+        parts += [(0.0004, hub, _cylinder(0.0004, 0.0231, 0.004)),
+                  (0.0018, hub + [0.0, 0.0, -0.012], _cylinder(0.0018, 0.0035, 0.020))]
+    mass = sum(m for m, _, _ in parts)
+    com = sum(m * p for m, p, _ in parts) / mass
+    inertia = sum(i + m * ((p - com) @ (p - com) * np.eye(3) - np.outer(p - com, p - com)) for m, p, i in parts)
+    body = rigid_body(asset_path("robots/quadrotor.urdf"))
+    assert body.mass == pytest.approx(mass, rel=1e-12)
+    np.testing.assert_allclose(body.com, com, atol=1e-15)
+    np.testing.assert_allclose(body.inertia, inertia, rtol=1e-12, atol=1e-18)  # the file's 13 digits
+    sim, robot = make(sims)
+    assert sim.link_indices(robot.body) == {"base_link": -1}  # one merged body
+    (merged_mass, _, merged_inertia), = sim.inertial_properties(robot.body, [-1])
+    assert merged_mass == body.mass
+    np.testing.assert_array_equal(merged_inertia, np.diag(body.inertia))
+    np.testing.assert_allclose(sim.base_inertial_offset(robot.body), body.com, atol=1e-15)
 
 
 # ----------------------------------------------------------------------------------------------------- physics
@@ -309,15 +345,24 @@ def test_same_commands_give_the_same_trajectory(sims):
 
 
 def test_link_states_from_the_base_match_pybullets_link_reads_while_tumbling(sims):
-    """The rigid airframe's link states are computed from the base state: they must be what pybullet's own link
-    reads give (positions, axes, centre-of-mass velocities, rates), to rounding, at full roll and yaw rates."""
+    """The airframe is one merged pybullet body, so its links' states are computed from the base state: they must be
+    what pybullet's own link reads of the same URDF loaded link by link give (positions, axes, centre-of-mass
+    velocities, rates), to rounding, with its base put in the same state, at full roll and yaw rates."""
     sim, robot = make(sims)
+    reference = Sim(physics_hz=HZ)
+    sims.append(reference)
+    body = reference.load_urdf("links", robot.urdf_path)
+    links = reference.link_indices(body)
+    tracked = [links[name] for name in robot.link_names]
     robot.apply_action(np.array([0.2, 1.0, -0.7, 1.0]))  # climbing, rolling, pitching and yawing at full rates
-    tracked = [robot.link_index[name] for name in robot.link_names]
     worst = np.zeros(4)
     for _ in range(40):
         run(sim, robot, 6)
-        mine, engine = robot.state().links, sim.link_states(robot.body, tracked)
+        com, quaternion = pb.getBasePositionAndOrientation(robot.body, physicsClientId=sim.client_id)
+        linear, angular = pb.getBaseVelocity(robot.body, physicsClientId=sim.client_id)
+        pb.resetBasePositionAndOrientation(body, com, quaternion, physicsClientId=reference.client_id)
+        pb.resetBaseVelocity(body, linear, angular, physicsClientId=reference.client_id)
+        mine, engine = robot.state().links, reference.link_states(body, tracked)
         for k, field in enumerate(("position", "rotation", "linear_velocity", "angular_velocity")):
             worst[k] = max(worst[k], np.abs(getattr(mine, field) - getattr(engine, field)).max())
     assert np.linalg.norm(robot.state().angular_velocity) > 2.0  # it tumbles
@@ -342,3 +387,25 @@ def test_env_calls_before_tick_once_per_physics_tick(make_env, monkeypatch):
     env.reset(seed=0)
     env.step(np.zeros(2))
     assert Ticked.ticks == env.unwrapped.substeps > 1
+
+
+def test_a_urdf_with_mass_off_the_base_is_refused_at_load(tmp_path):
+    """pybullet would put the merged body's centre of mass at the mass-weighted link frame origins, not where the
+    mass is: load refuses such a URDF instead of flying it with the wrong centre of mass."""
+    text = asset_path("robots/quadrotor.urdf").read_text()
+    arm = text.index('<link name="arm_1">')  # its mass given at its centre, 27 mm out along its frame's x axis
+    moved = text[:arm] + text[arm:].replace('<mass value="0"/>', '<origin xyz="0.027 0 0"/><mass value="0.0005"/>', 1)
+    path = tmp_path / "quadrotor.urdf"
+    path.write_text(moved.replace('<mass value="0.027"/>', '<mass value="0.0265"/>'))
+
+    class Moved(Quadrotor):
+        @property
+        def urdf_path(self):
+            return path
+
+    sim = Sim(physics_hz=HZ)
+    try:
+        with pytest.raises(ValueError, match="centre of mass .* put the airframe's mass on base_link"):
+            Moved().load(sim)
+    finally:
+        sim.close()
