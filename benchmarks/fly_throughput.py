@@ -212,7 +212,8 @@ PHASES = (
     ("sim.contact_distances: pybullet contact points", 0),
     ("checker.check: FCL clearance, contacts, swept audit", 0),
     ("sync: move the FCL shapes", 1),
-    ("_measure: bounds and FCL distances", 1),
+    ("_lower_bounds: every pair's bound, in numpy", 1),
+    ("_nearest_pair: FCL distances in order of the bounds", 1),
     ("_contacts", 1),
     ("_swept: the swept (tunneling) audit", 1),
     ("_observe: sensors, goal, proprioception", 0),
@@ -244,15 +245,16 @@ class StepProfile:
         u.robot.state = t.wrap(names[2], u.robot.state)
         u.sim.contact_distances = t.wrap(names[3], u.sim.contact_distances)
         u.checker.check = t.wrap(names[4], u.checker.check)
-        for attr, name in zip(("sync", "_measure", "_contacts", "_swept"), names[5:9], strict=True):
+        for attr, name in zip(("sync", "_lower_bounds", "_nearest_pair", "_contacts", "_swept"), names[5:10],
+                              strict=True):
             setattr(u.checker, attr, t.wrap(name, getattr(u.checker, attr)))
-        u._observe = t.wrap(names[9], u._observe)
+        u._observe = t.wrap(names[10], u._observe)
         for sensor in u.sensors:
             for attr in ("read", "observe", "info"):
-                setattr(sensor, attr, t.wrap(names[10], getattr(sensor, attr)))
-        u.task.observe = t.wrap(names[11], u.task.observe)
-        u.robot.observe = t.wrap(names[12], u.robot.observe)
-        u.task.evaluate = t.wrap(names[13], u.task.evaluate)
+                setattr(sensor, attr, t.wrap(names[11], getattr(sensor, attr)))
+        u.task.observe = t.wrap(names[12], u.task.observe)
+        u.robot.observe = t.wrap(names[13], u.robot.observe)
+        u.task.evaluate = t.wrap(names[14], u.task.evaluate)
 
     def run(self, steps: int) -> None:
         """``steps`` uniform-random-action steps, timed; episodes that end are reset untimed."""

@@ -38,8 +38,10 @@ from clutter_gym.worlds.scene import Obstacle
 
 #: Clearance reported when there is nothing to measure against (an empty scene without walls), metres.
 NO_OBSTACLE_CLEARANCE = 1e3
-#: scenes with at most this many obstacles bound every pair; larger ones first keep those near the robot
-SMALL_SCENE = 64
+#: scenes with at most this many obstacles bound every pair; larger ones first keep those near the robot. The bounds
+#: cost numpy's per-call overhead more than their arithmetic: for 14 shapes every pair costs less than filtering up to
+#: about 190 obstacles (docs/collision.md)
+SMALL_SCENE = 128
 #: metres taken off every bound, so that rounding in its arithmetic cannot lift it above an exact distance
 BOUND_SLACK = 1e-9
 #: in a scene larger than ``SMALL_SCENE``, a shape's candidates are sorted this many at a time (nearest first)
