@@ -69,11 +69,7 @@ def _search(free, limits, offsets, lengths, sources, source_lengths):  # pragma:
         if source_lengths[s] < distance[v]:
             distance[v] = source_lengths[s]
             predecessor[v] = FROM_SOURCE
-            if where[v] < 0:
-                heap[size] = v
-                where[v] = size
-                size += 1
-            _sift_up(heap, where, distance, where[v])
+            size = _lowered(heap, where, distance, v, size)
     while size > 0:
         u = heap[0]
         where[u] = -2
@@ -95,12 +91,20 @@ def _search(free, limits, offsets, lengths, sources, source_lengths):  # pragma:
             if d < distance[v]:
                 distance[v] = d
                 predecessor[v] = u
-                if where[v] < 0:
-                    heap[size] = v
-                    where[v] = size
-                    size += 1
-                _sift_up(heap, where, distance, where[v])
+                size = _lowered(heap, where, distance, v, size)
     return distance, predecessor
+
+
+@numba.njit(cache=True, inline="always")
+def _lowered(heap, where, distance, cell, size):  # pragma: no cover (compiled)
+    """Move ``cell``, whose distance just fell, up to its place in the heap (adding it if it is not in it); the
+    heap's new size."""
+    if where[cell] < 0:
+        heap[size] = cell
+        where[cell] = size
+        size += 1
+    _sift_up(heap, where, distance, where[cell])
+    return size
 
 
 @numba.njit(cache=True, inline="always")
