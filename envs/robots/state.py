@@ -22,7 +22,8 @@ class RobotState:
         angular_velocity: base angular velocity (wx, wy, wz), rad/s.
         links: poses and velocities of the links read every step (the IMU and every collision link).
         link_names: names of the rows of ``links``.
-        link_index: pybullet index of every link of the robot by URDF name (-1 for the base); constant.
+        link_index: pybullet index of every link of the robot by URDF name (-1 for the base); constant. Links merged
+            into a rigid base (the quadrotor's) have none: their states are among ``links``.
         body: pybullet body id of the robot.
         joint_position: positions of the robot's actuated joints (rad or m), an arm's; empty for the diffbot.
         joint_velocity: their velocities (rad/s or m/s).

@@ -10,15 +10,14 @@ down to the 6 face moves, which is the connectivity the generator certified reac
 
 The goal joins the graph as one more node, linked to those of the eight cell centres around it whose segment to it
 is certified the same way; the search (Dijkstra on the grid in place, ``worlds/grid_search.py``) runs once per
-episode from it. A query
-point p takes the least of D(c) + |p - c| over the eight centres c around it whose segment to p is certified. Each
-such value is the length of a collision-free path for the sphere, so the field is an upper bound on the true
-shortest path length wherever a certified centre exists: at least wherever p's clearance exceeds r plus a cell's
-diagonal and the centre nearest p is joined to the goal (that centre is then certified for p). When one centre
-certifies the whole segment from p to the goal, the value is the straight distance itself. Elsewhere (the sphere
-touching an obstacle, or a user's goal in a gap narrower than the grid certifies) the field continues as the nearest
-reachable cell's value plus the straight distance to it, so a robot pushed against an obstacle still has a finite,
-well-defined progress; it is not a bound there.
+episode from it. A query point p takes the least of D(c) + |p - c| over the eight centres c around it whose segment
+to p is certified. Each such value is the length of a collision-free path for the sphere, so the field is an upper
+bound on the true shortest path length wherever a certified centre exists: at least wherever p's clearance exceeds r
+plus a cell's diagonal and the centre nearest p is joined to the goal (that centre is then certified for p). When
+one centre certifies the whole segment from p to the goal, the value is the straight distance itself. Elsewhere (the
+sphere touching an obstacle, or a user's goal in a gap narrower than the grid certifies) the field continues as the
+nearest reachable cell's value plus the straight distance to it, so a robot pushed against an obstacle still has a
+finite, well-defined progress; it is not a bound there.
 """
 
 from __future__ import annotations
