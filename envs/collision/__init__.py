@@ -6,10 +6,11 @@ allowed-collision matrix enables (:mod:`.acm`); a :class:`CollisionChecker` meas
 """
 
 from clutter_gym.collision.acm import AllowedCollisionMatrix, generate_acm, load_acm
-from clutter_gym.collision.checker import CollisionChecker, CollisionReport, Contact
+from clutter_gym.collision.checker import CollisionChecker
 from clutter_gym.collision.fidelity import FIDELITY_LEVELS, LinkShape, build_link_shapes, check_fidelity
 from clutter_gym.collision.kinematics import UrdfKinematics
 from clutter_gym.collision.obstacles import obstacle_object
+from clutter_gym.collision.report import CollisionReport, Contact
 from clutter_gym.collision.robot_model import RobotCollisionModel, SelfClearance
 from clutter_gym.collision.urdf_geometry import CollisionElement, load_collision_elements
 
