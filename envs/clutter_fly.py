@@ -123,7 +123,9 @@ class ClutterFlyEnv(ClutterEnv):
     z in [2, 5]; ``obstacle_density`` volume fraction [0, 0.25]; ``ceiling``; ``n_rays`` [1, 4096];
     ``lidar_fov`` rad (0, 2 pi]; ``lidar_range`` m; ``lidar_channels`` [1, 128] and ``lidar_vertical_fov`` rad
     [0, pi/2]; ``camera_size`` (width, height) px; ``camera_modes`` (subset of ("rgb", "depth", "segmentation"));
-    ``camera_fov`` vertical, rad; ``camera_far`` m; ``camera_renderer`` ("tiny" or "egl"); ``physics_hz`` (a
+    ``camera_fov`` vertical, rad; ``camera_far`` m; ``camera_renderer`` ("rays": depth and
+    segmentation ray cast against the exact shapes; "tiny" or "egl" rasterise, and draw rgb too; None, the default:
+    "rays" unless ``camera_modes`` holds "rgb", then "tiny"); ``physics_hz`` (a
     multiple of ``control_hz``); ``control_hz``; ``solver_iterations``; ``aero`` (subset of ("drag",
     "ground_effect")); ``success_radius`` m (0, 2]; ``clearance_margin`` m [0, 1]; ``max_tilt`` rad (0, pi];
     ``terminate_on_collision``; ``contact_tolerance`` m [0, 0.05]; ``collision_fidelity``; ``collision_padding`` m
@@ -161,7 +163,7 @@ class ClutterFlyEnv(ClutterEnv):
         camera_modes: Sequence[str] = ("depth",),
         camera_fov: float = math.radians(58.0),
         camera_far: float = 10.0,
-        camera_renderer: str = "tiny",
+        camera_renderer: str | None = None,
         physics_hz: float = 240.0,
         control_hz: float = 30.0,
         solver_iterations: int = 10,

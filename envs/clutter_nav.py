@@ -109,8 +109,8 @@ class ClutterNavEnv(ClutterEnv):
     ``lidar_mount_height`` m above the lidar link; ``lidar_channels`` [1, 128] and ``lidar_vertical_fov`` rad
     [0, pi/2] (a multi-channel 3D LIDAR); ``camera_size`` (width, height) px; ``camera_modes`` (subset of
     ("rgb", "depth", "segmentation")); ``camera_fov`` vertical, rad; ``camera_far`` m; ``camera_renderer``
-    ("tiny" or "egl"); ``physics_hz`` (a multiple of
-    ``control_hz``); ``control_hz``; ``solver_iterations``; ``max_linear_speed`` m/s; ``max_angular_speed`` rad/s;
+    ("tiny", "egl", or "rays": depth and segmentation only, ray cast against the exact shapes); ``physics_hz`` (a
+    multiple of ``control_hz``); ``control_hz``; ``solver_iterations``; ``max_linear_speed`` m/s; ``max_angular_speed`` rad/s;
     ``success_radius`` m; ``clearance_margin`` m; ``terminate_on_collision``; ``contact_tolerance`` m;
     ``*_weight`` reward weights; ``subgoal_lookahead`` m (0: off); ``safety_horizon`` s [0, 2] (0: off),
     ``safety_margin`` m [0, 0.5] and ``safety_recovery`` s [0, 10] (0: never) (need a 2D ``lidar`` in

@@ -1,8 +1,10 @@
-"""Camera on a robot link: RGB, depth and segmentation from one ``getCameraImage`` per frame.
+"""Camera on a robot link: RGB, depth and segmentation from one ``getCameraImage`` per frame, or depth and
+segmentation ray cast against the world's exact boxes and cylinders.
 
 The image is rendered only when the sensor is due (its rate, see the noise profile's ``camera.rate_hz``) and only
 with the modes asked for. TinyRenderer's cost grows with the triangles of every visual shape in the world and
-with the pixels, so the robots and clutter keep their visual meshes lean.
+with the pixels, so the robots and clutter keep their visual meshes lean; the ray caster's with the pixels and the
+shapes behind each (docs/benchmarks.md has both).
 """
 
 from __future__ import annotations
@@ -30,7 +32,9 @@ from clutter_gym.robots.state import RobotState
 from clutter_gym.sim import Sim
 
 CAMERA_MODES = ("rgb", "depth", "segmentation")
-RENDERERS = ("tiny", "egl")
+RENDERERS = ("tiny", "egl", "rays")
+#: The modes the ray caster draws (it has no colours).
+RAY_MODES = ("depth", "segmentation")
 #: Segmentation classes, by value: what each pixel shows.
 SEGMENTATION_CLASSES = ("nothing", "ground", "obstacle", "robot", "goal")
 
@@ -43,7 +47,10 @@ class CameraConfig:
     vertical_fov: radians, (0, pi); 58 degrees is the RealSense D435's depth field of view.
     near, far: clipping planes in metres; nothing closer than ``near`` or beyond ``far`` is seen, and depth
         pixels there read 0 (no data).
-    renderer: "tiny" (TinyRenderer, CPU, always available) or "egl" (OpenGL through the EGL plugin).
+    renderer: "tiny" (TinyRenderer, CPU, always available), "egl" (OpenGL through the EGL plugin) or "rays" (depth
+        and segmentation only, ray cast on the CPU against the exact boxes, cylinders, ground and markers of the
+        world, see :meth:`clutter_gym.sim.Sim.ray_cast_image`; robots are not drawn, so it suits a camera that
+        sees no part of its own robot).
     link: URDF link the camera is mounted on; it looks along the link's +x axis with +z up.
     """
 
@@ -70,6 +77,9 @@ class CameraConfig:
             raise ValueError(f"camera near/far must satisfy 0.001 <= near < far <= 1000 m, got {self.near}, {self.far}")
         if self.renderer not in RENDERERS:
             raise ValueError(f"camera_renderer must be one of {RENDERERS}, got {self.renderer!r}")
+        if self.renderer == "rays" and not set(self.modes) <= set(RAY_MODES):
+            raise ValueError(f"camera_renderer='rays' draws only {RAY_MODES}, but camera_modes is {self.modes!r}: "
+                             "use camera_renderer='tiny' or 'egl' for rgb")
 
     @property
     def intrinsics(self) -> Intrinsics:
@@ -78,22 +88,25 @@ class CameraConfig:
         TinyRenderer samples each pixel at its corner, not its centre, so its principal point is
         ``(width / 2, height / 2 - 1)``, half a pixel off the ``((width - 1) / 2, (height - 1) / 2)`` of a
         centre-sampling renderer, which EGL's OpenGL rasteriser is assumed to be
-        (docs/design-notes.md#pixel-sampling).
+        (docs/design-notes.md#pixel-sampling). The ray caster casts through pixel centres.
         """
         ideal = Intrinsics.from_fov(self.width, self.height, self.vertical_fov)
-        if self.renderer == "egl":
+        if self.renderer != "tiny":
             return ideal
         return Intrinsics(self.width, self.height, ideal.fx, ideal.fy, self.width / 2, self.height / 2 - 1)
 
 
-def camera_config(size: Any, modes: Any, fov: float, far: float, renderer: str,
+def camera_config(size: Any, modes: Any, fov: float, far: float, renderer: str | None,
                   link: str = CameraConfig.link) -> CameraConfig:
     """The camera of an env's ``camera_size``, ``camera_modes``, ``camera_fov``, ``camera_far`` and
-    ``camera_renderer`` keyword arguments, mounted on ``link``; errors name the argument."""
+    ``camera_renderer`` keyword arguments, mounted on ``link``; errors name the argument. Renderer None: "rays"
+    when the modes are ones it draws, else "tiny"."""
     if isinstance(size, (str, bytes)) or not isinstance(size, Sequence) or len(size) != 2:
         raise ValueError(f"camera_size must be (width, height) in pixels, got {size!r}")
     if isinstance(modes, str) or not isinstance(modes, Sequence):
         raise ValueError(f"camera_modes must be a tuple of names, got {modes!r}")
+    if renderer is None:
+        renderer = "rays" if modes and all(m in RAY_MODES for m in modes) else "tiny"
     return CameraConfig(width=size[0], height=size[1], modes=tuple(modes), vertical_fov=fov, far=far, renderer=renderer,
                         link=link)
 
@@ -108,7 +121,6 @@ class Camera:
 
     name = "camera"
     read_every_step = False
-    renders = True
 
     def __init__(self, config: CameraConfig | None = None, rgb_noise: RgbNoise | None = None,
                  depth_noise: DepthNoise | None = None) -> None:
@@ -131,6 +143,7 @@ class Camera:
         self._rgb_episode, self._depth_episode = RgbEpisode(), DepthEpisode()
         self._classes = np.zeros(1, dtype=np.uint8)
         self._egl_loaded = False
+        self.renders = c.renderer != "rays"  # the ray caster needs no visual shapes in the world
 
     def reset(self, sim: Sim, state: RobotState, rng: np.random.Generator) -> None:
         if self.config.renderer == "egl" and not self._egl_loaded:
@@ -149,11 +162,21 @@ class Camera:
             eye, rotation = state.links.position[row], state.links.rotation[row]
         else:
             eye, rotation = sim.link_frame(state.body, state.link_index[c.link])
+        images: dict[str, np.ndarray] = {}
+        if c.renderer == "rays":
+            i = self.intrinsics
+            axes = np.array([rotation[:, 0], -rotation[:, 1], -rotation[:, 2]])  # forward, right, down
+            images["depth"], ids = sim.ray_cast_image(c.width, c.height, eye, axes, (i.fx, i.fy, i.cx, i.cy), c.near,
+                                                      c.far)
+            if "depth" not in c.modes:
+                del images["depth"]
+            if "segmentation" in c.modes:
+                images["segmentation"] = self._classes[np.clip(ids + 1, 0, len(self._classes) - 1)]
+            return images
         view = _view_matrix(eye, rotation)
         rgb, buffer, ids = sim.camera_image(
             c.width, c.height, view, self.projection, "segmentation" in c.modes, behind=state.body
         )
-        images: dict[str, np.ndarray] = {}
         if "rgb" in c.modes:
             images["rgb"] = rgb
         if "depth" in c.modes:

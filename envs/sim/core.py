@@ -18,6 +18,7 @@ import pybullet as pb  # imported quietly by the package first
 
 from clutter_gym.sim.actuation import Actuation
 from clutter_gym.sim.obstacles import ObstacleBodies
+from clutter_gym.sim.primitives import PrimitiveTable
 from clutter_gym.sim.rendering import Rendering
 from clutter_gym.util.quiet import quiet_c_output
 from clutter_gym.util.view_culling import ViewCuller
@@ -75,6 +76,8 @@ class Sim(Actuation, ObstacleBodies, Rendering):
         bodies: body id of each body given a name (:meth:`load_urdf`, :meth:`add_ground`, :meth:`add_marker`).
         culler: bounding spheres and shown colours of the static bodies made here (boxes, cylinders, markers), for
             culling them from the camera frames they cannot appear in (:meth:`camera_image`).
+        primitives: the shapes and poses of the boxes, cylinders, ground and markers made here, which
+            :meth:`ray_cast_image` draws.
     """
 
     def __init__(
@@ -109,6 +112,7 @@ class Sim(Actuation, ObstacleBodies, Rendering):
         self._shapes: dict[tuple, tuple[int, int]] = {}  # (kind, sizes, rgba) -> (collision, visual) shape ids
         self._removed_bodies = 0
         self.culler = ViewCuller()
+        self.primitives = PrimitiveTable()
         pb.setPhysicsEngineParameter(
             fixedTimeStep=1.0 / self.physics_hz,
             numSolverIterations=self._solver_iterations,
@@ -166,7 +170,9 @@ class Sim(Actuation, ObstacleBodies, Rendering):
             pb.GEOM_BOX, halfExtents=(half, half, 0.0005), visualFramePosition=(0.0, 0.0, -0.0005),
             rgbaColor=(0.85, 0.85, 0.8, 1.0), physicsClientId=self._cid,
         )
-        return self._register(name, self._static_bodies(shape, visual, [(0.0, 0.0, 0.0)])[0])
+        body = self._static_bodies(shape, visual, [(0.0, 0.0, 0.0)])[0]
+        self.primitives.add(body, "box", (half, half, 0.0005), (0.0, 0.0, 0.0), offset=(0.0, 0.0, -0.0005))
+        return self._register(name, body)
 
     def load_urdf(
         self, name: str, path: str | Path, position: Sequence[float] = (0.0, 0.0, 0.0), fixed_base: bool = False,
@@ -215,6 +221,7 @@ class Sim(Actuation, ObstacleBodies, Rendering):
             pb.GEOM_CYLINDER, radius=radius, length=0.01, rgbaColor=rgba, physicsClientId=self._cid
         )
         body = self._static_bodies(-1, vis, [(0.0, 0.0, 0.0)], float(np.hypot(radius, 0.005)), rgba)[0]
+        self.primitives.add(body, "cylinder", (radius, radius, 0.005), (0.0, 0.0, 0.0))
         return self._register(name, body)
 
     def _register(self, name: str, body: int) -> int:

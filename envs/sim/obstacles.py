@@ -41,7 +41,10 @@ class ObstacleBodies:
             positions: centres, one per box.
         """
         shapes = self._box_shapes(half_extents, rgba)
-        return self._static_bodies(*shapes, positions, float(np.linalg.norm(half_extents)), rgba)
+        bodies = self._static_bodies(*shapes, positions, float(np.linalg.norm(half_extents)), rgba)
+        for body, position in zip(bodies, positions):
+            self.primitives.add(body, "box", half_extents, position)
+        return bodies
 
     def _box_shapes(self, half_extents: Sequence[float], rgba: Sequence[float]) -> tuple[int, int]:
         """(collision, visual) shape ids of a box, made once per size and colour; static and movable boxes share
@@ -87,14 +90,17 @@ class ObstacleBodies:
                 self._visual_shape(pb.GEOM_CYLINDER, radius=radius, length=height, rgbaColor=rgba),
             )
         bodies = self._static_bodies(*self._shapes[key], positions, float(np.hypot(radius, 0.5 * height)), rgba)
-        for body in bodies:
+        for body, position in zip(bodies, positions):
             pb.changeDynamics(body, -1, collisionMargin=0.0, physicsClientId=self._cid)
+            self.primitives.add(body, "cylinder", (radius, radius, 0.5 * height), position)
         return bodies
 
     def add_movable_box(self, half_extents: Sequence[float], rgba: Sequence[float]) -> int:
         """Add a dynamic box centred at the origin, parked (mass 0) until :meth:`set_mass` gives it a mass; returns
         its body id. Shapes are shared like :meth:`add_static_boxes`'s."""
-        return self._movable_body(*self._box_shapes(half_extents, rgba), float(np.linalg.norm(half_extents)), rgba)
+        body = self._movable_body(*self._box_shapes(half_extents, rgba), float(np.linalg.norm(half_extents)), rgba)
+        self.primitives.add(body, "box", half_extents, (0.0, 0.0, 0.0))
+        return body
 
     def add_movable_cylinder(self, radius: float, height: float, rgba: Sequence[float]) -> int:
         """Add a dynamic upright cylinder centred at the origin, like :meth:`add_movable_box`.
@@ -112,6 +118,7 @@ class ObstacleBodies:
             )
         body = self._movable_body(*self._shapes[key], float(np.hypot(radius, 0.5 * height)), rgba)
         pb.changeDynamics(body, -1, collisionMargin=0.0, physicsClientId=self._cid)
+        self.primitives.add(body, "cylinder", (radius, radius, 0.5 * height), (0.0, 0.0, 0.0))
         return body
 
     def _movable_body(self, collision: int, visual: int, radius: float, rgba: Sequence[float]) -> int:
@@ -144,8 +151,9 @@ class ObstacleBodies:
         poses = [pb.getBasePositionAndOrientation(b, physicsClientId=self._cid) for b in bodies]
         positions = np.array([p for p, _ in poses], dtype=float).reshape(-1, 3)
         rotations = np.array([pb.getMatrixFromQuaternion(q) for _, q in poses], dtype=float).reshape(-1, 3, 3)
-        for body, position in zip(bodies, positions):
+        for body, position, rotation in zip(bodies, positions, rotations):
             self.culler.move(body, position)
+            self.primitives.move(body, position, rotation)
         return positions, rotations
 
     def _visual_shape(self, geometry: int, **kwargs) -> int:
@@ -222,6 +230,7 @@ class ObstacleBodies:
         """Delete a body from the world (its collision and visual shapes stay cached for reuse)."""
         pb.removeBody(body, physicsClientId=self._cid)
         self.culler.remove(body)
+        self.primitives.remove(body)
         self._visuals.pop(body, None)
         self._body_ids.discard(body)
         self._freed.add(body)
@@ -231,7 +240,8 @@ class ObstacleBodies:
         """Show a single-shape body in colour ``rgba`` (channels in [0, 1]), or hide it from every renderer (fully
         transparent shapes are skipped by TinyRenderer: a parked obstacle then costs a camera frame nothing).
 
-        Does nothing in a Sim without :attr:`visuals`."""
+        Only the ray-cast camera's :attr:`primitives` are told in a Sim without :attr:`visuals`."""
+        self.primitives.show(body, visible)
         if not self.visuals:
             return
         colour = (*rgba[:3], rgba[3] if visible else 0.0)
@@ -247,3 +257,4 @@ class ObstacleBodies:
         (x, y, z, w); it has no velocity to reset."""
         pb.resetBasePositionAndOrientation(body, position, quaternion, physicsClientId=self._cid)
         self.culler.move(body, position)
+        self.primitives.move(body, position, pb.getMatrixFromQuaternion(quaternion, physicsClientId=self._cid))

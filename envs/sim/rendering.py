@@ -1,4 +1,5 @@
-"""Pictures of the world: the ``rgb_array`` render, robot-mounted camera images, the GUI camera, EGL.
+"""Pictures of the world: the ``rgb_array`` render, robot-mounted camera images (rasterised, or ray cast for depth
+and segmentation), the GUI camera, EGL.
 
 Part of :class:`clutter_gym.sim.Sim` (a mixin: it uses the client id, the renderer choice, the visual-colour cache
 and the view culler the Sim keeps).
@@ -12,6 +13,7 @@ from collections.abc import Sequence
 import numpy as np
 import pybullet as pb
 
+from clutter_gym.sim.ray_casting import cast_depth
 from clutter_gym.util.quiet import quiet_c_output
 
 _INVISIBLE = (0.0, 0.0, 0.0, 0.0)
@@ -107,6 +109,33 @@ class Rendering:
             return rgb, depth, None
         seg = np.asarray(seg, dtype=np.int64).reshape(height, width)
         return rgb, depth, np.where(seg >= 0, seg & ((1 << 24) - 1), -1)  # low 24 bits: the body id
+
+    def ray_cast_image(
+        self, width: int, height: int, eye: np.ndarray, axes: np.ndarray, intrinsics: tuple[float, float, float, float],
+        near: float, far: float,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Depth and body id per pixel centre, by casting rays against the exact shapes of :attr:`primitives` (the
+        shown boxes, cylinders, ground and markers; robots are not drawn). Needs no visuals and no pybullet call.
+
+        Args:
+            width, height: image size in pixels.
+            eye: (3,) camera centre, world frame, metres.
+            axes: (3, 3) rows: the camera's forward, right and down (image rows grow downwards) in world coordinates.
+            intrinsics: (fx, fy, cx, cy) in pixels, pixel centres at integer coordinates.
+            near, far: metres; only surfaces with depth in [near, far) are seen.
+
+        Returns:
+            Depth along the optical axis (height, width) in metres, 0 where nothing is seen; the body id per pixel
+            (height, width), -1 where there is none.
+        """
+        bodies, kinds, centres, rotations, halves = self.primitives.arrays()
+        depth, hit = np.empty((height, width)), np.empty((height, width), dtype=np.int64)
+        cast_depth(np.asarray(eye, dtype=float), np.ascontiguousarray(axes, dtype=float), *intrinsics, near, far,
+                   kinds, centres, rotations, halves, depth, hit)
+        ids = np.full_like(hit, -1)
+        seen = hit >= 0
+        ids[seen] = bodies[hit[seen]]
+        return depth, ids
 
     def _check_visuals(self) -> None:
         if not self.visuals:

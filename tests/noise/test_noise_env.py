@@ -127,7 +127,7 @@ def test_inf_no_return_reaches_info_but_not_the_observation(make_env):
         ({"noise": {"lidar": {"range_sigma": -1}}}, r"lidar\.range_sigma must be a number in \[0\.0, 1\.0\] m"),
         ({"camera_size": (4, 84)}, r"camera_size\[0\] \(width\) must be an integer in \[8, 1024\]"),
         ({"camera_modes": ("rgb", "thermal")}, r"camera_modes must be a non-empty tuple of names"),
-        ({"camera_renderer": "vulkan"}, r"camera_renderer must be one of \('tiny', 'egl'\)"),
+        ({"camera_renderer": "vulkan"}, r"camera_renderer must be one of \('tiny', 'egl', 'rays'\)"),
         ({"lidar_channels": 0}, r"lidar_channels must be an integer in \[1, 128\]"),
     ],
 )
