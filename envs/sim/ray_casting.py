@@ -20,7 +20,7 @@ from numba import njit
 BOX, CYLINDER = 0, 1
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _box_hit(ex, ey, ez, dx, dy, dz, hx, hy, hz, near):
     """The smallest ray parameter >= near at which the ray e + t d meets the surface of the centred box with half
     extents h (inf if none)."""
@@ -29,19 +29,20 @@ def _box_hit(ex, ey, ez, dx, dy, dz, hx, hy, hz, near):
         if d == 0.0:
             if abs(e) > h:
                 return np.inf
-        else:
-            t1, t2 = (-h - e) / d, (h - e) / d
-            if t1 > t2:
-                t1, t2 = t2, t1
-            t_in, t_out = max(t_in, t1), min(t_out, t2)
-            if t_in > t_out:
-                return np.inf
+            continue
+        inv = 1.0 / d
+        t1, t2 = (-h - e) * inv, (h - e) * inv
+        if t1 > t2:
+            t1, t2 = t2, t1
+        t_in, t_out = max(t_in, t1), min(t_out, t2)
+    if t_in > t_out:
+        return np.inf
     if t_in >= near:
         return t_in
     return t_out if t_out >= near else np.inf
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _cylinder_hit(ex, ey, ez, dx, dy, dz, radius, hz, near):
     """The smallest ray parameter >= near at which the ray e + t d meets the surface of the upright cylinder of
     ``radius`` and half height ``hz`` centred at the origin (inf if none)."""
@@ -66,7 +67,7 @@ def _cylinder_hit(ex, ey, ez, dx, dy, dz, radius, hz, near):
     return best
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def cast_depth(eye, axes, fx, fy, cx, cy, near, far, kinds, centres, rotations, halves, depth, hit):
     """Fill ``depth`` and ``hit`` with what each pixel centre sees.
 
@@ -90,29 +91,34 @@ def cast_depth(eye, axes, fx, fy, cx, cy, near, far, kinds, centres, rotations, 
     height, width = depth.shape
     n = kinds.shape[0]
     rects, nearest = np.empty((n, 4), dtype=np.int64), np.empty(n)
+    corners = np.empty((8, 3))
     for k in range(n):
         nearest[k] = _image_rect(eye, axes, fx, fy, cx, cy, near, centres[k], rotations[k], halves[k], width, height,
-                                 rects[k])
+                                 corners, rects[k])
     depth[:] = np.inf
     hit[:] = -1
     for k in np.argsort(nearest):  # nearest first: a pixel that already sees something nearer skips the test
         if nearest[k] >= far:
             break
-        rot, h = rotations[k], halves[k]
+        rot, h, c = rotations[k], halves[k], centres[k]
         # eye, forward, right and down in the shape's frame
-        e, f, r, dn = (eye - centres[k]) @ rot, axes[0] @ rot, axes[1] @ rot, axes[2] @ rot
+        ex, ey, ez = _to_frame(rot, eye[0] - c[0], eye[1] - c[1], eye[2] - c[2])
+        f0, f1, f2 = _to_frame(rot, axes[0, 0], axes[0, 1], axes[0, 2])
+        r0, r1, r2 = _to_frame(rot, axes[1, 0], axes[1, 1], axes[1, 2])
+        d0, d1, d2 = _to_frame(rot, axes[2, 0], axes[2, 1], axes[2, 2])
         i0, i1, j0, j1 = rects[k]
+        box = kinds[k] == BOX
         for j in range(j0, j1 + 1):
             v = (j - cy) / fy
             for i in range(i0, i1 + 1):
                 if depth[j, i] <= nearest[k]:
                     continue
                 u = (i - cx) / fx
-                dx, dy, dz = f[0] + u * r[0] + v * dn[0], f[1] + u * r[1] + v * dn[1], f[2] + u * r[2] + v * dn[2]
-                if kinds[k] == BOX:
-                    t = _box_hit(e[0], e[1], e[2], dx, dy, dz, h[0], h[1], h[2], near)
+                dx, dy, dz = f0 + u * r0 + v * d0, f1 + u * r1 + v * d1, f2 + u * r2 + v * d2
+                if box:
+                    t = _box_hit(ex, ey, ez, dx, dy, dz, h[0], h[1], h[2], near)
                 else:
-                    t = _cylinder_hit(e[0], e[1], e[2], dx, dy, dz, h[0], h[2], near)
+                    t = _cylinder_hit(ex, ey, ez, dx, dy, dz, h[0], h[2], near)
                 if t < depth[j, i] and t < far:
                     depth[j, i] = t
                     hit[j, i] = k
@@ -122,26 +128,41 @@ def cast_depth(eye, axes, fx, fy, cx, cy, near, far, kinds, centres, rotations, 
                 depth[j, i] = 0.0
 
 
-@njit(cache=True)
-def _image_rect(eye, axes, fx, fy, cx, cy, near, centre, rot, h, width, height, rect):
+@njit(cache=True, error_model="numpy")
+def _to_frame(rot, x, y, z):
+    """The world vector (x, y, z) in the frame whose axes are the columns of ``rot``."""
+    return (rot[0, 0] * x + rot[1, 0] * y + rot[2, 0] * z, rot[0, 1] * x + rot[1, 1] * y + rot[2, 1] * z,
+            rot[0, 2] * x + rot[1, 2] * y + rot[2, 2] * z)
+
+
+@njit(cache=True, error_model="numpy")
+def _image_rect(eye, axes, fx, fy, cx, cy, near, centre, rot, h, width, height, corners, rect):
     """Set ``rect`` to the pixel rectangle (i0, i1, j0, j1), inclusive, that holds the projection of the shape's
     bounding box cut at the near plane (its corners in front of the plane and the points where its edges cross
-    it); return the smallest depth of that cut box (inf, and an empty rectangle, when it lies behind the plane)."""
-    cam = np.empty((8, 3))  # rows: depth, right, down
+    it); return the smallest depth of that cut box (inf, and an empty rectangle, when it lies behind the plane).
+    ``corners``: (8, 3) scratch space."""
+    # the box's centre and half axes in camera coordinates (rows: depth, right, down)
+    rel = (centre[0] - eye[0], centre[1] - eye[1], centre[2] - eye[2])
     for corner in range(8):
-        local = np.array([h[0] if corner & 1 else -h[0], h[1] if corner & 2 else -h[1], h[2] if corner & 4 else -h[2]])
-        cam[corner] = axes @ (rot @ local + centre - eye)
+        for row in range(3):
+            value = axes[row, 0] * rel[0] + axes[row, 1] * rel[1] + axes[row, 2] * rel[2]
+            for m in range(3):
+                half = h[m] if corner & (1 << m) else -h[m]
+                value += half * (axes[row, 0] * rot[0, m] + axes[row, 1] * rot[1, m] + axes[row, 2] * rot[2, m])
+            corners[corner, row] = value
     i0, i1, j0, j1, nearest = width, -1, height, -1, np.inf
     for a in range(8):
         for b in (a, a | 1, a | 2, a | 4):  # the corner itself, then its edges to greater corners
-            za, zb = cam[a, 0], cam[b, 0]
+            za, zb = corners[a, 0], corners[b, 0]
             if b == a:
                 if za < near:
                     continue
-                x, y, z = cam[a, 1], cam[a, 2], za
+                x, y, z = corners[a, 1], corners[a, 2], za
             elif (za < near) != (zb < near):
                 s = (near - za) / (zb - za)
-                x, y, z = cam[a, 1] + s * (cam[b, 1] - cam[a, 1]), cam[a, 2] + s * (cam[b, 2] - cam[a, 2]), near
+                x = corners[a, 1] + s * (corners[b, 1] - corners[a, 1])
+                y = corners[a, 2] + s * (corners[b, 2] - corners[a, 2])
+                z = near
             else:
                 continue
             nearest = min(nearest, z)
