@@ -13,10 +13,10 @@ The workloads: the KIN peer; ClutterFly-v0 at its defaults (IMU only; FCL cleara
 audit every step); with a 16-channel x 64-ray LIDAR cast every control step (30 Hz) and at a 3D LIDAR's 10 Hz
 (the rate is the noise profile's ``lidar.rate_hz``, set through ``noise={"lidar": {"rate_hz": 10}}`` on the clean
 "none" profile: no noise is added, the scan is held between updates); with an 84x84 depth camera rendered every
-control step; and the RGB peer. Then the ratios against the issue's 2x targets, the IMU-only step against the raw
-pybullet work it needs (``benchmarks.fly_floor``, replayed on a twin of that env in the same rounds), what the rays
-cost, and a per-phase profile of the IMU-only step from a stopwatched copy of that env, run as one more block per
-round.
+control step, ray cast (the default) and by TinyRenderer; and the RGB peer. Then the ratios against the issue's
+2x targets, what a camera frame costs either way, the IMU-only step against the raw pybullet work it needs
+(``benchmarks.fly_floor``, replayed on a twin of that env in the same rounds), what the LIDAR's rays cost, and a
+per-phase profile of the IMU-only step from a stopwatched copy of that env, run as one more block per round.
 
     python -m benchmarks.fly_throughput [--steps 400] [--rounds 6]     # about 2 minutes on 2 shared cores
 """
@@ -49,12 +49,15 @@ WORKLOADS: dict[str, tuple[Callable[[], Any], tuple[int, ...]]] = {
     "ClutterFly-v0 + LIDAR 16x64 at 30 Hz": (lambda: gym.make("ClutterFly-v0", **LIDAR), (4,)),
     "ClutterFly-v0 + LIDAR 16x64 at 10 Hz": (
         lambda: gym.make("ClutterFly-v0", **LIDAR, noise={"lidar": {"rate_hz": 10.0}}), (4,)),
-    "ClutterFly-v0 + depth camera 84x84": (
+    "ClutterFly-v0 + depth camera 84x84 (rays)": (
         lambda: gym.make("ClutterFly-v0", sensors=("imu", "camera"), camera_size=(84, 84)), (4,)),
+    "ClutterFly-v0 + depth camera 84x84 (TinyRenderer)": (
+        lambda: gym.make("ClutterFly-v0", sensors=("imu", "camera"), camera_size=(84, 84), camera_renderer="tiny"),
+        (4,)),
     "peer: HoverAviary 64x48 RGB (rebuilt)": (make_drone_camera_workload, (1, 4)),
 }
-KIN_PEER, IMU, LIDAR30, LIDAR10, DEPTH, RGB_PEER = WORKLOADS
-FLY = (IMU, LIDAR30, LIDAR10, DEPTH)
+KIN_PEER, IMU, LIDAR30, LIDAR10, DEPTH, DEPTH_TINY, RGB_PEER = WORKLOADS
+FLY = (IMU, LIDAR30, LIDAR10, DEPTH, DEPTH_TINY)
 TARGET = 2.0  # the issue's "at least 2x the peer"
 FLOOR = "floor: the raw pybullet work of an IMU-only step"
 
@@ -322,12 +325,17 @@ def report(blocks: dict[str, list[Block]], calls: dict[str, float], scans: dict[
 
     kin, kin_step = ratio(IMU, KIN_PEER, "cpu_rate"), ratio(IMU, KIN_PEER, "cpu_step_rate")
     cam, cam_step = ratio(DEPTH, RGB_PEER, "cpu_rate"), ratio(DEPTH, RGB_PEER, "cpu_step_rate")
+    tiny, tiny_step = ratio(DEPTH_TINY, RGB_PEER, "cpu_rate"), ratio(DEPTH_TINY, RGB_PEER, "cpu_step_rate")
+    frame_us = {label: 1e6 / median(blocks[label], "cpu_step_rate") - 1e6 / median(blocks[IMU], "cpu_step_rate")
+                for label in (DEPTH, DEPTH_TINY)}
     lines += [
         "",
         f"Kinematic: ClutterFly-v0 (IMU) / HoverAviary KIN = {kin:.2f}x per CPU-s with resets, {kin_step:.2f}x "
         f"in step() alone: {verdict(kin)}.",
         f"Camera: ClutterFly-v0 (84x84 depth) / HoverAviary 64x48 RGB = {cam:.2f}x with resets, {cam_step:.2f}x "
-        f"in step() alone: {verdict(cam)}.",
+        f"in step() alone: {verdict(cam)}. With TinyRenderer instead of the ray caster: {tiny:.2f}x with resets, "
+        f"{tiny_step:.2f}x in step() alone. A frame costs {frame_us[DEPTH]:,.0f} us of CPU a step ray cast, "
+        f"{frame_us[DEPTH_TINY]:,.0f} us rasterised (each over the IMU-only step).",
     ]
     if FLOOR in blocks:
         floor = median(blocks[FLOOR], "cpu_step_rate")
