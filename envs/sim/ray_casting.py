@@ -30,8 +30,7 @@ def _box_hit(ex, ey, ez, dx, dy, dz, hx, hy, hz, near):
             if abs(e) > h:
                 return np.inf
             continue
-        inv = 1.0 / d
-        t1, t2 = (-h - e) * inv, (h - e) * inv
+        t1, t2 = (-h - e) / d, (h - e) / d
         if t1 > t2:
             t1, t2 = t2, t1
         t_in, t_out = max(t_in, t1), min(t_out, t2)
