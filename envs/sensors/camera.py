@@ -168,25 +168,19 @@ class Camera:
             axes = np.array([rotation[:, 0], -rotation[:, 1], -rotation[:, 2]])  # forward, right, down
             images["depth"], ids = sim.ray_cast_image(c.width, c.height, eye, axes, (i.fx, i.fy, i.cx, i.cy), c.near,
                                                       c.far)
-            if "depth" not in c.modes:
-                del images["depth"]
-            if "segmentation" in c.modes:
-                images["segmentation"] = self._classes[np.clip(ids + 1, 0, len(self._classes) - 1)]
-            return images
-        view = _view_matrix(eye, rotation)
-        rgb, buffer, ids = sim.camera_image(
-            c.width, c.height, view, self.projection, "segmentation" in c.modes, behind=state.body
-        )
-        if "rgb" in c.modes:
-            images["rgb"] = rgb
-        if "depth" in c.modes:
-            # the depth buffer is non-linear in z: invert the projection. TinyRenderer leaves the background a
-            # hair short of the far plane (z = 0.99999 far), so the last millimetre counts as nothing seen.
-            z = c.far * c.near / (c.far - (c.far - c.near) * buffer)
-            images["depth"] = np.where(z < c.far - 1e-3, z, 0.0)
-        if ids is not None:
+        else:
+            view = _view_matrix(eye, rotation)
+            images["rgb"], buffer, ids = sim.camera_image(
+                c.width, c.height, view, self.projection, "segmentation" in c.modes, behind=state.body
+            )
+            if "depth" in c.modes:
+                # the depth buffer is non-linear in z: invert the projection. TinyRenderer leaves the background a
+                # hair short of the far plane (z = 0.99999 far), so the last millimetre counts as nothing seen.
+                z = c.far * c.near / (c.far - (c.far - c.near) * buffer)
+                images["depth"] = np.where(z < c.far - 1e-3, z, 0.0)
+        if "segmentation" in c.modes:
             images["segmentation"] = self._classes[np.clip(ids + 1, 0, len(self._classes) - 1)]
-        return images
+        return {mode: images[mode] for mode in c.modes}
 
     def read(self, sim: Sim, state: RobotState, rng: np.random.Generator) -> dict[str, np.ndarray]:
         images = self.render(sim, state)

@@ -26,9 +26,6 @@ class PrimitiveTable:
         self._hidden: set[int] = set()
         self._arrays: tuple[np.ndarray, ...] | None = None  # shown rows, rebuilt on change
 
-    def __contains__(self, body: int) -> bool:
-        return body in self._rows
-
     def add(self, body: int, kind: str, halves: Sequence[float], position: Sequence[float],
             offset: Sequence[float] = (0.0, 0.0, 0.0)) -> None:
         """Track a body, unrotated at ``position``.
