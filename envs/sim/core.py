@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import operator
+import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -53,6 +54,12 @@ class LinkStates:
     angular_velocity: np.ndarray
 
 
+def _disconnect(client: int) -> None:
+    """Disconnect a pybullet client (the GUI prints its thread shutdown: silenced)."""
+    with contextlib.suppress(pb.error), quiet_c_output():
+        pb.disconnect(physicsClientId=client)
+
+
 def pybullet_data_file(relative: str) -> Path:
     """Absolute path of a file shipped in the ``pybullet_data`` package (the Panda's URDF, for example)."""
     import pybullet_data
@@ -92,6 +99,11 @@ class Sim(Actuation, ObstacleBodies, Rendering):
             self._cid = pb.connect(pb.GUI if gui else pb.DIRECT)
         if self._cid < 0:
             raise RuntimeError("pybullet could not open a physics client")
+        # An env dropped without close() would keep its physics server (tens of MiB) for good: the finalizer
+        # disconnects when this Sim is garbage collected. It holds the id, not the Sim, runs at most once (close()
+        # calls it too) and not at interpreter exit, where pybullet's module may already be torn down.
+        self._finalizer = weakref.finalize(self, _disconnect, self._cid)
+        self._finalizer.atexit = False
         self.physics_hz = float(physics_hz)
         self._solver_iterations = int(solver_iterations)
         self._gravity = float(gravity)
@@ -146,11 +158,9 @@ class Sim(Actuation, ObstacleBodies, Rendering):
         return self._cid >= 0 and pb.isConnected(physicsClientId=self._cid)
 
     def close(self) -> None:
-        """Disconnect the client; safe to call twice."""
-        if self._cid >= 0:
-            with contextlib.suppress(pb.error), quiet_c_output():  # the GUI prints its thread shutdown
-                pb.disconnect(physicsClientId=self._cid)
-            self._cid = -1
+        """Disconnect the client; safe to call twice. A Sim that is garbage collected unclosed disconnects too."""
+        self._finalizer()
+        self._cid = -1
 
     # ------------------------------------------------------------------------------------------- bodies
     def add_ground(self, visual_size: float, name: str = "ground") -> int:
