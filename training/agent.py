@@ -16,24 +16,26 @@ while not done:
 The run folder's ``config.yaml`` is the recipe: env id, env arguments, noise profile and the PPO settings, which
 say which observation processing the policy was trained behind (normalisation, and a frame stack whose frames
 the agent keeps in ``state``) and whether its actions are residuals on the subgoal pursuit, which ``predict``
-then adds. The model folder holds SB3's ``model.zip`` and,
-when observations were normalised, the ``VecNormalize`` statistics.
+then adds. The model folder holds SB3's ``model.zip`` and, when observations were normalised, the ``VecNormalize``
+statistics (``vecnormalize.npz``); loading either runs no code from the files.
 """
 
 from __future__ import annotations
 
-import pickle
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
+from stable_baselines3.common.vec_env.stacked_observations import StackedObservations
 
 from clutter_gym.training.config import TrainConfig, deep_merge
 from clutter_gym.training.memory import frame_space, push_frame
+from clutter_gym.training.normalizer import NORMALIZER_FILE, detached, normalizer_path
+from clutter_gym.training.policy_file import load_ppo
 from clutter_gym.training.residual import residual_action, subgoal_pursuit
-from clutter_gym.training.run_dir import MODEL_FILE, NORMALIZER_FILE, IncompatibleRunError, RunDir
+from clutter_gym.training.run_dir import MODEL_FILE, IncompatibleRunError, RunDir
 
 if TYPE_CHECKING:
     from stable_baselines3 import PPO
@@ -160,21 +162,23 @@ def _check_shape(name: str, shape: tuple[int, ...], expected: tuple[int, ...]) -
     return False
 
 
-def load(run_dir: str | Path, step: int | None = None) -> Agent:
-    """Load a trained run as an :class:`Agent`.
+def load(run_dir: str | Path, step: int | None = None, trust_pickle: bool = False) -> Agent:
+    """Load a trained run as an :class:`Agent`, unpickling nothing (docs/training.md, "Loading runs from others").
 
     Args:
         run_dir: a run folder written by ``clutter-gym train`` (or by the main job: ``out/main/run``).
         step: load the checkpoint of this step; None loads the final model, or the newest checkpoint of a
             run that has not finished.
+        trust_pickle: read the normalisation statistics of a run written by clutter-gym 0.1, which kept them in
+            a pickle (``vecnormalize.pkl``); a pickle can run any code its author put in it.
 
     Raises:
-        FileNotFoundError: no run, model or checkpoint there (the message lists the checkpoints there are).
+        FileNotFoundError: no run, model or checkpoint there (the message lists the checkpoints there are), or
+            the normalisation statistics of a run trained with ``normalize_obs`` are missing.
+        UntrustedFileError: the statistics are in a pickle and ``trust_pickle`` is False.
         IncompatibleRunError: a run this version of clutter-gym cannot rebuild; the message names the
             version that wrote it.
     """
-    from stable_baselines3 import PPO
-
     run = RunDir(run_dir)
     config = run.read_config()
     if step is None:
@@ -184,15 +188,28 @@ def load(run_dir: str | Path, step: int | None = None) -> Agent:
         if step not in found:
             raise FileNotFoundError(f"{run.root} has no checkpoint of step {step}; it has {sorted(found)}")
         folder = found[step]
+    statistics = normalizer_path(folder, trust_pickle)
+    if statistics is None and config.ppo.normalize_obs:
+        raise FileNotFoundError(f"{folder / NORMALIZER_FILE} is missing: {run.root} was trained on normalised "
+                                "observations, and its policy acts wrongly on raw ones")
+    observation_space, action_space = policy_spaces(config)
     try:
-        model = PPO.load(folder / MODEL_FILE, device="cpu")
-        normalizer = None
-        if (folder / NORMALIZER_FILE).is_file():
-            with (folder / NORMALIZER_FILE).open("rb") as f:
-                normalizer = pickle.load(f)  # VecNormalize without its env: normalize_obs needs only the statistics
-    except Exception as exc:  # pickle and SB3 raise many kinds; all mean "cannot rebuild this model here"
+        model = load_ppo(folder / MODEL_FILE, config, observation_space, action_space)
+        normalizer = None if statistics is None else detached(statistics, observation_space, action_space)
+    except Exception as exc:  # zip, torch and SB3 raise many kinds; all mean "cannot rebuild this model here"
         versions = run.written_by()
         raise IncompatibleRunError(f"{folder} cannot be loaded ({type(exc).__name__}: {exc}); it was written by "
                                    f"clutter-gym {versions.get('clutter-gym', '0.1.0 or older')} "
                                    f"({versions or 'versions not recorded'})") from None
     return Agent(run, config, model, normalizer, folder)
+
+
+def policy_spaces(config: TrainConfig) -> tuple[spaces.Space, spaces.Space]:
+    """The observation space the run's policy takes (a stack of ``frame_stack`` env observations) and its action
+    space, from the env its config makes."""
+    env = gym.make(config.env_id, **config.make_kwargs())
+    observation_space, action_space = env.observation_space, env.action_space
+    env.close()
+    if config.frame_stack > 1:
+        observation_space = StackedObservations(1, config.frame_stack, observation_space).stacked_observation_space
+    return observation_space, action_space

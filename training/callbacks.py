@@ -13,7 +13,7 @@ from stable_baselines3.common.callbacks import BaseCallback
 from tqdm import tqdm
 
 from clutter_gym.training.config import TrainConfig
-from clutter_gym.training.run_dir import RunDir
+from clutter_gym.training.run_dir import RunDir, writing
 
 WINDOW = 100  # episodes in the running success / collision rates
 
@@ -43,6 +43,10 @@ class RunMonitor(BaseCallback):
                              desc=f"{self.config.env_id} seed {self.config.seed}")
 
     def _append(self, row: dict[str, float]) -> None:
+        with writing(self.run.episodes_file):
+            self._write(row)
+
+    def _write(self, row: dict[str, float]) -> None:
         if self._writer is None:
             exists = self.run.episodes_file.is_file() and self.run.episodes_file.stat().st_size > 0
             if exists:

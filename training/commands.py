@@ -37,6 +37,19 @@ def user_errors() -> Iterator[None]:
         raise UserError(str(exc)) from None
 
 
+@contextmanager
+def run_errors() -> Iterator[None]:
+    """Treat what stops training on a run folder as one line: a file it cannot write (a full disk), or
+    normalisation statistics that are missing or in a pickle nobody said to trust."""
+    from clutter_gym.training.normalizer import UntrustedFileError
+    from clutter_gym.training.run_dir import RunWriteError
+
+    try:
+        yield
+    except (RunWriteError, UntrustedFileError, FileNotFoundError) as exc:
+        raise UserError(str(exc)) from None
+
+
 def positive_int(text: str) -> int:
     value = int(text)
     if value < 1:
@@ -97,6 +110,13 @@ def _help(text: str) -> str:
 def _add_env_kwargs_option(parser: argparse.ArgumentParser, help: str) -> None:
     parser.add_argument("--env-kwargs", dest="env_kwargs", metavar="KEY=VALUE", nargs="+", action="extend",
                         type=env_kwarg, default=None, help=help)
+
+
+def _add_trust_pickle_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--trust-pickle", action="store_true",
+                        help="read a run written by clutter-gym 0.1, whose normalisation statistics are a pickle "
+                             "(vecnormalize.pkl): loading a pickle runs any code its author put in it, so only for "
+                             "runs you trust; the statistics are then rewritten as vecnormalize.npz")
 
 
 def add_settings_options(parser: argparse.ArgumentParser) -> None:
@@ -165,6 +185,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
                    help="continue this run from its newest checkpoint with its saved settings (only --timesteps "
                         "may change)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    _add_trust_pickle_option(p)
     add_settings_options(p)
     _add_ppo_options(p)
     p.set_defaults(handler=run_train)
@@ -181,6 +202,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
                               "noise.lidar.range_sigma=0.05); the observation and action shapes must stay the same")
     p.add_argument("--json", action="store_true", help="print the summary as JSON (per-episode rows included)")
     p.add_argument("--video", default=None, help="write the first episode to this .gif or .mp4")
+    _add_trust_pickle_option(p)
     p.set_defaults(handler=run_eval)
 
     p = sub.add_parser("sweep", help="sim-to-real sweep: train under profiles, evaluate under profiles, CSV + heatmap",
@@ -240,7 +262,8 @@ def run_train(args: argparse.Namespace) -> int:
             config = config_for(args.env, train_overrides(args))
             run = start(config, args.out or f"runs/{config.env_id}/{config.noise}-seed{config.seed}")
     print(f"run folder: {run.root}")
-    summary = train(run, progress=not args.no_progress, timesteps=args.timesteps)
+    with run_errors():
+        summary = train(run, progress=not args.no_progress, timesteps=args.timesteps, trust_pickle=args.trust_pickle)
     if summary is not None:
         print_summary(summary)
     return 0
@@ -251,7 +274,7 @@ def run_eval(args: argparse.Namespace) -> int:
 
     with user_errors():
         summary = evaluate(args.run, noise=args.noise, episodes=args.episodes, seed=args.seed, video=args.video,
-                           env_overrides=nest(args.env_kwargs))
+                           env_overrides=nest(args.env_kwargs), trust_pickle=args.trust_pickle)
     if args.json:
         print(json.dumps(summary))
     else:
@@ -289,7 +312,8 @@ def run_report(args: argparse.Namespace) -> int:
 
     with user_errors():
         run = prepare_run(args.env, Path(args.out), timesteps=args.timesteps, seed=args.seed, settings=settings(args))
-    report = main_job(run, Path(args.out), timesteps=args.timesteps, episodes=args.episodes,
-                      progress=not args.no_progress)
+    with run_errors():
+        report = main_job(run, Path(args.out), timesteps=args.timesteps, episodes=args.episodes,
+                          progress=not args.no_progress)
     print(Path(report).read_text())
     return 0

@@ -27,12 +27,14 @@ def evaluate(
     seed: int,
     video: str | Path | None = None,
     env_overrides: dict[str, Any] | None = None,
+    trust_pickle: bool = False,
 ) -> dict[str, Any]:
     """Roll out ``episodes`` episodes of the run's policy; episode ``i`` is reset with seed ``seed + i``.
 
     Seeds fix the layouts independently of the noise profile, so evaluations of one run under two profiles see
     the same scenes (a paired comparison). The env takes the run's ``env_kwargs`` (and its noise-section
-    overrides, on top of ``noise``), updated by ``env_overrides``.
+    overrides, on top of ``noise``), updated by ``env_overrides``. ``trust_pickle`` reads the normalisation
+    statistics of a run written by clutter-gym 0.1, which are a pickle (see :func:`~clutter_gym.training.load`).
 
     Returns:
         JSON-ready summary: run, env, noise profiles, env overrides, seed, the model's training step, ``metrics``
@@ -42,7 +44,7 @@ def evaluate(
         raise ValueError(f"noise must be one of {PROFILE_NAMES}, got {noise!r}")
     if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
         raise ValueError(f"episodes must be an integer >= 1, got {episodes!r}")
-    agent = load(run_dir)
+    agent = load(run_dir, trust_pickle=trust_pickle)
     overrides = dict(env_overrides or {})
     noise_spec = {"profile": noise, **overrides.pop("noise", {})}
     env = agent.make_env(noise=noise_spec, render_mode="rgb_array" if video else None, **overrides)

@@ -5,8 +5,9 @@ RUN/
   config.yaml            the resolved TrainConfig, the run format and the package versions that wrote it
   episodes.csv           one row per finished training episode (timestep + EpisodeStats fields)
   tb/                    TensorBoard event files
-  checkpoints/step_<N>/  model.zip + vecnormalize.pkl, every ``checkpoint_every`` steps (newest few kept)
-  model/                 the final model.zip + vecnormalize.pkl
+  checkpoints/step_<N>/  model.zip + vecnormalize.npz, after the first rollout and every ``checkpoint_every`` steps
+                         (newest few kept)
+  model/                 the final model.zip + vecnormalize.npz
   best/                  the policy that did best in the validations during training (when they are on)
   validation.csv         one row per validation: step, success and collision rates, whether it became best/
   training.json          wall time spent in training (summed over resumes) and the steps reached
@@ -14,16 +15,20 @@ RUN/
 ```
 
 A checkpoint is written into a temporary folder and renamed into place, so every ``step_<N>`` folder is
-complete; a run killed mid-write leaves only a hidden temporary folder, which the next save removes.
+complete; a run killed mid-write leaves only a hidden temporary folder, which the next save removes. The episode
+log is appended row by row, so a kill can leave its last row torn: reading drops that row.
 """
 
 from __future__ import annotations
 
 import csv
+import io
 import json
 import platform
 import re
 import shutil
+from collections.abc import Iterator
+from contextlib import contextmanager
 from importlib import metadata
 from pathlib import Path
 from typing import Any
@@ -31,10 +36,10 @@ from typing import Any
 import yaml
 
 from clutter_gym.training.config import TrainConfig
+from clutter_gym.training.normalizer import NORMALIZER_FILE, save_normalizer
 from clutter_gym.util.atomic import atomic_folder, atomic_path, write_text_atomically
 
 MODEL_FILE = "model.zip"
-NORMALIZER_FILE = "vecnormalize.pkl"
 _STEP_DIR = re.compile(r"^step_(\d+)$")
 #: Layout version of a run folder. A config.yaml without one predates the field and has format 1.
 RUN_FORMAT = 1
@@ -43,6 +48,24 @@ _PACKAGES = ("clutter-gym", "stable-baselines3", "torch", "gymnasium", "numpy")
 
 class IncompatibleRunError(ValueError):
     """A run folder that this version of clutter-gym cannot rebuild (another format, settings or model file)."""
+
+
+class RunWriteError(OSError):
+    """A model folder that could not be written (a full disk, say); the message names it and the free space."""
+
+
+@contextmanager
+def writing(path: Path) -> Iterator[None]:
+    """Turn a failed write of ``path`` (a full disk, a file size limit) into a :class:`RunWriteError` that names it
+    and the free space there."""
+    try:
+        yield
+    except OSError as exc:
+        if isinstance(exc, RunWriteError):
+            raise
+        free = shutil.disk_usage(path.parent).free / 2**20
+        raise RunWriteError(f"could not write {path}: {exc.strerror or exc} ({free:,.0f} MiB free there); what was "
+                            "saved before is kept") from None
 
 
 def package_versions() -> dict[str, str]:
@@ -138,11 +161,15 @@ class RunDir:
 
     @staticmethod
     def save_model(model: Any, normalizer: Any | None, folder: Path) -> None:
-        """SB3 model (and VecNormalize statistics, if any) into ``folder``, which appears complete or not at all."""
-        with atomic_folder(folder) as tmp:
+        """SB3 model (and VecNormalize statistics, if any) into ``folder``, which appears complete or not at all.
+
+        Raises:
+            RunWriteError: the folder could not be written; what was there before is kept.
+        """
+        with writing(folder), atomic_folder(folder) as tmp:
             model.save(tmp / MODEL_FILE)
             if normalizer is not None:
-                normalizer.save(tmp / NORMALIZER_FILE)
+                save_normalizer(normalizer, tmp / NORMALIZER_FILE)
 
     def policy_folder(self) -> Path:
         """The best validated policy if there is one, else the final model if training finished, else the newest
@@ -176,20 +203,51 @@ class RunDir:
         """Add one validation row (the whole file is rewritten atomically: it holds a few dozen rows)."""
         _write_rows(self.validation_file, [*self.read_validations(), row])
 
+    def truncate_validations(self, last_step: int) -> bool:
+        """Drop validation rows after ``last_step`` (the steps a resumed run will redo). When one of them had saved
+        ``best/``, that policy belongs to the dropped steps: ``best/`` is removed, the kept rows lose their best
+        mark (the next validation sets a new best) and True is returned."""
+        rows = self.read_validations()
+        kept = [row for row in rows if row["step"] <= last_step]
+        dropped_best = any(row["best"] for row in rows if row["step"] > last_step)
+        if dropped_best:
+            shutil.rmtree(self.best_dir, ignore_errors=True)
+            kept = [{**row, "best": 0.0} for row in kept]
+        if len(kept) < len(rows):
+            _write_rows(self.validation_file, kept)
+        return dropped_best
+
     # -- episode log ----------------------------------------------------------------------------------------
     def read_episodes(self) -> list[dict[str, float]]:
         return _read_rows(self.episodes_file)
 
-    def truncate_episodes(self, last_step: int) -> None:
-        """Drop episode rows logged after ``last_step`` (the steps a resumed run will redo)."""
-        _write_rows(self.episodes_file, [row for row in self.read_episodes() if row["timestep"] <= last_step])
+    def truncate_episodes(self, last_step: int) -> int:
+        """Drop episode rows logged after ``last_step`` (the steps a resumed run will redo) and a torn last row;
+        returns how many complete rows were dropped."""
+        rows = self.read_episodes()
+        kept = [row for row in rows if row["timestep"] <= last_step]
+        _write_rows(self.episodes_file, kept)
+        return len(rows) - len(kept)
 
 
 def _read_rows(path: Path) -> list[dict[str, float]]:
+    """The rows of a CSV log of numbers; a last row without its line end (torn by a kill or a full disk) is dropped.
+
+    Raises:
+        ValueError: a complete row that does not hold one number per column.
+    """
     if not path.is_file():
         return []
-    with path.open(newline="") as f:
-        return [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
+    text = path.read_text()
+    if text and not text.endswith("\n"):
+        text = text[: text.rfind("\n") + 1]
+    rows = []
+    for line, row in enumerate(csv.DictReader(io.StringIO(text, newline="")), start=2):
+        try:
+            rows.append({k: float(v) for k, v in row.items()})
+        except (TypeError, ValueError):  # a short row gives None, a long one a list under the key None
+            raise ValueError(f"{path} line {line} is not a row of {len(row)} numbers: {row}") from None
+    return rows
 
 
 def _write_rows(path: Path, rows: list[dict[str, float]]) -> None:

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import shutil
+import sys
 import time
 from pathlib import Path
 from typing import Any
@@ -17,7 +19,9 @@ from stable_baselines3.common.vec_env import VecEnv
 from clutter_gym.training.callbacks import BestPolicyKeeper, RunMonitor
 from clutter_gym.training.config import EVAL_SEED, TrainConfig
 from clutter_gym.training.evaluate import evaluate
-from clutter_gym.training.run_dir import NORMALIZER_FILE, RunDir
+from clutter_gym.training.normalizer import NORMALIZER_FILE, normalizer_path, read_statistics
+from clutter_gym.training.policy_file import load_ppo, saved_step
+from clutter_gym.training.run_dir import MODEL_FILE, RunDir
 from clutter_gym.training.vec_env import policy_name, training_env
 from clutter_gym.util.atomic import write_text_atomically
 
@@ -57,37 +61,50 @@ def build_model(config: TrainConfig, venv: VecEnv) -> PPO:
                **config.ppo.sb3_kwargs())
 
 
-def train(run: RunDir, progress: bool = True, timesteps: int | None = None) -> dict[str, Any] | None:
+def train(run: RunDir, progress: bool = True, timesteps: int | None = None,
+          trust_pickle: bool = False) -> dict[str, Any] | None:
     """Train (or continue) the run in ``run`` up to its configured timesteps, then save and evaluate.
 
     With ``validate_every`` set, the policy is validated on held-out layouts on that schedule and the best one
     is kept in ``best/``; the final evaluation (like ``load()``) uses that one.
 
-    A run with checkpoints continues from the newest one, with the config saved in the folder: the steps after
-    that checkpoint are redone (and their episode rows dropped), so a killed run loses at most one checkpoint
-    interval. ``timesteps`` raises the run's total (to extend a finished run). The continued run draws new env
-    seeds, so it is not bit-identical to an uninterrupted one.
+    A run with checkpoints continues from the newest complete one (:func:`resume_point`), with the config saved in
+    the folder: the steps after it are redone and their episode and validation rows dropped, so a killed run loses
+    at most one checkpoint interval. A run killed before its first checkpoint starts over, saying so. A finished
+    run is left as it is unless ``timesteps`` raises its total; it then continues from its final model. The
+    continued run draws new env seeds, so it is not bit-identical to an uninterrupted one.
+
+    Args:
+        trust_pickle: continue a run written by clutter-gym 0.1, whose normalisation statistics are a pickle.
 
     Returns:
-        The final evaluation summary (also written to ``eval.json``), or None if ``final_eval_episodes`` is 0.
+        The final evaluation summary (also written to ``eval.json``), or None if ``final_eval_episodes`` is 0 (for a
+        finished run left as it is: its ``eval.json``, if any).
+
+    Raises:
+        FileNotFoundError: the statistics of a run trained with normalisation are missing from its newest model.
+        UntrustedFileError: they are a pickle and ``trust_pickle`` is False.
+        RunWriteError: a checkpoint or the final model could not be written.
     """
     config = run.read_config()
     if timesteps is not None and timesteps != config.timesteps:
         config = TrainConfig.from_dict({**config.to_dict(), "timesteps": timesteps})
         run.write_config(config)
     torch.set_num_threads(1)  # small MLPs: threads only fight the env workers for the cores
-    latest = run.latest_checkpoint()
-    done = latest[0] if latest else 0
-    normalizer_file = latest[1] / NORMALIZER_FILE if latest else None
-    venv = training_env(config, seed=config.seed + done, normalizer_file=normalizer_file)
+    point = resume_point(run, config, trust_pickle)
+    done = point[0] if point else 0
+    if run.is_finished() and done >= config.timesteps:
+        _say(f"{run.root} finished training at step {done}: nothing to resume (pass --timesteps above {done} to "
+             "train it further)")
+        return json.loads(run.eval_file.read_text()) if run.eval_file.is_file() else None
+    _forget_after(run, done)
+    venv = training_env(config, seed=config.seed + done, normalizer_file=point[2] if point else None)
     try:
-        if latest is None:
+        if point is None:
             model = build_model(config, venv)
         else:
-            step, folder = latest
-            model = PPO.load(folder / "model.zip", env=venv, device="cpu")
-            model.set_random_seed(config.seed + step)
-            run.truncate_episodes(step)
+            model = load_ppo(point[1] / MODEL_FILE, config, venv.observation_space, venv.action_space, env=venv)
+            model.set_random_seed(config.seed + done)
         model.set_logger(configure(str(run.tb_dir), ["tensorboard"]))
         remaining = config.timesteps - model.num_timesteps
         callbacks = [RunMonitor(run, config, progress)]
@@ -95,7 +112,7 @@ def train(run: RunDir, progress: bool = True, timesteps: int | None = None) -> d
             callbacks.append(BestPolicyKeeper(run, config))
         if remaining > 0:
             t0 = time.perf_counter()
-            model.learn(remaining, callback=CallbackList(callbacks), reset_num_timesteps=latest is None)
+            model.learn(remaining, callback=CallbackList(callbacks), reset_num_timesteps=point is None)
             run.add_training_time(time.perf_counter() - t0, model.num_timesteps)
         run.save_model(model, model.get_vec_normalize_env(), run.model_dir)
     finally:
@@ -106,3 +123,52 @@ def train(run: RunDir, progress: bool = True, timesteps: int | None = None) -> d
                        seed=config.seed + EVAL_SEED)
     write_text_atomically(run.eval_file, json.dumps(summary, indent=2))
     return summary
+
+
+def resume_point(run: RunDir, config: TrainConfig, trust_pickle: bool = False) -> tuple[int, Path, Path | None] | None:
+    """``(step, model folder, statistics file or None)`` of the newest model the run can continue from: its final
+    model or a checkpoint. One that cannot be read (a truncated ``model.zip``, say) is removed, saying so, and the
+    one before it is tried; None when there is none.
+
+    Raises:
+        FileNotFoundError: the run was trained with normalisation and the newest model's statistics are missing
+            (its policy cannot continue on fresh statistics).
+        UntrustedFileError: the statistics are a pickle and ``trust_pickle`` is False.
+    """
+    candidates = list(run.checkpoints())
+    if run.is_finished():
+        try:
+            candidates.append((saved_step(run.model_dir / MODEL_FILE), run.model_dir))
+        except ValueError as exc:
+            _say(f"the final model cannot be continued from: {exc}")
+    for step, folder in sorted(candidates, key=lambda c: (c[0], c[1] == run.model_dir), reverse=True):
+        statistics = normalizer_path(folder, trust_pickle)
+        if statistics is None and (config.ppo.normalize_obs or config.ppo.normalize_reward):
+            raise FileNotFoundError(f"{folder / NORMALIZER_FILE} is missing: the run was trained with normalisation "
+                                    "and cannot continue on fresh statistics")
+        try:
+            if saved_step(folder / MODEL_FILE) != step and folder != run.model_dir:
+                raise ValueError(f"its model.zip is not of step {step}")
+            if statistics is not None:
+                read_statistics(statistics)
+        except ValueError as exc:
+            _say(f"{folder} cannot be continued from ({exc}): removed, trying the one before it")
+            if folder != run.model_dir:
+                shutil.rmtree(folder, ignore_errors=True)
+            continue
+        return step, folder, statistics
+    return None
+
+
+def _forget_after(run: RunDir, step: int) -> None:
+    """Drop what the run logged after ``step``, which training is about to redo, and say what was dropped."""
+    dropped = run.truncate_episodes(step)
+    if step == 0 and dropped:
+        _say(f"{run.root} has no checkpoint to continue from: starting over from step 0 (dropped the {dropped} "
+             "episode rows of the attempt before)")
+    if run.truncate_validations(step):
+        _say(f"{run.best_dir} was saved after step {step}, which is being redone: removed")
+
+
+def _say(message: str) -> None:
+    print(f"clutter-gym train: {message}", file=sys.stderr, flush=True)

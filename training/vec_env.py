@@ -13,6 +13,7 @@ from gymnasium import spaces
 from stable_baselines3.common.monitor import Monitor
 from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv, VecNormalize
 
+from clutter_gym.training import normalizer
 from clutter_gym.training.config import TrainConfig
 from clutter_gym.training.episode_stats import EpisodeStats
 from clutter_gym.training.layout_pool import LayoutPool
@@ -71,12 +72,10 @@ def normalize(venv: VecEnv, config: TrainConfig) -> VecEnv:
 
 def training_env(config: TrainConfig, seed: int, normalizer_file: Path | None = None) -> VecEnv:
     """The vector env PPO trains on: the envs, their normalisation (fresh, or the statistics saved in
-    ``normalizer_file`` when continuing a run) and the frame stack, in that order."""
+    ``normalizer_file``, a ``vecnormalize.npz`` or a trusted older ``.pkl``, when continuing a run) and the frame
+    stack, in that order."""
     venv = build_vec_env(config, seed)
-    if normalizer_file is not None and normalizer_file.is_file():
-        venv = VecNormalize.load(str(normalizer_file), venv)
-    else:
-        venv = normalize(venv, config)
+    venv = normalize(venv, config) if normalizer_file is None else normalizer.wrap(venv, normalizer_file)
     return stack_frames(venv, config.frame_stack)
 
 

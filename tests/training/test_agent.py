@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import pickle
 import shutil
 import stat
 
@@ -12,7 +11,8 @@ import yaml
 
 from clutter_gym.training import Agent, load
 from clutter_gym.training.config import config_for
-from clutter_gym.training.run_dir import MODEL_FILE, NORMALIZER_FILE, RUN_FORMAT, IncompatibleRunError
+from clutter_gym.training.normalizer import NORMALIZER_FILE
+from clutter_gym.training.run_dir import MODEL_FILE, RUN_FORMAT, IncompatibleRunError
 from clutter_gym.training.train import start, train
 
 TINY = {"timesteps": 128, "n_envs": 1, "checkpoint_every": 64, "final_eval_episodes": 0,
@@ -36,11 +36,12 @@ def test_predict_applies_the_observation_normalisation_the_run_trained_with(run)
     env.close()
     action, state = agent.predict(obs)
     assert action.shape == (2,) and state is None
-    with (run.model_dir / NORMALIZER_FILE).open("rb") as f:
-        stats = pickle.load(f)
-    expected_input = stats.normalize_obs(obs) if stats.norm_obs else obs
-    if stats.norm_obs:  # normalisation really changes what the network sees
-        assert not np.allclose(expected_input["lidar"], obs["lidar"])
+    expected_input = obs
+    if run.read_config().ppo.normalize_obs:  # SB3's formula, from the saved arrays
+        with np.load(run.model_dir / NORMALIZER_FILE) as stats:
+            expected_input = {key: np.clip((value - stats[f"obs/{key}/mean"]) / np.sqrt(stats[f"obs/{key}/var"] + 1e-8),
+                                           -10.0, 10.0).astype(np.float32) for key, value in obs.items()}
+        assert not np.allclose(expected_input["lidar"], obs["lidar"])  # normalisation changes what the network sees
     expected, _ = agent.model.predict(expected_input, deterministic=True)
     np.testing.assert_array_equal(action, expected)
 

@@ -7,13 +7,13 @@ import functools
 import numpy as np
 import pytest
 from gymnasium import spaces
-from stable_baselines3.common.vec_env import DummyVecEnv, VecFrameStack, VecNormalize
+from stable_baselines3.common.vec_env import DummyVecEnv, VecFrameStack
 from stable_baselines3.common.vec_env.stacked_observations import StackedObservations
 
-from clutter_gym.training import load
+from clutter_gym.training import load, normalizer
 from clutter_gym.training.config import config_for
 from clutter_gym.training.memory import frame_space, push_frame
-from clutter_gym.training.run_dir import NORMALIZER_FILE
+from clutter_gym.training.normalizer import NORMALIZER_FILE
 from clutter_gym.training.train import start, train
 from clutter_gym.training.vec_env import make_env
 
@@ -48,8 +48,8 @@ def test_a_loaded_stacking_agent_acts_as_the_training_pipeline(stacked_run):
     """Agent.predict on plain env observations gives the actions the model gives behind the training wrappers."""
     agent = load(stacked_run.root)
     config = agent.config
-    reference = VecNormalize.load(str(agent.folder / NORMALIZER_FILE),
-                                  DummyVecEnv([functools.partial(make_env, config.env_id, config.make_kwargs())]))
+    reference = normalizer.wrap(DummyVecEnv([functools.partial(make_env, config.env_id, config.make_kwargs())]),
+                                agent.folder / NORMALIZER_FILE)
     reference.training, reference.norm_reward = False, False
     reference = VecFrameStack(reference, config.frame_stack)
     env = agent.make_env()

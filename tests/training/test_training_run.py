@@ -14,7 +14,8 @@ from clutter_gym.training import load
 from clutter_gym.training.config import config_for
 from clutter_gym.training.episode_stats import EPISODE_KEYS, EpisodeStats
 from clutter_gym.training.evaluate import METRICS, evaluate
-from clutter_gym.training.run_dir import MODEL_FILE, NORMALIZER_FILE, RunDir
+from clutter_gym.training.normalizer import NORMALIZER_FILE
+from clutter_gym.training.run_dir import MODEL_FILE, RunDir
 from clutter_gym.training.train import start, train
 
 # Small enough to run in seconds; short episodes so that some finish inside the budget.
