@@ -10,9 +10,20 @@ except PackageNotFoundError:  # imported from a source tree that was never insta
     __version__ = "0+unknown"
 
 ENV_IDS = ("ClutterNav-v0", "ClutterReach-v0", "ClutterFly-v0")
+#: Each env with the env arguments its shipped PPO agent trains with (training/hyperparams/ppo.yml), under an id of
+#: its own, for tools that make envs by id alone: rl-zoo3 makes its evaluation env without the conf file's
+#: env_kwargs. Making one needs the ``[train]`` extra; keyword arguments go on top of the shipped ones.
+TRAIN_IDS = {"ClutterNavTrain-v0": "ClutterNav-v0", "ClutterReachTrain-v0": "ClutterReach-v0",
+             "ClutterFlyTrain-v0": "ClutterFly-v0"}
 
-register(id="ClutterNav-v0", entry_point="clutter_gym.clutter_nav:ClutterNavEnv", max_episode_steps=400)
-register(id="ClutterReach-v0", entry_point="clutter_gym.clutter_reach:ClutterReachEnv", max_episode_steps=100)
-register(id="ClutterFly-v0", entry_point="clutter_gym.clutter_fly:ClutterFlyEnv", max_episode_steps=600)
+_ENTRY_POINTS = {"ClutterNav-v0": "clutter_gym.clutter_nav:ClutterNavEnv",
+                 "ClutterReach-v0": "clutter_gym.clutter_reach:ClutterReachEnv",
+                 "ClutterFly-v0": "clutter_gym.clutter_fly:ClutterFlyEnv"}
+_EPISODE_STEPS = {"ClutterNav-v0": 400, "ClutterReach-v0": 100, "ClutterFly-v0": 600}
+for _env_id in ENV_IDS:
+    register(id=_env_id, entry_point=_ENTRY_POINTS[_env_id], max_episode_steps=_EPISODE_STEPS[_env_id])
+for _train_id, _env_id in TRAIN_IDS.items():
+    register(id=_train_id, entry_point="clutter_gym.training.zoo:shipped_env", kwargs={"env_id": _env_id},
+             max_episode_steps=_EPISODE_STEPS[_env_id])
 
-__all__ = ["ENV_IDS", "__version__"]
+__all__ = ["ENV_IDS", "TRAIN_IDS", "__version__"]

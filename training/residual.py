@@ -31,6 +31,9 @@ def subgoal_pursuit(env_id: str, gain: float) -> Pursuit:
     Raises:
         ValueError: ``env_id`` has no pursuit.
     """
+    from clutter_gym import TRAIN_IDS
+
+    env_id = TRAIN_IDS.get(env_id, env_id)  # a *Train-v0 id is its env with the shipped settings
     if env_id == "ClutterReach-v0":
         return lambda obs: np.clip(gain * np.asarray(obs["subgoal"], dtype=np.float32), -1.0, 1.0)
     if env_id == "ClutterFly-v0":
