@@ -223,8 +223,11 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
                    help="envs per training cell (default from the files; each cell steps them over one worker "
                         "process per core, so --workers 1 gives a cell every core)")
     p.add_argument("--ray-address", default=None,
-                   help="run cells as Ray tasks on this cluster ('auto', 'ray://host:10001', or 'local' for a "
-                        "local Ray)")
+                   help="run cells as Ray tasks on this cluster ('auto', 'HEAD:6379', 'ray://HEAD:10001', or "
+                        "'local' for a local Ray)")
+    p.add_argument("--cpus-per-cell", type=positive_int, default=None,
+                   help="with --ray-address: CPUs each cell reserves on one node and steps its envs over (default: "
+                        "env_workers from the files, or 1 when that is 0); more than the largest node has is an error")
     add_settings_options(p)
     p.set_defaults(handler=run_sweep)
 
@@ -301,7 +304,9 @@ def run_sweep(args: argparse.Namespace) -> int:
                          seeds=args.seeds, timesteps=args.timesteps, episodes=args.episodes, n_envs=args.n_envs,
                          settings=settings(args))
         check_spec(spec, Path(args.out))
-    result = sweep(spec, Path(args.out), workers=args.workers, ray_address=args.ray_address)
+    with user_errors():
+        result = sweep(spec, Path(args.out), workers=args.workers, ray_address=args.ray_address,
+                       cpus_per_cell=args.cpus_per_cell)
     print(f"sweep: {result['cells_run']} cells run, {result['cells_skipped']} already done")
     print(f"  {result['csv']}\n  {result['heatmap']}")
     return 0

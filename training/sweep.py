@@ -81,8 +81,12 @@ def cell_done(spec: SweepSpec, out: Path, train_noise: str, seed: int) -> bool:
     return all((folder / f"eval-{p}.json").is_file() for p in spec.eval_noise)
 
 
-def run_cell(spec_data: dict[str, Any], out: str, train_noise: str, seed: int) -> str:
-    """Train (or resume, or skip if finished) one cell's run, then each missing evaluation. Returns the cell name."""
+def run_cell(spec_data: dict[str, Any], out: str, train_noise: str, seed: int, env_workers: int | None = None) -> str:
+    """Train (or resume, or skip if finished) one cell's run, then each missing evaluation. Returns the cell name.
+
+    ``env_workers`` sets the processes that step the cell's training envs (None: the config's), which changes the
+    speed of training and nothing else: a Ray cell steps its envs over exactly the CPUs it reserved.
+    """
     from clutter_gym.training.evaluate import evaluate
     from clutter_gym.training.run_dir import RunDir
     from clutter_gym.training.train import start, train
@@ -94,7 +98,7 @@ def run_cell(spec_data: dict[str, Any], out: str, train_noise: str, seed: int) -
     if not run.config_file.is_file():
         start(spec.cell_config(train_noise, seed), run.root)
     if not run.is_finished():
-        train(run, progress=False)
+        train(run, progress=False, env_workers=env_workers)
     for profile in spec.eval_noise:
         target = folder / f"eval-{profile}.json"
         if not target.is_file():
@@ -104,25 +108,39 @@ def run_cell(spec_data: dict[str, Any], out: str, train_noise: str, seed: int) -
     return folder.name
 
 
-def run_sweep(spec: SweepSpec, out: Path, workers: int | None = None, ray_address: str | None = None) -> dict[str, Any]:
+def run_sweep(spec: SweepSpec, out: Path, workers: int | None = None, ray_address: str | None = None,
+              cpus_per_cell: int | None = None) -> dict[str, Any]:
     """Run every unfinished cell (process pool, or Ray tasks when ``ray_address`` is given), then write CSV and plot.
 
-    ``ray_address`` is passed to ``ray.init``: ``"auto"`` or ``"ray://head:10001"`` for a running cluster, or
-    ``"local"`` to start a throwaway local Ray instance (how the tests exercise this path).
+    ``ray_address`` is passed to ``ray.init``: ``"auto"``, ``"HEAD:6379"`` or ``"ray://HEAD:10001"`` for a running
+    cluster, or ``"local"`` to start a throwaway local Ray instance. A Ray cell reserves ``cpus_per_cell`` CPUs of
+    one node (None: the config's ``env_workers``, or 1 when that is 0, "one per core", which means nothing before a
+    node is chosen) and steps its training envs over that many processes.
+
+    Returns:
+        ``cells_run``, ``cells_skipped``, ``csv``, ``heatmap``, ``rows`` and, for Ray, ``nodes``: the id of the
+        node that ran each cell.
+
+    Raises:
+        ValueError: a cell asks for more CPUs than any node of the Ray cluster has.
     """
     check_spec(spec, out)
     spec_file = out / "sweep.yaml"
     if not spec_file.is_file():
         write_text_atomically(spec_file, yaml.safe_dump(spec.to_dict(), sort_keys=False))
     todo = [cell for cell in spec.cells() if not cell_done(spec, out, *cell)]
-    if todo:
-        runner = _run_on_ray if ray_address is not None else _run_on_pool
-        runner(spec, out, todo, workers if ray_address is None else ray_address)
+    nodes: dict[str, str] = {}
+    if todo and ray_address is not None:
+        cpus = cpus_per_cell or spec.cell_config(*todo[0]).env_workers or 1
+        nodes = _run_on_ray(spec, out, todo, ray_address, cpus)
+    elif todo:
+        _run_on_pool(spec, out, todo, workers)
     rows = collect_rows(spec, out)
     csv_path = write_csv(rows, out / "sweep.csv")
     heatmap = write_heatmap(rows, spec, out / "heatmap.png")
-    return {"cells_run": len(todo), "cells_skipped": len(spec.cells()) - len(todo), "csv": str(csv_path),
-            "heatmap": str(heatmap), "rows": rows}
+    result = {"cells_run": len(todo), "cells_skipped": len(spec.cells()) - len(todo), "csv": str(csv_path),
+              "heatmap": str(heatmap), "rows": rows}
+    return {**result, "nodes": nodes} if ray_address is not None else result
 
 
 def check_spec(spec: SweepSpec, out: Path) -> None:
@@ -150,7 +168,8 @@ def _run_on_pool(spec: SweepSpec, out: Path, todo: list[tuple[str, int]], worker
             print(f"  cell {future.result()} done", flush=True)
 
 
-def _run_on_ray(spec: SweepSpec, out: Path, todo: list[tuple[str, int]], address: str) -> None:
+def _run_on_ray(spec: SweepSpec, out: Path, todo: list[tuple[str, int]], address: str, cpus: int) -> dict[str, str]:
+    """Each cell as a Ray task of ``cpus`` CPUs, spread over the nodes; returns the node id of each cell."""
     try:
         import ray
     except ImportError as exc:
@@ -159,16 +178,30 @@ def _run_on_ray(spec: SweepSpec, out: Path, todo: list[tuple[str, int]], address
     if started_here:
         ray.init(address=None if address == "local" else address, include_dashboard=False, log_to_driver=False)
     try:
-        from clutter_gym.training.vec_env import env_workers
-
-        task = ray.remote(num_cpus=env_workers(spec.cell_config(*todo[0])))(run_cell)
-        pending = [task.remote(spec.to_dict(), str(out.resolve()), noise, seed) for noise, seed in todo]
+        largest = max((node["Resources"].get("CPU", 0.0) for node in ray.nodes() if node["Alive"]), default=0.0)
+        if cpus > largest:  # Ray would keep the task pending for a node that never comes, silently
+            raise ValueError(f"each cell asks Ray for {cpus} CPUs (--cpus-per-cell, default: env_workers) and the "
+                             f"largest node of the cluster at {address!r} has {largest:g}; pass --cpus-per-cell "
+                             f"{max(int(largest), 1)} or add bigger nodes")
+        task = ray.remote(num_cpus=cpus, scheduling_strategy="SPREAD")(_ray_cell)
+        pending = [task.remote(spec.to_dict(), str(out.resolve()), noise, seed, cpus) for noise, seed in todo]
+        nodes = {}
         while pending:
             finished, pending = ray.wait(pending)
-            print(f"  cell {ray.get(finished[0])} done (ray)", flush=True)
+            cell, node = ray.get(finished[0])
+            nodes[cell] = node
+            print(f"  cell {cell} done (ray node {node[:12]})", flush=True)
+        return nodes
     finally:
         if started_here:
             ray.shutdown()
+
+
+def _ray_cell(*args: Any) -> tuple[str, str]:
+    """:func:`run_cell` in a Ray task; returns the cell's name and the id of the node it ran on."""
+    import ray
+
+    return run_cell(*args), ray.get_runtime_context().get_node_id()
 
 
 def collect_rows(spec: SweepSpec, out: Path) -> list[dict[str, Any]]:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import shutil
 import sys
@@ -61,8 +62,8 @@ def build_model(config: TrainConfig, venv: VecEnv) -> PPO:
                **config.ppo.sb3_kwargs())
 
 
-def train(run: RunDir, progress: bool = True, timesteps: int | None = None,
-          trust_pickle: bool = False) -> dict[str, Any] | None:
+def train(run: RunDir, progress: bool = True, timesteps: int | None = None, trust_pickle: bool = False,
+          env_workers: int | None = None) -> dict[str, Any] | None:
     """Train (or continue) the run in ``run`` up to its configured timesteps, then save and evaluate.
 
     With ``validate_every`` set, the policy is validated on held-out layouts on that schedule and the best one
@@ -76,6 +77,7 @@ def train(run: RunDir, progress: bool = True, timesteps: int | None = None,
 
     Args:
         trust_pickle: continue a run written by clutter-gym 0.1, whose normalisation statistics are a pickle.
+        env_workers: processes that step the training envs this time (None: the config's); speed only.
 
     Returns:
         The final evaluation summary (also written to ``eval.json``), or None if ``final_eval_episodes`` is 0 (for a
@@ -92,6 +94,8 @@ def train(run: RunDir, progress: bool = True, timesteps: int | None = None,
         run.write_config(config)
     torch.set_num_threads(1)  # small MLPs: threads only fight the env workers for the cores
     point = resume_point(run, config, trust_pickle)
+    if env_workers is not None:
+        config = dataclasses.replace(config, env_workers=min(env_workers, config.n_envs))
     done = point[0] if point else 0
     if run.is_finished() and done >= config.timesteps:
         _say(f"{run.root} finished training at step {done}: nothing to resume (pass --timesteps above {done} to "

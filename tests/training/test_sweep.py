@@ -3,6 +3,16 @@
 from __future__ import annotations
 
 import csv
+import os
+import re
+import secrets
+import shutil
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
 
 import pytest
 
@@ -61,3 +71,65 @@ def test_the_ray_path_runs_the_same_cells(tmp_path):
                      timesteps=64, episodes=1, n_envs=1, settings={"ppo": {"n_steps": 64, "batch_size": 32}})
     result = run_sweep(spec, tmp_path, ray_address="local")
     assert result["cells_run"] == 1 and len(result["rows"]) == 2
+
+
+@pytest.fixture(scope="module")
+def ray_cluster():
+    """A real two-node Ray cluster (head and one worker, 1 CPU each) on 127.0.0.1, as docs/training.md starts one,
+    protected by a token of its own (Ray 2.60 turns token authentication on by itself when ~/.ray holds a token,
+    and then a node started without it cannot join). Yields the address and the environment its clients need;
+    stops exactly the processes it started (tests/training/ray_cluster.py)."""
+    pytest.importorskip("ray")
+    if not sys.platform.startswith("linux"):
+        pytest.skip("the cluster's launcher reaps Ray's daemons as their subreaper, a Linux feature")
+    temp = Path(tempfile.mkdtemp(prefix="cg-ray-", dir="/tmp"))  # short: Ray's socket paths sit under it
+    token = temp / "auth_token"
+    token.write_text(secrets.token_hex(32))
+    env = {**os.environ, "RAY_AUTH_MODE": "token", "RAY_AUTH_TOKEN_PATH": str(token), "RAY_USAGE_STATS_ENABLED": "0"}
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    launcher = subprocess.Popen([sys.executable, str(Path(__file__).with_name("ray_cluster.py")), str(temp), str(port),
+                                 "1", "1"], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, env=env)
+    try:
+        assert launcher.stdout.readline().strip() == "ready", "the Ray cluster did not start"
+        yield f"127.0.0.1:{port}", env
+    finally:
+        launcher.stdin.close()
+        launcher.wait(timeout=60)
+        shutil.rmtree(temp, ignore_errors=True)
+
+
+def _cli_sweep(out: Path, address: str, env: dict, *extra: str) -> subprocess.CompletedProcess:
+    hyperparams = out.parent / f"{out.name}-tiny.yml"
+    hyperparams.write_text("default:\n  ppo: {n_steps: 64, batch_size: 32, n_epochs: 1}\n")
+    return subprocess.run(
+        [str(Path(sys.executable).with_name("clutter-gym")), "sweep", "--env", "ClutterNav-v0", "--train-noise",
+         "none,nominal", "--eval-noise", "none", "--seeds", "1", "--timesteps", "64", "--episodes", "1", "--n-envs",
+         "2", "--hyperparams", str(hyperparams), "--env-kwargs", "obstacle_density=0.05", "--out", str(out),
+         "--ray-address", address, *extra],
+        capture_output=True, text=True, env=env, timeout=600)
+
+
+def test_ray_cluster_of_two_nodes_runs_a_cell_on_each(ray_cluster, tmp_path):
+    """Each cell reserves one CPU (the default, not the launching machine's core count): on two 1-CPU nodes, one
+    cell runs on each, and a cell steps its envs over the one CPU it reserved."""
+    address, env = ray_cluster
+    result = _cli_sweep(tmp_path / "sweep", address, env)
+    assert result.returncode == 0, result.stderr[-3000:]
+    nodes = re.findall(r"cell \S+ done \(ray node (\w+)\)", result.stdout)
+    assert len(nodes) == 2 and len(set(nodes)) == 2, result.stdout
+    with open(tmp_path / "sweep" / "sweep.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert {(r["train_noise"], r["eval_noise"]) for r in rows} == {("none", "none"), ("nominal", "none")}
+    assert (tmp_path / "sweep" / "heatmap.png").stat().st_size > 5000
+
+
+def test_ray_cluster_refuses_cells_no_node_can_take_at_once(ray_cluster, tmp_path):
+    address, env = ray_cluster
+    started = time.perf_counter()
+    result = _cli_sweep(tmp_path / "sweep", address, env, "--cpus-per-cell", "2")
+    assert result.returncode == 2
+    assert "each cell asks Ray for 2 CPUs" in result.stderr and "largest node of the cluster" in result.stderr
+    assert "Traceback" not in result.stderr
+    assert time.perf_counter() - started < 120
