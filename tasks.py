@@ -1,18 +1,25 @@
 #!/usr/bin/env python3
-"""Project commands that need nothing but Python 3.10+ and pip: ``python3 tasks.py main|demo|test|bench``.
+"""Project commands that need nothing but Python and pip: ``python3 tasks.py main|demo|test|bench``.
 
 Each command first makes ``.venv`` (once) and installs clutter-gym into it with its test, training, benchmark and Ray
-extras, with torch pinned through ``constraints.txt`` (an unpinned torch pulls several GB of CUDA wheels). The package
-itself is reinstalled (not in editable mode) whenever its sources change, so tests always import what a user's
-``pip install .`` would give them. ``test`` runs ``ruff check .`` (settings in pyproject.toml) before pytest.
+extras, with torch's version pinned through ``constraints.txt``. The package itself is reinstalled (not in editable
+mode) whenever its sources change, so tests always import what a user's ``pip install .`` would give them. ``test``
+runs ``ruff check .`` (settings in pyproject.toml) before pytest.
+
+pybullet 3.2.7 ships wheels for CPython 3.10 and 3.11 only; on a newer Python pip compiles it from source (a C++
+compiler, the Python headers and many minutes, see the README). So when ``.venv`` does not exist yet and this file
+runs on a newer Python, it makes ``.venv`` with a CPython 3.11 or 3.10 found on PATH instead, and says which.
 """
 
 from __future__ import annotations
 
 import hashlib
+import os
+import shutil
 import subprocess
 import sys
 import venv
+from collections.abc import Callable
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent
@@ -20,6 +27,8 @@ VENV = ROOT / ".venv"
 BIN = VENV / ("Scripts" if sys.platform == "win32" else "bin")
 PY = BIN / "python"
 SOURCES = ("pyproject.toml", "constraints.txt", "envs", "training", "assets")
+#: The Pythons pybullet 3.2.7 has wheels for, newest first.
+WHEEL_PYTHONS = ((3, 11), (3, 10))
 
 
 def _digest(paths: tuple[str, ...]) -> str:
@@ -37,6 +46,36 @@ def _digest(paths: tuple[str, ...]) -> str:
 def _pip(*args: str) -> None:
     subprocess.run([str(PY), "-m", "pip", "install", "-q", "--disable-pip-version-check", "-c",
                     str(ROOT / "constraints.txt"), *args], check=True)
+
+
+def wheel_python(version: tuple[int, int], which: Callable[[str], str | None] = shutil.which) -> str | None:
+    """A Python with pybullet wheels to make ``.venv`` with when this one (``version``) has none: the path of
+    ``python3.11`` or ``python3.10`` on PATH; None when this Python has wheels, or no such Python is found."""
+    if version in WHEEL_PYTHONS:
+        return None
+    for major, minor in WHEEL_PYTHONS:
+        found = which(f"python{major}.{minor}")
+        if found:
+            return found
+    return None
+
+
+def use_a_wheel_python(argv: list[str]) -> None:
+    """Before ``.venv`` exists, run this file again under a Python pybullet has wheels for, when this one has none
+    (or say what installing on this one costs)."""
+    if PY.exists() or os.environ.get("CLUTTER_GYM_TASKS_REEXEC"):
+        return
+    version = sys.version_info[:2]
+    found = wheel_python(version)
+    if found:
+        print(f"tasks.py: Python {version[0]}.{version[1]} has no pybullet wheel; making .venv with {found}",
+              flush=True)
+        os.environ["CLUTTER_GYM_TASKS_REEXEC"] = "1"
+        os.execv(found, [found, str(Path(__file__).resolve()), *argv])
+    if version not in WHEEL_PYTHONS:
+        print(f"tasks.py: pybullet 3.2.7 has no wheel for Python {version[0]}.{version[1]} and no python3.11 or "
+              "python3.10 is on PATH: pip compiles it from source (needs a C++ compiler and the Python headers; "
+              "see the README for the time it takes)", flush=True)
 
 
 def ensure_installed() -> None:
@@ -66,6 +105,7 @@ def main(argv: list[str]) -> int:
     if not argv or argv[0] not in commands:
         print(f"usage: python3 tasks.py {{{'|'.join(commands)}}} [extra arguments]", file=sys.stderr)
         return 2
+    use_a_wheel_python(argv)
     ensure_installed()
     if argv[0] == "test" and subprocess.run([str(PY), "-m", "ruff", "check", "."], cwd=ROOT).returncode != 0:
         print("ruff: style errors above (ruff check --fix . fixes import order)", file=sys.stderr)
