@@ -186,6 +186,7 @@ class ClutterEnv(gym.Env):
         info.update(
             reward_terms=outcome.terms,
             cost=outcome.cost,
+            **{f"cost_{cause}": value for cause, value in outcome.costs.items()},
             is_success=outcome.is_success,
             min_clearance=report.min_clearance,
             closest_pair=report.closest,

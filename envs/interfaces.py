@@ -118,13 +118,18 @@ class Arena(Protocol):
 
 @dataclass(frozen=True, slots=True)
 class StepOutcome:
-    """Reward, its signed terms, and the episode-ending flags of one step."""
+    """Reward, its signed terms, the episode-ending flags and the safety cost of one step, by cause (the env puts
+    each in ``info["cost_<cause>"]`` and their sum in ``info["cost"]``)."""
 
     reward: float
     terms: dict[str, float]
     terminated: bool
     is_success: bool
-    cost: float
+    costs: dict[str, float]
+
+    @property
+    def cost(self) -> float:
+        return sum(self.costs.values())
 
 
 class Task(Protocol):

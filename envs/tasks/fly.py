@@ -17,7 +17,7 @@ from gymnasium import spaces
 from clutter_gym.collision import CollisionReport
 from clutter_gym.interfaces import StepOutcome
 from clutter_gym.robots.state import RobotState
-from clutter_gym.tasks.terms import check_weights, clearance_term, control_term
+from clutter_gym.tasks.terms import check_weights, clearance_term, control_term, cost_by_cause
 from clutter_gym.worlds.volume_path import VolumePathDistance
 from clutter_gym.worlds.volume_scene import VolumeScene, boundary_distance
 from clutter_gym.worlds.volume_spec import VolumeSpec
@@ -173,4 +173,5 @@ class FlyTask:
         }
         self._previous_path = path
         success = success and not crashed
-        return StepOutcome(sum(terms.values()), terms, success or crashed, success, 1.0 if unsafe else 0.0)
+        costs = cost_by_cause(contact=report.in_contact, tunneling=report.tunneling > 0)
+        return StepOutcome(sum(terms.values()), terms, success or crashed, success, costs)

@@ -15,7 +15,7 @@ from gymnasium import spaces
 from clutter_gym.collision import CollisionReport
 from clutter_gym.interfaces import StepOutcome
 from clutter_gym.robots.state import RobotState
-from clutter_gym.tasks.terms import check_weights, clearance_term, control_term
+from clutter_gym.tasks.terms import check_weights, clearance_term, control_term, cost_by_cause
 from clutter_gym.worlds.clutter import ClutterSpec
 from clutter_gym.worlds.path_distance import PathDistance
 from clutter_gym.worlds.scene import Scene
@@ -157,7 +157,7 @@ class NavigateTask:
         self._previous_path = path
         flipped = state.rotation[2, 2] < MAX_TILT_COS
         terminated = success or flipped or (self.terminate_on_collision and report.in_contact)
-        return StepOutcome(sum(terms.values()), terms, terminated, success, 1.0 if report.in_contact else 0.0)
+        return StepOutcome(sum(terms.values()), terms, terminated, success, cost_by_cause(contact=report.in_contact))
 
 
 def _forward_speed(state: RobotState) -> float:

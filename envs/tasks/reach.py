@@ -15,7 +15,7 @@ from clutter_gym.collision import CollisionReport
 from clutter_gym.interfaces import StepOutcome
 from clutter_gym.planning.joint_space import JointPath
 from clutter_gym.robots.state import RobotState
-from clutter_gym.tasks.terms import check_weights, clearance_term, control_term
+from clutter_gym.tasks.terms import check_weights, clearance_term, control_term, cost_by_cause
 from clutter_gym.worlds.tabletop import ReachScene
 
 if TYPE_CHECKING:
@@ -205,6 +205,6 @@ class ReachTask:
             "control": control_term(w.control, action),
         }
         self._previous = to_go
-        unsafe = report.in_contact or self_contact or report.tunneling > 0
-        terminated = success or (self.terminate_on_collision and unsafe)
-        return StepOutcome(sum(terms.values()), terms, terminated, success, 1.0 if unsafe else 0.0)
+        costs = cost_by_cause(contact=report.in_contact, self_contact=self_contact, tunneling=report.tunneling > 0)
+        terminated = success or (self.terminate_on_collision and any(costs.values()))
+        return StepOutcome(sum(terms.values()), terms, terminated, success, costs)

@@ -1,4 +1,5 @@
-"""What every task's reward shares: the range check of its weights, and the terms that price safety and effort."""
+"""What every task's reward shares: the range check of its weights, the terms that price safety and effort, and the
+split of a step's safety cost by cause."""
 
 from __future__ import annotations
 
@@ -28,3 +29,14 @@ def clearance_term(weight: float, margin: float, min_clearance: float) -> float:
 def control_term(weight: float, action: np.ndarray) -> float:
     """``-weight`` times the squared norm of the (clipped) action."""
     return -weight * float(action @ action)
+
+
+def cost_by_cause(**causes: bool) -> dict[str, float]:
+    """A step's safety cost split by cause, Safety-Gymnasium style: 1.0 for the first cause that holds, in the order
+    given, 0.0 for the others, so the values sum to the step's cost (1 for an unsafe step, else 0). Every cause has
+    its entry in every step."""
+    costs = dict.fromkeys(causes, 0.0)
+    first = next((name for name, holds in causes.items() if holds), None)
+    if first is not None:
+        costs[first] = 1.0
+    return costs
