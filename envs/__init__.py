@@ -22,6 +22,9 @@ _ENTRY_POINTS = {"ClutterNav-v0": "clutter_gym.clutter_nav:ClutterNavEnv",
 _EPISODE_STEPS = {"ClutterNav-v0": 400, "ClutterReach-v0": 100, "ClutterFly-v0": 600}
 for _env_id in ENV_IDS:
     register(id=_env_id, entry_point=_ENTRY_POINTS[_env_id], max_episode_steps=_EPISODE_STEPS[_env_id])
+#: ClutterReach goal-conditioned for HER: Dict(observation, achieved_goal, desired_goal) and compute_reward.
+register(id="ClutterReachGoal-v0", entry_point="clutter_gym.goal_conditioned:make_goal_reach",
+         max_episode_steps=_EPISODE_STEPS["ClutterReach-v0"])
 for _train_id, _env_id in TRAIN_IDS.items():
     register(id=_train_id, entry_point="clutter_gym.training.zoo:shipped_env", kwargs={"env_id": _env_id},
              max_episode_steps=_EPISODE_STEPS[_env_id])
