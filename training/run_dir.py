@@ -27,6 +27,7 @@ import json
 import platform
 import re
 import shutil
+import subprocess
 from collections.abc import Iterator
 from contextlib import contextmanager
 from importlib import metadata
@@ -69,14 +70,34 @@ def writing(path: Path) -> Iterator[None]:
 
 
 def package_versions() -> dict[str, str]:
-    """Versions of the packages a run's files depend on, and Python's."""
+    """Versions of the packages a run's files depend on, Python's, and the clutter-gym commit when the run is
+    started from a git checkout of clutter-gym (see :func:`checkout_commit`)."""
     versions = {}
     for name in _PACKAGES:
         try:
             versions[name] = metadata.version(name)
         except metadata.PackageNotFoundError:
             versions[name] = "not installed"
-    return {**versions, "python": platform.python_version()}
+    commit = checkout_commit(Path.cwd())
+    return {**versions, "python": platform.python_version(), **({"clutter-gym commit": commit} if commit else {})}
+
+
+def checkout_commit(folder: Path) -> str | None:
+    """The commit of the clutter-gym git checkout ``folder`` lies in (``python3 tasks.py`` runs there), with
+    ``-dirty`` when its tracked files have uncommitted changes; None outside such a checkout or without git."""
+    def git(*args: str) -> str:
+        return subprocess.run(["git", "-C", str(folder), *args], capture_output=True, text=True, timeout=10,
+                              check=True).stdout.strip()
+
+    try:
+        root = Path(git("rev-parse", "--show-toplevel"))
+        if 'name = "clutter-gym"' not in (root / "pyproject.toml").read_text():
+            return None
+        commit = git("rev-parse", "HEAD")
+        dirty = bool(git("status", "--porcelain", "--untracked-files=no"))
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return f"{commit}-dirty" if dirty else commit
 
 
 class RunDir:

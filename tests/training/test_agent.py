@@ -151,3 +151,18 @@ def test_make_env_takes_noise_overrides_on_top_of_the_runs(tmp_path):
     env = agent.make_env()
     assert env.unwrapped.spec.kwargs["noise"] == {"profile": "none", "lidar": {"range_sigma": 0.03}}
     env.close()
+
+
+def test_the_run_folder_records_the_commit_of_the_checkout_it_was_started_from(tmp_path):
+    import subprocess
+    from pathlib import Path
+
+    from clutter_gym.training.run_dir import checkout_commit
+
+    root = Path(__file__).resolve().parents[2]
+    if not (root / ".git").exists():
+        pytest.skip("the tests do not run from a git checkout")
+    head = subprocess.run(["git", "-C", str(root), "rev-parse", "HEAD"], capture_output=True, text=True,
+                          check=True).stdout.strip()
+    assert checkout_commit(root / "training").removesuffix("-dirty") == head
+    assert checkout_commit(tmp_path) is None  # not a checkout (of clutter-gym)
