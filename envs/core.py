@@ -6,6 +6,7 @@ sensing, collision or reward lives in the part that owns it, behind the contract
 
 from __future__ import annotations
 
+import difflib
 import inspect
 import math
 import os
@@ -53,6 +54,12 @@ class ClutterEnv(gym.Env):
     """
 
     metadata = {"render_modes": list(RENDER_MODES), "render_fps": 20}
+
+    def __new__(cls, *args: Any, **kwargs: Any) -> ClutterEnv:
+        """Check the keyword arguments against the env's own before it is built: a misspelt one is named with the
+        closest allowed name and the whole list, where Python would only say "unexpected keyword argument"."""
+        check_keywords(cls, kwargs)
+        return super().__new__(cls)
 
     def __init__(
         self,
@@ -271,6 +278,19 @@ class ClutterEnv(gym.Env):
         if self.sim.client_id < 0:
             name = self.spec.id if self.spec is not None else type(self).__name__
             raise RuntimeError(f"{name} is closed: make a new env with gym.make")
+
+
+def check_keywords(cls: type, kwargs: Mapping[str, Any]) -> None:
+    """Raise a ``TypeError`` naming each keyword ``cls.__init__`` does not take, with the closest allowed name and
+    the list of them."""
+    allowed = [name for name, p in inspect.signature(cls.__init__).parameters.items()
+               if name != "self" and p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
+    unknown = [name for name in kwargs if name not in allowed]
+    if unknown:
+        hints = [f"{name!r}" + "".join(f" (did you mean {m!r}?)" for m in difflib.get_close_matches(name, allowed, 1))
+                 for name in unknown]
+        raise TypeError(f"{cls.__name__} got unknown keyword argument(s) {', '.join(hints)}; it takes "
+                        f"{sorted(allowed)}")
 
 
 def check_env_settings(render_mode: str | None, physics_hz: float, control_hz: float, solver_iterations: int,

@@ -96,9 +96,13 @@ def test_numpy_booleans_are_booleans():
     env.close()
 
 
-def test_unknown_kwarg_is_named():
-    with pytest.raises(TypeError, match="n_beams"):
+def test_unknown_kwarg_is_named_with_the_closest_allowed_name_and_the_list():
+    with pytest.raises(TypeError, match=r"'n_beams' \(did you mean 'n_rays'\?\); it takes \[.*'n_rays'"):
         gym.make("ClutterNav-v0", n_beams=10)
+    with pytest.raises(TypeError, match=r"'obstacle_densty' \(did you mean 'obstacle_density'\?\)"):
+        gym.make("ClutterFly-v0", obstacle_densty=0.1)
+    with pytest.raises(TypeError, match=r"'zzz'; it takes \["):  # nothing close: the list alone
+        gym.make("ClutterReach-v0", zzz=1)
 
 
 @pytest.mark.parametrize("sensors", [(), ("imu",), ("lidar",), ("imu", "lidar")])
