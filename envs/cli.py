@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import time
 import typing
@@ -121,6 +122,16 @@ def profiles(name: str | None) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """The command line; a reader that stops reading (``clutter-gym profiles | head``) ends it quietly."""
+    try:
+        return _run(argv)
+    except BrokenPipeError:
+        # Python's recipe: point stdout at devnull so that the flush at exit does not raise again
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1
+
+
+def _run(argv: list[str] | None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     if args.command == "demo":

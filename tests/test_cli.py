@@ -169,3 +169,13 @@ def test_the_fly_demo_flies_the_planned_path_to_the_goal_and_writes_a_gif(tmp_pa
     assert summary["policy"] == "scripted position controller on the planned path"
     assert summary["success"] and summary["contact_steps"] == 0 and summary["steps"] < 600
     assert Path(summary["gif"]).stat().st_size > 0
+
+
+def test_a_reader_that_stops_early_ends_the_command_quietly():
+    """``clutter-gym profiles | head -1``: the pipe closes under the command; no traceback, no hang."""
+    cli = Path(sys.executable).with_name("clutter-gym")
+    proc = subprocess.Popen([str(cli), "profiles"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, bufsize=0)
+    assert proc.stdout.read(10)
+    proc.stdout.close()
+    _, err = proc.communicate(timeout=60)
+    assert b"Traceback" not in err and b"BrokenPipeError" not in err, err.decode()
