@@ -91,6 +91,7 @@ def ensure_installed() -> None:
         deps_stamp.write_text(deps)
     pkg = _digest(SOURCES)
     if not pkg_stamp.exists() or pkg_stamp.read_text() != pkg:
+        shutil.rmtree(ROOT / "build", ignore_errors=True)  # build/lib keeps deleted modules, which would ship
         _pip("--no-deps", "--force-reinstall", str(ROOT))
         pkg_stamp.write_text(pkg)
 
