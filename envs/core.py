@@ -101,7 +101,8 @@ class ClutterEnv(gym.Env):
         self.observation_space = spaces.Dict(
             {**{key: space for s in self.sensors for key, space in s.spaces.items()}, **task.spaces, **robot.spaces}
         )
-        self.scene: Layout | None = None
+        self.scene: Layout | None = None  # None between episodes: before the first reset and after a failed one
+        self._failed_reset: str | None = None  # why the last reset raised, until one succeeds
         self._movable: tuple[np.ndarray, list[int]] = (np.zeros(0, dtype=int), [])  # scene indices and bodies
 
     @property
@@ -122,10 +123,22 @@ class ClutterEnv(gym.Env):
         """Start an episode on a new seeded layout, or on ``options["scene"]`` (format: docs/envs.md,
         "Scene format").
 
+        A reset that raises leaves no episode: the world may hold part of the refused scene, so :meth:`step`
+        refuses to run until a reset succeeds.
+
         Raises:
             RuntimeError: the env is closed.
+            ValueError: ``options`` or its scene is invalid, or a user scene starts in collision.
         """
         self._check_open()
+        try:
+            return self._reset(seed, options)
+        except BaseException as error:
+            self.scene, self._failed_reset = None, f"{type(error).__name__}: {error}"
+            raise
+
+    def _reset(self, seed: int | None, options: Mapping[str, Any] | None
+               ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
         super().reset(seed=seed)
         scene = self.arena.choose_scene(self.np_random, options)
         if self.sim.needs_rebuild:  # memory pybullet only frees by emptying the world: build it again
@@ -157,6 +170,7 @@ class ClutterEnv(gym.Env):
             min_clearance=report.min_clearance, n_contacts=report.n_contacts, is_success=False,
             noise_profile=self.noise.name,
         )
+        self._failed_reset = None
         if self.render_mode == "human":
             self.render()
         return obs, info
@@ -167,10 +181,12 @@ class ClutterEnv(gym.Env):
         Raises:
             ValueError: the action has the wrong shape or holds NaN/Inf. Finite values outside [-1, 1] are
                 clipped, not rejected.
-            RuntimeError: the env is closed, or was never reset.
+            RuntimeError: the env is closed, was never reset, or its last reset failed.
         """
         self._check_open()
         if self.scene is None:
+            if self._failed_reset is not None:
+                raise RuntimeError(f"the last reset() failed ({self._failed_reset}); call reset() again before step()")
             raise RuntimeError("call reset() before step()")
         a = self._checked_action(action)
         applied, speed_scale = self.safety.filter(a, self._scan) if self.safety else (a, 1.0)

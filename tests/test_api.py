@@ -177,6 +177,20 @@ def test_step_before_reset_raises(make_env):
         make_env().step(np.zeros(2))
 
 
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_a_failed_reset_refuses_steps_until_a_reset_succeeds(env_id, make_env):
+    env = make_env(env_id)
+    env.reset(seed=0)
+    action = np.zeros(env.action_space.shape)
+    env.step(action)
+    with pytest.raises(ValueError, match="unknown keys"):
+        env.reset(options={"scene": {"bogus": 1}})
+    with pytest.raises(RuntimeError, match=r"last reset\(\) failed \(ValueError: .*unknown keys.*call reset\(\) again"):
+        env.step(action)
+    env.reset(seed=0)
+    env.step(action)
+
+
 def test_render_rgb_array(make_env):
     env = make_env(render_mode="rgb_array")
     env.reset(seed=0)

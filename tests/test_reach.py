@@ -68,6 +68,23 @@ def test_bad_scenes_raise_naming_the_field(bad, message, make_env):
         env.reset(options={"scene": bad})
 
 
+def test_a_scene_refused_for_starting_in_collision_cannot_be_stepped(make_env):
+    """The refused scene is already placed when the check refuses it: a step there would run it anyway."""
+    env = make_env("ClutterReach-v0")
+    env.reset(seed=0)
+    env.step(np.zeros(7))
+    with pytest.raises(ValueError, match="scene starts in collision"):
+        env.reset(options={"scene": scene([{"shape": "box", "size": [0.2, 0.2, 0.8], "position": [0.3, 0.0]}])})
+    for _ in range(2):  # refused every time, not once
+        with pytest.raises(RuntimeError, match=r"last reset\(\) failed \(ValueError: scene starts in collision.*"
+                                               r"call reset\(\) again"):
+            env.step(np.zeros(7))
+    assert env.unwrapped.scene is None
+    env.reset(seed=0)
+    _, _, _, _, info = env.step(np.zeros(7))
+    assert info["cost"] == 0.0 and info["n_contacts"] == 0
+
+
 @pytest.mark.parametrize(
     ("kwargs", "message"),
     [
