@@ -9,6 +9,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
+from clutter_gym.collision.fidelity import COARSE_LEVELS, FIDELITY_LEVELS
 from clutter_gym.training.baselines import StraightLineReacher
 from clutter_gym.worlds.scene import Obstacle
 from clutter_gym.worlds.tabletop import TABLE, TableSpec, point_clearance, sample_reach_scene
@@ -31,6 +32,39 @@ def test_generated_layouts_start_clear_with_a_free_reachable_target(fidelity, ma
         assert env.unwrapped.checker.check(env.unwrapped.robot.state()).self_collision is None
         assert point_clearance(np.array(scene_.target), scene_.obstacles) >= 0.06
         assert np.linalg.norm(np.array(scene_.target) - [0, 0, 0.333]) <= 0.8
+
+
+@pytest.mark.parametrize("fidelity", FIDELITY_LEVELS)
+def test_generated_scenes_are_accepted_back_at_every_fidelity_level(fidelity, make_env):
+    """A generated start is clear of the clutter and of self-collision; a coarse level refused some of them back when
+    it judged self-collision by its own shapes, which overlap around the wrist where the links do not."""
+    env = make_env("ClutterReach-v0", collision_fidelity=fidelity)
+    for seed in range(31):
+        env.reset(seed=seed)
+        _, info = env.reset(options={"scene": env.unwrapped.scene.to_dict()})
+        assert info["n_contacts"] == 0
+
+
+def test_coarse_levels_report_the_self_collisions_convex_reports_under_random_commands(make_env):
+    """The fidelity level changes what FCL measures, not the physics: envs stepped in lockstep share every pose."""
+    levels = ("convex", *COARSE_LEVELS)
+    envs = {level: make_env("ClutterReach-v0", collision_fidelity=level, max_joint_speed=1.0) for level in levels}
+    rng = np.random.default_rng(2)
+    reports = {level: [] for level in levels}
+    for seed in range(3):
+        for env in envs.values():
+            env.reset(seed=seed)
+        for _ in range(100):
+            action = rng.uniform(-1, 1, 7)
+            for level, env in envs.items():
+                reports[level].append(env.step(action)[4]["self_collision"] is not None)
+    convex = np.array(reports["convex"])
+    assert convex.sum() >= 10  # the arm folds onto itself in some steps
+    for level in COARSE_LEVELS:
+        coarse = np.array(reports[level])
+        assert not np.any(coarse & ~convex), f"{level}: self-collision convex does not see"
+        if level != "spheres":  # its sphere sets enclose the meshes, not their hulls: it can only see less
+            np.testing.assert_array_equal(coarse, convex, err_msg=level)
 
 
 def test_layouts_have_a_shelf_and_are_seeded():

@@ -12,12 +12,16 @@ Every other pair stays enabled, in particular one that collides in some but not 
 disables pairs in collision in the default pose; that rule is left out here because such a pair can be in the
 enabled band, and checking it costs less than missing it.
 
-The samples use the unpadded geometry at the requested fidelity. Results are cached as JSON keyed by the URDF's
-content (and its meshes'), the fidelity and the sampling settings: first among the files shipped in
-``clutter_gym/assets/acm/``, then in the user cache (``$XDG_CACHE_HOME/clutter-gym/acm``, default
-``~/.cache/clutter-gym/acm``), else generated (seconds) and written there atomically. The shipped files
-(the Panda's and the diffbot's, every level) are regenerated with ``save_acm(generate_acm(urdf, level), urdf,
-SHIPPED_DIR)``; a test fails when they no longer match their URDFs.
+The samples use the unpadded geometry at the requested fidelity. :func:`load_acm` gives the coarse levels
+(``COARSE_LEVELS``) no matrix of their own: their shapes overlap around most joints in most poses, so their own
+samples would leave pairs enabled that the links themselves touch in few poses or none. They share
+``CONFIRM_LEVEL``'s, whose shapes also confirm their self-collision hits (:mod:`confirm`); ``auto`` shares
+``mesh``'s. Results are cached as JSON keyed by the URDF's content (and its meshes'), the fidelity and the sampling
+settings: first among the files shipped in ``clutter_gym/assets/acm/``, then in the user cache
+(``$XDG_CACHE_HOME/clutter-gym/acm``, default ``~/.cache/clutter-gym/acm``), else generated (seconds) and written
+there atomically. The shipped files (the Panda's and the diffbot's at ``convex`` and ``mesh``, the two levels
+:func:`load_acm` reads) are regenerated with ``save_acm(generate_acm(urdf, level), urdf, SHIPPED_DIR)``; a test
+fails when they no longer match their URDFs.
 """
 
 from __future__ import annotations
@@ -32,7 +36,7 @@ import fcl
 import numpy as np
 
 from clutter_gym.assets import ASSET_DIR
-from clutter_gym.collision.fidelity import build_link_shapes, check_fidelity
+from clutter_gym.collision.fidelity import COARSE_LEVELS, CONFIRM_LEVEL, build_link_shapes, check_fidelity
 from clutter_gym.collision.kinematics import UrdfKinematics
 from clutter_gym.collision.urdf_geometry import load_collision_elements, urdf_digest
 from clutter_gym.util.atomic import write_text_atomically
@@ -190,9 +194,12 @@ def _user_cache_dir() -> Path:
 def load_acm(urdf: str | Path, fidelity: str, samples: int = ACM_SAMPLES,
              seed: int = ACM_SEED) -> AllowedCollisionMatrix:
     """The cached ACM of ``urdf`` at ``fidelity`` (shipped or user cache), generating and caching it if absent.
-    ``auto`` and ``spheres`` share ``mesh``'s: which link pairs can touch is a property of the robot, which
-    ``auto`` models to within ``AUTO_HULL_TOLERANCE`` and ``spheres`` by a fitted enclosure."""
-    if fidelity in ("auto", "spheres"):
+    Which link pairs can touch is a property of the robot: ``auto`` shares ``mesh``'s, which it models to within
+    ``AUTO_HULL_TOLERANCE``, and the coarse levels (``COARSE_LEVELS``) share ``CONFIRM_LEVEL``'s, whose shapes
+    confirm their self-collision hits (their own shapes overlap around most joints in most poses)."""
+    if fidelity in COARSE_LEVELS:
+        fidelity = CONFIRM_LEVEL
+    elif fidelity == "auto":
         fidelity = "mesh"
     key = acm_key(urdf, fidelity, samples, seed)
     name = f"{Path(urdf).stem}-{key}.json"

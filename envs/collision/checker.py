@@ -12,7 +12,8 @@ obstacle) pair from below in one numpy pass, then:
    typically one or two FCL queries a step instead of one or more per shape, and only the shapes it measures moved
    in FCL;
 2. pairs within ``contact_tolerance`` are enumerated as contacts with their penetration depth;
-3. enabled self pairs (the ACM) are tested, after a bounding-ball filter;
+3. enabled self pairs (the ACM) are tested, after a bounding-ball filter; at a coarse level a hit counts only when
+   the ``convex`` level's shapes of the two links touch as well (:mod:`confirm`);
 4. shapes that moved faster than ``swept_speed`` are swept from their previous pose (``fcl.continuousCollide``,
    translation motion, conservative advancement) against the obstacles near their path: a hit the end-of-step
    check does not see is *tunneling*, unless the pair was in contact at the previous check (a shape leaving a

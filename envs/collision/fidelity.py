@@ -9,7 +9,9 @@
 | ``mesh`` | its elements | its triangles (``fcl.BVHModel``, OBBRSS tree; hull for depth) | as they are |
 | ``auto`` | its elements | its hull if within ``AUTO_HULL_TOLERANCE`` of the mesh, else its triangles | as they are |
 
-Every approximation encloses the exact geometry, so a coarser level can report contact early but never late.
+Every approximation encloses the exact geometry, so a coarser level can report contact early but never late. Self-
+collision is the exception: the coarse levels (``COARSE_LEVELS``) report it only where ``convex``'s shapes touch
+too, since their own shapes overlap around the joints in poses where the links are apart.
 ``auto`` is ``mesh`` to within the tolerance at ``convex``'s cost for the elements that are convex already: the
 hull lies outside the mesh, so the distance to it is short of the distance to the mesh by at most the largest gap
 between the two surfaces.
@@ -30,6 +32,11 @@ from clutter_gym.collision.urdf_geometry import CollisionElement
 from clutter_gym.util.transforms import quat_to_matrix
 
 FIDELITY_LEVELS = ("sphere", "spheres", "primitive", "convex", "mesh", "auto")
+#: Levels whose shapes reach so far beyond the links that neighbouring links' shapes overlap in poses where the links
+#: are apart: their self-collision hits are confirmed with ``CONFIRM_LEVEL``'s shapes (:mod:`confirm`), and they
+#: check that level's ACM.
+COARSE_LEVELS = ("sphere", "spheres", "primitive")
+CONFIRM_LEVEL = "convex"
 #: Spheres fitted to each mesh element at the ``spheres`` level.
 SPHERES_PER_ELEMENT = 16
 #: ``auto`` keeps a mesh element's triangles when its convex hull strays further than this from it, metres.

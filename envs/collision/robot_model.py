@@ -10,8 +10,9 @@ import fcl
 import numpy as np
 
 from clutter_gym.collision.acm import AllowedCollisionMatrix, load_acm
+from clutter_gym.collision.confirm import PairConfirmer
 from clutter_gym.collision.distance import signed_distance
-from clutter_gym.collision.fidelity import LinkShape, build_link_shapes
+from clutter_gym.collision.fidelity import COARSE_LEVELS, CONFIRM_LEVEL, LinkShape, build_link_shapes
 from clutter_gym.collision.urdf_geometry import load_collision_elements
 
 #: Spheres from which a model's spheres are a sphere set: answered from their balls in numpy, placed in FCL only
@@ -36,6 +37,11 @@ class RobotCollisionModel:
         padding: metres added around every link (a float), or per link name (missing links get 0). Padding is
             applied exactly, as a Minkowski sum with a ball: it is subtracted from every distance.
         acm: pairs of links whose self-collision is checked; None checks none.
+        confirm_shapes: finer shapes of the same links (a coarse level's model gets the ``convex`` level's): a pair
+            of links is in self-collision only when these touch too, and ``shapes`` serve as their broad phase
+            (:mod:`confirm`). Where ``shapes`` enclose them (``sphere``, ``primitive``) the verdict is theirs;
+            ``spheres``' sphere sets enclose the meshes, not their hulls, so it can miss a touch of the hulls alone.
+            Empty: ``shapes`` decide.
 
     Raises:
         ValueError: a shape's link is not among ``link_names``, or a padding is negative or not finite.
@@ -47,6 +53,7 @@ class RobotCollisionModel:
         link_names: Sequence[str],
         padding: float | Mapping[str, float] = 0.0,
         acm: AllowedCollisionMatrix | None = None,
+        confirm_shapes: Sequence[LinkShape] = (),
     ) -> None:
         self.shapes = list(shapes)
         self.link_names = tuple(link_names)
@@ -83,6 +90,7 @@ class RobotCollisionModel:
         self.position = np.zeros((len(self.shapes), 3))
         self.rotation = np.broadcast_to(np.eye(3), (len(self.shapes), 3, 3)).copy()
         self._collide_request = fcl.CollisionRequest()
+        self._confirm = PairConfirmer(confirm_shapes, self.link_names, pad) if confirm_shapes else None
         self.set_acm(acm)
 
     @classmethod
@@ -94,9 +102,17 @@ class RobotCollisionModel:
         padding: float | Mapping[str, float] = 0.0,
         self_collision: bool = True,
     ) -> RobotCollisionModel:
-        """The model of ``urdf`` at ``fidelity``, with its cached ACM when ``self_collision`` is on."""
-        shapes = build_link_shapes(load_collision_elements(urdf), fidelity)
-        return cls(shapes, link_names, padding, load_acm(urdf, fidelity) if self_collision else None)
+        """The model of ``urdf`` at ``fidelity``, with its cached ACM when ``self_collision`` is on. At a coarse
+        level (``COARSE_LEVELS``) that ACM is ``CONFIRM_LEVEL``'s and its self-collision hits are confirmed with
+        that level's shapes: it checks the pairs that level checks and reports self-collision only where that level
+        does, instead of where its own shapes overlap and the links do not."""
+        elements = load_collision_elements(urdf)
+        shapes = build_link_shapes(elements, fidelity)
+        if not self_collision:
+            return cls(shapes, link_names, padding)
+        acm = load_acm(urdf, fidelity)
+        confirm = build_link_shapes(elements, CONFIRM_LEVEL) if fidelity in COARSE_LEVELS and acm.enabled else ()
+        return cls(shapes, link_names, padding, acm, confirm)
 
     def set_acm(self, acm: AllowedCollisionMatrix | None) -> None:
         """Check self-collision for the pairs ``acm`` enables (shape pairs of those link pairs)."""
@@ -108,6 +124,7 @@ class RobotCollisionModel:
             for j in range(i + 1, len(self.shapes))
             if tuple(sorted((self.shapes[i].link, self.shapes[j].link))) in enabled
         ]
+        self._self_links = [(self.shapes[i].link, self.shapes[j].link) for i, j in self.self_pairs]
         first, second = np.array(self.self_pairs, dtype=int).reshape(-1, 2).T
         radius = self.ball_radius + self.padding
         self._pair_index = (first, second, radius[first] + radius[second])
@@ -129,6 +146,8 @@ class RobotCollisionModel:
         """Move every FCL object to its link's pose (``positions`` (L, 3), ``rotations`` (L, 3, 3) by row)."""
         self.position, self.rotation = self.world_poses(positions, rotations)
         self._stale = [False] * len(self.shapes)
+        if self._confirm is not None:
+            self._confirm.set_link_poses(positions, rotations)
         rotation, position = self.rotation, self.position
         for obj, i in self._eager:
             obj.setRotation(rotation[i])
@@ -141,6 +160,8 @@ class RobotCollisionModel:
         asks for it: a query that measures a few shapes moves only those (:attr:`objects` may be out of date)."""
         self.position, self.rotation = self.world_poses(positions, rotations)
         self._stale = [True] * len(self.shapes)
+        if self._confirm is not None:
+            self._confirm.set_link_poses(positions, rotations)
 
     def object(self, i: int) -> fcl.CollisionObject:
         """Shape ``i``'s FCL object at the synced pose."""
@@ -167,12 +188,17 @@ class RobotCollisionModel:
         return self.position + np.einsum("nij,nj->ni", self.rotation, self._ball_offset)
 
     def self_collision(self) -> tuple[str, str] | None:
-        """The first enabled link pair in collision (padding included), or None."""
+        """The first enabled link pair in collision (padding included), or None. With ``confirm_shapes``, the
+        first whose confirming shapes touch too; a pair they reject is not asked about again in this call."""
         if not self.self_pairs:
             return None
-        request, pad, exact = self._collide_request, self.padding, self.exact
+        request, pad, exact, confirm = self._collide_request, self.padding, self.exact, self._confirm
+        rejected: set[tuple[str, str]] = set()
         for k in np.flatnonzero(self._pair_bounds() <= 0.0):  # pairs whose balls are apart cannot touch
             i, j = self.self_pairs[k]
+            links = self._self_links[k]
+            if links in rejected:
+                continue
             if exact[i] and exact[j]:  # two spheres: overlapping balls are the collision
                 hit = True
             elif pad[i] + pad[j] > 0.0:
@@ -180,11 +206,15 @@ class RobotCollisionModel:
             else:
                 hit = fcl.collide(self.object(i), self.object(j), request, fcl.CollisionResult()) > 0
             if hit:
-                return self.shapes[i].link, self.shapes[j].link
+                if confirm is None or confirm.collide(*links):
+                    return links
+                rejected.add(links)
         return None
 
     def self_clearance(self) -> SelfClearance:
-        """Smallest signed distance over the enabled link pairs, and that pair."""
+        """Smallest signed distance over the enabled link pairs, and that pair, measured on this model's own shapes
+        (never on ``confirm_shapes``): at a coarse level it may be negative where :meth:`self_collision` finds no
+        pair in collision."""
         best, pair = np.inf, None
         bounds = self._pair_bounds()
         spheres, others = self._sphere_pairs, self._other_pairs
