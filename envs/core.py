@@ -248,9 +248,14 @@ class ClutterEnv(gym.Env):
         return np.minimum(np.maximum(a, self._action_low), self._action_high)
 
     def _check_start(self, report: CollisionReport, options: Mapping[str, Any] | None) -> None:
-        """A user scene must not start in collision. Generated scenes keep their clutter clear of the start pose;
-        a coarse fidelity level may still report self-collision there, which is that level's error, not the
-        scene's (tests check generated starts at the default levels)."""
+        """Refuse a user scene that starts in collision: a contact, or self-collision of a pair the ACM checks (at a
+        coarse level confirmed with the convex shapes, so the robot's own, not its coarse shapes').
+
+        A generated scene is not checked: its sampler keeps the clutter clear of the start pose, and without
+        ``collision_padding`` it starts clear at every fidelity level, so it is accepted back as a user scene
+        (tests/test_reach.py checks every level). A padding also pads self-collision, and neighbouring links stand
+        close in the ready pose: a padded generated start can touch, and that episode begins in collision while the
+        same scene passed back is refused (docs/limitations.md)."""
         if options and "scene" in options and (report.in_contact or report.self_collision is not None):
             what = report.contacts[0] if report.contacts else f"self-collision {report.self_collision}"
             raise ValueError(f"scene starts in collision: {what}")
