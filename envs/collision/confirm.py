@@ -8,12 +8,11 @@ verdict is the finer level's while a step in which no coarse pair touches costs 
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 
 import fcl
 import numpy as np
 
-from clutter_gym.collision.distance import SEPARATION
 from clutter_gym.collision.fidelity import LinkShape
 
 
@@ -24,14 +23,11 @@ class PairConfirmer:
     Args:
         shapes: the finer level's shapes (``convex``'s).
         link_names: names of the rows of the pose arrays given to :meth:`set_link_poses`.
-        padding: metres added around each link (missing links get 0), as in the coarse model: a padded pair
-            touches when its signed distance is at most the two paddings.
     """
 
-    def __init__(self, shapes: Sequence[LinkShape], link_names: Sequence[str], padding: Mapping[str, float]) -> None:
+    def __init__(self, shapes: Sequence[LinkShape], link_names: Sequence[str]) -> None:
         self.shapes = list(shapes)
         self._rows = [list(link_names).index(s.link) for s in self.shapes]
-        self._padding = [float(padding.get(s.link, 0.0)) for s in self.shapes]
         self._objects = [fcl.CollisionObject(s.geometry, fcl.Transform()) for s in self.shapes]
         #: per shape: placed at its link's origin, unrotated (most mesh elements), so its pose is the link's
         self._at_origin = [not s.position.any() and np.array_equal(s.rotation, np.eye(3)) for s in self.shapes]
@@ -48,7 +44,7 @@ class PairConfirmer:
         self._placed = [False] * len(self.shapes)
 
     def collide(self, a: str, b: str) -> bool:
-        """Whether links ``a`` and ``b`` touch (padding included) at the last link poses."""
+        """Whether links ``a`` and ``b`` touch at the last link poses."""
         if self._poses is None:
             raise RuntimeError("set_link_poses() before collide()")
         for i in self._by_link.get(a, ()):
@@ -58,11 +54,7 @@ class PairConfirmer:
         return False
 
     def _touch(self, i: int, j: int) -> bool:
-        first, second, pad = self._objects[i], self._objects[j], self._padding[i] + self._padding[j]
-        if pad == 0.0:
-            return fcl.collide(first, second, self._request, fcl.CollisionResult()) > 0
-        # padded shapes touch within the two paddings; an overlap (FCL's -1) is within any
-        return fcl.distance(first, second, SEPARATION, fcl.DistanceResult()) <= pad
+        return fcl.collide(self._objects[i], self._objects[j], self._request, fcl.CollisionResult()) > 0
 
     def _place(self, i: int) -> int:
         """Move shape ``i`` to its link's pose once per :meth:`set_link_poses`; returns ``i``."""

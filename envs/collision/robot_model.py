@@ -34,8 +34,11 @@ class RobotCollisionModel:
     Args:
         shapes: the robot's shapes at one fidelity level (see :func:`build_link_shapes`).
         link_names: names of the rows of the pose arrays passed to :meth:`sync`.
-        padding: metres added around every link (a float), or per link name (missing links get 0). Padding is
-            applied exactly, as a Minkowski sum with a ball: it is subtracted from every distance.
+        padding: metres added around every link (a float), or per link name (missing links get 0), against the
+            world: it is applied exactly, as a Minkowski sum with a ball, subtracted from every distance to an
+            obstacle. Self-collision is checked on the unpadded shapes, as the ACM is sampled on them: neighbouring
+            links sit a few centimetres apart in every pose, and padding them would put the robot in
+            self-collision everywhere.
         acm: pairs of links whose self-collision is checked; None checks none.
         confirm_shapes: finer shapes of the same links (a coarse level's model gets the ``convex`` level's): a pair
             of links is in self-collision only when these touch too, and ``shapes`` serve as their broad phase
@@ -90,7 +93,7 @@ class RobotCollisionModel:
         self.position = np.zeros((len(self.shapes), 3))
         self.rotation = np.broadcast_to(np.eye(3), (len(self.shapes), 3, 3)).copy()
         self._collide_request = fcl.CollisionRequest()
-        self._confirm = PairConfirmer(confirm_shapes, self.link_names, pad) if confirm_shapes else None
+        self._confirm = PairConfirmer(confirm_shapes, self.link_names) if confirm_shapes else None
         self.set_acm(acm)
 
     @classmethod
@@ -126,13 +129,13 @@ class RobotCollisionModel:
         ]
         self._self_links = [(self.shapes[i].link, self.shapes[j].link) for i, j in self.self_pairs]
         first, second = np.array(self.self_pairs, dtype=int).reshape(-1, 2).T
-        radius = self.ball_radius + self.padding
+        radius = self.ball_radius  # self pairs are unpadded (see padding above)
         self._pair_index = (first, second, radius[first] + radius[second])
         spheres = self.exact[first] & self.exact[second]  # pairs of spheres: their ball bounds are their distances
         self._sphere_pairs, self._other_pairs = np.flatnonzero(spheres), np.flatnonzero(~spheres)
 
     def _pair_bounds(self) -> np.ndarray:
-        """Lower bounds on every enabled pair's padded distance, from the shapes' bounding balls."""
+        """Lower bounds on every enabled pair's (unpadded) distance, from the shapes' bounding balls."""
         first, second, reach = self._pair_index
         centres = self.ball_centres()
         return np.linalg.norm(centres[first] - centres[second], axis=1) - reach
@@ -188,11 +191,11 @@ class RobotCollisionModel:
         return self.position + np.einsum("nij,nj->ni", self.rotation, self._ball_offset)
 
     def self_collision(self) -> tuple[str, str] | None:
-        """The first enabled link pair in collision (padding included), or None. With ``confirm_shapes``, the
+        """The first enabled link pair in collision (unpadded shapes), or None. With ``confirm_shapes``, the
         first whose confirming shapes touch too; a pair they reject is not asked about again in this call."""
         if not self.self_pairs:
             return None
-        request, pad, exact, confirm = self._collide_request, self.padding, self.exact, self._confirm
+        request, exact, confirm = self._collide_request, self.exact, self._confirm
         rejected: set[tuple[str, str]] = set()
         for k in np.flatnonzero(self._pair_bounds() <= 0.0):  # pairs whose balls are apart cannot touch
             i, j = self.self_pairs[k]
@@ -201,8 +204,6 @@ class RobotCollisionModel:
                 continue
             if exact[i] and exact[j]:  # two spheres: overlapping balls are the collision
                 hit = True
-            elif pad[i] + pad[j] > 0.0:
-                hit = self._pair_distance(i, j) <= 0.0
             else:
                 hit = fcl.collide(self.object(i), self.object(j), request, fcl.CollisionResult()) > 0
             if hit:
@@ -235,4 +236,4 @@ class RobotCollisionModel:
         d, _ = signed_distance(self.object(i), self.object(j))
         if d <= 0.0:  # overlap: the depth comes from the solid shapes (a BVH has none)
             d, _ = signed_distance(self.solid_object(i), self.solid_object(j))
-        return d - self.padding[i] - self.padding[j]
+        return d

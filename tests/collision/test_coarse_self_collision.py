@@ -87,7 +87,7 @@ def test_coarse_levels_check_the_convex_acm():
 def test_the_confirmer_moves_only_the_shapes_of_the_pair_it_is_asked_about():
     """What keeps a coarse level's cost where no coarse pair touches: nothing of the convex shapes moves."""
     shapes = build_link_shapes(load_collision_elements(URDF), "convex")
-    confirmer = PairConfirmer(shapes, KIN.links, {})
+    confirmer = PairConfirmer(shapes, KIN.links)
     with pytest.raises(RuntimeError, match="set_link_poses"):
         confirmer.collide("panda_link5", "panda_link7")
     frames = KIN.forward(np.zeros((1, len(KIN.joints))))
@@ -96,3 +96,10 @@ def test_the_confirmer_moves_only_the_shapes_of_the_pair_it_is_asked_about():
     assert not any(confirmer._placed)
     confirmer.collide("panda_link5", "panda_link7")
     assert {s.link for s, placed in zip(shapes, confirmer._placed) if placed} == {"panda_link5", "panda_link7"}
+
+
+@pytest.mark.parametrize("level", ["primitive", "convex"])
+def test_padding_does_not_reach_self_collision(level, random_poses):
+    """Padding is a margin against the world; the ACM is sampled on the unpadded shapes, and neighbouring links sit
+    a few centimetres apart in every pose."""
+    assert verdicts(level, 0.03, random_poses) == verdicts(level, 0.0, random_poses)
