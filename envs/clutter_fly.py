@@ -24,6 +24,9 @@ from clutter_gym.worlds.volume_spec import SIZE_RANGE
 SENSOR_LINK, IMU_LINK = "sensor_mount", "imu"
 #: Lowest volume height, metres: the generator's wall openings (up to 1.6 m tall) must fit under the top.
 MIN_HEIGHT = 2.0
+#: Hz, the lowest physics rate: the body-rate loop runs once per tick behind the motors' lag, and below it the loop
+#: overshoots and no longer brings the airframe back level (docs/envs.md, "Physics rate").
+MIN_PHYSICS_HZ = 60.0
 #: m/s^2, the Sim's gravity: the hover action the control term is measured from.
 GRAVITY = 9.81
 #: metres: clearance is resolved this far (or to ``clearance_margin``, if larger); farther reads this. The reward
@@ -125,9 +128,9 @@ class ClutterFlyEnv(ClutterEnv):
     [0, pi/2]; ``camera_size`` (width, height) px; ``camera_modes`` (subset of ("rgb", "depth", "segmentation"));
     ``camera_fov`` vertical, rad; ``camera_far`` m; ``camera_renderer`` ("rays": depth and
     segmentation ray cast against the exact shapes; "tiny" or "egl" rasterise, and draw rgb too; None, the default:
-    "rays" unless ``camera_modes`` holds "rgb", then "tiny"); ``physics_hz`` (a
-    multiple of ``control_hz``); ``control_hz``; ``solver_iterations``; ``aero`` (subset of ("drag",
-    "ground_effect")); ``success_radius`` m (0, 2]; ``clearance_margin`` m [0, 1]; ``max_tilt`` rad (0, pi];
+    "rays" unless ``camera_modes`` holds "rgb", then "tiny"); ``physics_hz`` (a multiple of ``control_hz``, at least
+    :data:`MIN_PHYSICS_HZ`); ``control_hz`` (at least ``physics_hz`` / 1000); ``solver_iterations``; ``aero`` (subset
+    of ("drag", "ground_effect")); ``success_radius`` m (0, 2]; ``clearance_margin`` m [0, 1]; ``max_tilt`` rad (0, pi];
     ``terminate_on_collision``; ``contact_tolerance`` m [0, 0.05]; ``collision_fidelity``; ``collision_padding`` m
     [0, 1]; ``swept_speed`` m/s (``inf`` turns swept checks off); ``*_weight`` reward weights [0, 1e4];
     ``subgoal_lookahead`` m [0, volume diagonal] (0: off).
@@ -187,7 +190,8 @@ class ClutterFlyEnv(ClutterEnv):
         subgoal_lookahead: float = 0.0,
     ) -> None:
         check_numbers(ClutterFlyEnv.__init__, locals())
-        check_env_settings(render_mode, physics_hz, control_hz, solver_iterations, contact_tolerance)
+        check_env_settings(render_mode, physics_hz, control_hz, solver_iterations, contact_tolerance,
+                           env_id="ClutterFly-v0", min_physics_hz=MIN_PHYSICS_HZ)
         check_flags(ceiling=ceiling, terminate_on_collision=terminate_on_collision)
         if not (swept_speed > 0.0):  # inf allowed: no swept checks
             raise ValueError(f"swept_speed must be > 0 m/s (inf disables swept checks), got {swept_speed!r}")

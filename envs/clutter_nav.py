@@ -18,6 +18,10 @@ from clutter_gym.sensors import ImuConfig, LidarConfig, build_sensors, camera_co
 from clutter_gym.tasks import NavigateTask, NavRewardWeights
 from clutter_gym.worlds import ClutterArena, ClutterSpec
 
+#: Hz, the lowest physics rate: below it the wheels' contact with the floor does not settle, and a stopped robot creeps
+#: and bounces on (docs/envs.md, "Physics rate").
+MIN_PHYSICS_HZ = 60.0
+
 
 class ClutterNavEnv(ClutterEnv):
     """## Description
@@ -110,8 +114,9 @@ class ClutterNavEnv(ClutterEnv):
     [0, pi/2] (a multi-channel 3D LIDAR); ``camera_size`` (width, height) px; ``camera_modes`` (subset of
     ("rgb", "depth", "segmentation")); ``camera_fov`` vertical, rad; ``camera_far`` m; ``camera_renderer``
     ("tiny", "egl", or "rays": depth and segmentation only, ray cast against the exact shapes); ``physics_hz`` (a
-    multiple of ``control_hz``); ``control_hz``; ``solver_iterations``; ``max_linear_speed`` m/s; ``max_angular_speed`` rad/s;
-    ``success_radius`` m; ``clearance_margin`` m; ``terminate_on_collision``; ``contact_tolerance`` m;
+    multiple of ``control_hz``, at least :data:`MIN_PHYSICS_HZ`); ``control_hz`` (at least ``physics_hz`` / 1000);
+    ``solver_iterations``; ``max_linear_speed`` m/s; ``max_angular_speed`` rad/s; ``success_radius`` m;
+    ``clearance_margin`` m; ``terminate_on_collision``; ``contact_tolerance`` m;
     ``*_weight`` reward weights; ``subgoal_lookahead`` m (0: off); ``safety_horizon`` s [0, 2] (0: off),
     ``safety_margin`` m [0, 0.5] and ``safety_recovery`` s [0, 10] (0: never) (need a 2D ``lidar`` in
     ``sensors``).
@@ -183,7 +188,8 @@ class ClutterNavEnv(ClutterEnv):
         safety_recovery: float = 0.0,
     ) -> None:
         check_numbers(ClutterNavEnv.__init__, locals())
-        check_env_settings(render_mode, physics_hz, control_hz, solver_iterations, contact_tolerance)
+        check_env_settings(render_mode, physics_hz, control_hz, solver_iterations, contact_tolerance,
+                           env_id="ClutterNav-v0", min_physics_hz=MIN_PHYSICS_HZ)
         check_flags(terminate_on_collision=terminate_on_collision)
         robot = DiffDriveRobot(DiffDriveConfig(max_linear_speed=max_linear_speed, max_angular_speed=max_angular_speed))
         spec = ClutterSpec(arena_size=arena_size, obstacle_density=obstacle_density,

@@ -13,6 +13,10 @@ from clutter_gym.robots.panda import EE_ROW, LOWER, READY, TRACKED_LINKS, UPPER,
 from clutter_gym.tasks import ReachRewardWeights, ReachTask
 from clutter_gym.worlds import TableSpec, TabletopArena
 
+#: Hz, the lowest physics rate: the Panda's joint motors hold their targets through pybullet's constraint solver
+#: once per tick, and below it the arm sags under gravity and is still moving long after a stop (docs/envs.md,
+#: "Physics rate").
+MIN_PHYSICS_HZ = 60.0
 #: Clearance the subgoal's planner keeps from the layout, metres (on top of ``collision_padding``).
 SUBGOAL_MARGIN = 0.02
 
@@ -93,8 +97,9 @@ class ClutterReachEnv(ClutterEnv):
     static clutter stands, and settles onto it in its first ticks; the planner behind ``subgoal`` plans on the layout
     as placed); ``shelf``; ``noise`` (profile name
     or overrides; only action noise, timing and dynamics apply: the arm has no exteroceptive sensors);
-    ``physics_hz``; ``control_hz``; ``solver_iterations``; ``success_radius`` m; ``clearance_margin`` m;
-    ``clearance_range`` m; ``observe_directions``; ``observe_target_offset``; ``terminate_on_collision``;
+    ``physics_hz`` (a multiple of ``control_hz``, at least :data:`MIN_PHYSICS_HZ`); ``control_hz`` (at least
+    ``physics_hz`` / 1000); ``solver_iterations``; ``success_radius`` m; ``clearance_margin`` m; ``clearance_range`` m;
+    ``observe_directions``; ``observe_target_offset``; ``terminate_on_collision``;
     ``contact_tolerance`` m; ``swept_speed`` m/s (``inf`` turns swept checks off); ``*_weight`` reward weights;
     ``subgoal_lookahead`` rad [0, 3] (0: off).
 
@@ -143,7 +148,8 @@ class ClutterReachEnv(ClutterEnv):
         subgoal_lookahead: float = 0.0,
     ) -> None:
         check_numbers(ClutterReachEnv.__init__, locals())
-        check_env_settings(render_mode, physics_hz, control_hz, solver_iterations, contact_tolerance)
+        check_env_settings(render_mode, physics_hz, control_hz, solver_iterations, contact_tolerance,
+                           env_id="ClutterReach-v0", min_physics_hz=MIN_PHYSICS_HZ)
         check_flags(self_collision=self_collision, shelf=shelf, observe_directions=observe_directions,
                     observe_target_offset=observe_target_offset, terminate_on_collision=terminate_on_collision)
         if not (math.isfinite(clearance_range) and 0.01 <= clearance_range <= 2.0):

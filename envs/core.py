@@ -31,6 +31,11 @@ from clutter_gym.util.checks import check_integer, is_number
 from clutter_gym.util.transforms import yaw_quat
 
 RENDER_MODES = ("human", "rgb_array")
+MAX_PHYSICS_HZ = 10000.0  # physics ticks per simulated second, at most
+MAX_CONTROL_HZ = 1000.0  # actions per simulated second, at most
+#: physics ticks one step may run: a step stays a bounded stretch of simulated and wall time (docs/envs.md,
+#: "Physics rate")
+MAX_TICKS_PER_STEP = 1000
 
 
 class ClutterEnv(gym.Env):
@@ -315,10 +320,11 @@ def check_keywords(cls: type, kwargs: Mapping[str, Any]) -> None:
 
 
 def check_env_settings(render_mode: str | None, physics_hz: float, control_hz: float, solver_iterations: int,
-                       contact_tolerance: float) -> None:
-    """Raise at make time, naming the argument, for the settings every env shares (before anything is built)."""
+                       contact_tolerance: float, *, env_id: str, min_physics_hz: float) -> None:
+    """Raise at make time, naming the argument, for the settings every env shares (before anything is built);
+    ``min_physics_hz`` is the env's floor on the physics rate (``env_id`` names the env in its message)."""
     check_render_mode(render_mode)
-    check_rates(physics_hz, control_hz, solver_iterations)
+    check_rates(physics_hz, control_hz, solver_iterations, env_id=env_id, min_physics_hz=min_physics_hz)
     if not (math.isfinite(contact_tolerance) and 0.0 <= contact_tolerance <= 0.05):
         raise ValueError(f"contact_tolerance must be in [0, 0.05] metres, got {contact_tolerance!r}")
 
@@ -369,13 +375,29 @@ def check_render_mode(render_mode: str | None) -> None:
         )
 
 
-def check_rates(physics_hz: float, control_hz: float, solver_iterations: int) -> None:
-    """Raise at make time, naming the argument, for rates or solver settings the control loop cannot run."""
-    if not (math.isfinite(control_hz) and 0.0 < control_hz <= 1000.0):
-        raise ValueError(f"control_hz must be in (0, 1000] Hz, got {control_hz!r}")
-    if not (math.isfinite(physics_hz) and control_hz <= physics_hz <= 10000.0):
-        raise ValueError(f"physics_hz must be in [control_hz={control_hz}, 10000] Hz, got {physics_hz!r}")
+def check_rates(physics_hz: float, control_hz: float, solver_iterations: int, *, env_id: str = "this env",
+                min_physics_hz: float = 1.0) -> None:
+    """Raise at make time, naming the argument, for rates or solver settings the control loop cannot run.
+
+    ``min_physics_hz`` is the env's floor: below it the stiffest dynamics it simulates (a rate loop, wheel contact,
+    joint motors) break. One step runs ``physics_hz / control_hz`` ticks, at most :data:`MAX_TICKS_PER_STEP`, so a
+    step is a bounded stretch of simulated time and of wall time (docs/envs.md, "Physics rate").
+    """
+    if not (math.isfinite(control_hz) and 0.0 < control_hz <= MAX_CONTROL_HZ):
+        raise ValueError(f"control_hz must be in (0, {MAX_CONTROL_HZ:g}] Hz, got {control_hz!r}")
+    if not (math.isfinite(physics_hz) and min_physics_hz <= physics_hz <= MAX_PHYSICS_HZ):
+        raise ValueError(f"physics_hz must be in [{min_physics_hz:g}, {MAX_PHYSICS_HZ:g}] Hz for {env_id} (below "
+                         f"{min_physics_hz:g} Hz its physics is not stable; docs/envs.md, \"Physics rate\"), "
+                         f"got {physics_hz!r}")
+    if physics_hz < control_hz:
+        raise ValueError(f"physics_hz must be in [control_hz={control_hz}, {MAX_PHYSICS_HZ:g}] Hz, got {physics_hz!r}")
     ratio = physics_hz / control_hz
+    if ratio > MAX_TICKS_PER_STEP * (1.0 + 1e-9):
+        raise ValueError(
+            f"control_hz must be at least physics_hz / {MAX_TICKS_PER_STEP} = {physics_hz / MAX_TICKS_PER_STEP:g} Hz "
+            f"(a step runs at most {MAX_TICKS_PER_STEP} physics ticks, {MAX_TICKS_PER_STEP / physics_hz:g} s at "
+            f"physics_hz={physics_hz:g}), got {control_hz!r}"
+        )
     if abs(ratio - round(ratio)) > 1e-9 * ratio:
         raise ValueError(
             f"physics_hz must be an integer multiple of control_hz; {physics_hz} / {control_hz} = {ratio:.6g}"

@@ -17,7 +17,7 @@ import pytest
         ({"n_rays": 0}, r"n_rays must be an integer in \[1, 4096\]"),
         ({"n_rays": 2.5}, r"n_rays must be an integer"),
         ({"physics_hz": 100.0, "control_hz": 30.0}, r"physics_hz must be an integer multiple of control_hz"),
-        ({"physics_hz": 10.0, "control_hz": 20.0}, r"physics_hz must be in \[control_hz"),
+        ({"physics_hz": 120.0, "control_hz": 240.0}, r"physics_hz must be in \[control_hz=240.0, 10000\]"),
         ({"control_hz": 0.0}, r"control_hz must be in \(0, 1000\]"),
         ({"solver_iterations": 0}, r"solver_iterations must be an integer in \[1, 1000\]"),
         ({"sensors": ("lidar", "sonar")}, r"unknown sensors \['sonar'\]; allowed: \('lidar', 'imu', 'camera'\)"),
@@ -42,6 +42,33 @@ import pytest
 def test_invalid_kwargs_raise_at_make(kwargs, pattern):
     with pytest.raises(ValueError, match=pattern):
         gym.make("ClutterNav-v0", **kwargs)
+
+
+@pytest.mark.parametrize("env_id", ["ClutterNav-v0", "ClutterReach-v0", "ClutterFly-v0"])
+@pytest.mark.parametrize(("physics_hz", "control_hz"), [(1.0, 1.0), (20.0, 20.0), (40.0, 20.0)])
+def test_a_physics_rate_below_the_envs_floor_is_refused(env_id, physics_hz, control_hz):
+    """Below its floor an env's stiffest dynamics break (docs/envs.md, "Physics rate"): ClutterFly's rate loop
+    flips it, ClutterNav's wheels creep after a stop, the Panda sags and drifts."""
+    with pytest.raises(ValueError, match=re.escape(f"physics_hz must be in [60, 10000] Hz for {env_id}")):
+        gym.make(env_id, physics_hz=physics_hz, control_hz=control_hz)
+
+
+@pytest.mark.parametrize("env_id", ["ClutterNav-v0", "ClutterReach-v0", "ClutterFly-v0"])
+@pytest.mark.parametrize(("physics_hz", "control_hz", "least"), [(120.0, 1e-3, "0.12"), (10000.0, 5.0, "10")])
+def test_more_than_a_thousand_physics_ticks_per_step_are_refused(env_id, physics_hz, control_hz, least):
+    """One step holds one action for at most 1000 ticks: control_hz=1e-3 made a step 1,000 s of simulated time."""
+    with pytest.raises(ValueError, match=re.escape(f"control_hz must be at least physics_hz / 1000 = {least} Hz")):
+        gym.make(env_id, physics_hz=physics_hz, control_hz=control_hz)
+
+
+def test_the_rate_limits_themselves_are_allowed(make_env):
+    """The floor and the cap on ticks per step are in range."""
+    from clutter_gym.clutter_nav import MIN_PHYSICS_HZ
+    from clutter_gym.core import MAX_TICKS_PER_STEP
+
+    assert make_env("ClutterNav-v0", physics_hz=MIN_PHYSICS_HZ, control_hz=20.0).unwrapped.substeps == 3
+    env = make_env("ClutterNav-v0", physics_hz=float(MAX_TICKS_PER_STEP), control_hz=1.0, sensors=())
+    assert env.unwrapped.substeps == MAX_TICKS_PER_STEP
 
 
 @pytest.mark.parametrize(("env_id", "name", "value"), [
