@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import fcl
 import numpy as np
 import trimesh
+from scipy.spatial import QhullError
 
 from clutter_gym.collision.sphere_fit import fit_spheres
 from clutter_gym.collision.urdf_geometry import CollisionElement
@@ -245,13 +246,18 @@ def _frame_with_z(axis: np.ndarray) -> np.ndarray:
 
 
 def _link_sphere(link: str, elements: Sequence[CollisionElement]) -> LinkShape:
-    """The sphere about the elements' points' minimum enclosing ball centre that encloses every element exactly."""
+    """The sphere about the elements' points' minimum enclosing ball centre that encloses every element exactly (about
+    their bounding box's centre where Qhull cannot find that ball)."""
     samples, farthest = [], []
     for e in elements:
         r = quat_to_matrix(e.quaternion)
         samples.append(e.position + _surface_points(e) @ r.T)
         farthest.append(_farthest_distance_fn(e, r))
-    centre, _ = trimesh.nsphere.minimum_nsphere(np.vstack(samples))
+    points = np.vstack(samples)
+    try:
+        centre, _ = trimesh.nsphere.minimum_nsphere(points)
+    except QhullError:  # a nearly flat set with many points on one circle: any centre gives an enclosing sphere
+        centre = 0.5 * (points.min(axis=0) + points.max(axis=0))
     radius = max(f(centre) for f in farthest)
     return LinkShape(link, fcl.Sphere(float(radius)), np.asarray(centre, dtype=float), np.eye(3), "sphere",
                      float(radius))

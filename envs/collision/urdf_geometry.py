@@ -26,6 +26,12 @@ KINDS = ("box", "cylinder", "sphere", "capsule", "mesh")
 #: relative to the mesh's size: a triangle's area (over the diagonal squared) and a mesh's thinnest spread of vertices
 #: (over its widest) at or below this have none
 MIN_AREA = 1e-9
+#: metres: a mesh (as scaled by its URDF) narrower than this is refused. trimesh drops triangles under an absolute
+#: area tolerance, so a hull of a far smaller mesh loses its faces (docs/collision.md, "User meshes").
+MIN_MESH_SIZE = 1e-3
+#: a mesh (as scaled) whose thinnest extent is at most this share of its widest is refused as nearly flat: it encloses
+#: almost no volume, and the minimum enclosing sphere's Qhull step loses its thickness in round-off.
+MIN_THICKNESS = 1e-3
 
 
 @dataclass(frozen=True, eq=False)
@@ -116,6 +122,25 @@ def _load_mesh(path: Path) -> trimesh.Trimesh:
     return loaded
 
 
+def check_solid(mesh: trimesh.Trimesh, what: str) -> None:
+    """Refuse a mesh too small or too thin to build every fidelity level's shape from (its extents are measured
+    along the principal axes of its vertices, so a turned plate counts as thin).
+
+    Raises:
+        ValueError: starting with ``what`` (the element and the file), naming the limit.
+    """
+    vertices = np.asarray(mesh.vertices, dtype=float)
+    centred = vertices - vertices.mean(axis=0)
+    axes = np.linalg.svd(centred, full_matrices=False)[2]
+    extents = np.ptp(centred @ axes.T, axis=0)  # widest first
+    if extents[0] < MIN_MESH_SIZE:
+        raise ValueError(f"{what} is {extents[0]:.3g} m across, under the {MIN_MESH_SIZE:g} m a collision mesh needs "
+                         f"(check the URDF's scale and the file's units)")
+    if extents[-1] <= MIN_THICKNESS * extents[0]:
+        raise ValueError(f"{what} is nearly flat: {extents[-1]:.3g} m thick and {extents[0]:.3g} m wide, at most "
+                         f"{MIN_THICKNESS:g} of its width; give it thickness or model it as a box")
+
+
 def _element(col: ET.Element, link: str, urdf: Path, where: str) -> CollisionElement:
     origin = col.find("origin")
     attrs = origin.attrib if origin is not None else {}
@@ -148,6 +173,7 @@ def _element(col: ET.Element, link: str, urdf: Path, where: str) -> CollisionEle
         except Exception as exc:  # trimesh raises many types for unreadable files
             raise ValueError(f"{where}: cannot read mesh {source}: {exc}") from exc
         mesh.apply_scale(scale)
+        check_solid(mesh, f"{where}: mesh {source}")
         return CollisionElement(link, "mesh", tuple(mesh.extents.tolist()), position, quaternion, mesh, source)
     raise ValueError(f"{where}: <{tag}> collision geometry is not supported ({', '.join(KINDS)} are)")
 

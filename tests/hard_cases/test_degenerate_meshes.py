@@ -33,6 +33,10 @@ Three defects this test found are fixed where they belong:
   it with a ``ValueError`` naming the file.
 * Half the triangles wound backwards made the ``spheres`` fit 4 spheres instead of 16, 2.1x as loose; loading now
   makes the winding consistent.
+* A nearly flat mesh (a 0.2 m square with a 1e-6 m apex) still raised ``QhullError`` at ``sphere``, and a 2e-7 m cube a
+  ``TypeError`` at ``primitive`` and an ``IndexError`` at ``auto``; loading now refuses a mesh under 1 mm across or at
+  most 1e-3 as thick as it is wide, as the file gives it or as the URDF scales it (docs/collision.md, "User
+  meshes"), and the link sphere no longer needs Qhull to succeed.
 """
 
 from __future__ import annotations
@@ -47,7 +51,13 @@ import numpy as np
 import pytest
 import trimesh
 
-from clutter_gym.collision import FIDELITY_LEVELS, CollisionChecker, RobotCollisionModel
+from clutter_gym.collision import (
+    FIDELITY_LEVELS,
+    CollisionChecker,
+    CollisionElement,
+    RobotCollisionModel,
+    build_link_shapes,
+)
 from clutter_gym.robots.state import RobotState
 from clutter_gym.sim import LinkStates
 from clutter_gym.util.transforms import quat_to_matrix, yaw_quat
@@ -101,6 +111,16 @@ NO_SOLID = {
     "single triangle": (np.array([[0, -H, -H], [0, H, -H], [0, 0, H]]), np.array([[0, 1, 2]]), "flat"),
     "flat plate": (np.array([[-H, -H, 0], [H, -H, 0], [H, H, 0], [-H, H, 0]]), np.array([[0, 1, 2], [0, 2, 3]]),
                    "flat"),
+}
+_square = np.array([[-H, -H, 0.0], [H, -H, 0.0], [H, H, 0.0], [-H, H, 0.0]])
+_pyramid_faces = np.array([[0, 2, 1], [0, 3, 2], [0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]])
+#: name -> (vertices, faces, URDF mesh scale, words the load error must contain): refused at every level, as the
+#: file or as scaled by the URDF
+REFUSED = {
+    "nearly flat pyramid": (np.vstack([_square, [0.0, 0.0, 1e-6]]), _pyramid_faces, None, "nearly flat"),
+    "cube flattened by scale": (V, F, "1 1 1e-6", "nearly flat"),
+    "tiny cube": (V * 1e-6, F, None, "across"),
+    "cube shrunk by scale": (V, F, "1e-6 1e-6 1e-6", "across"),
 }
 #: cases that aborted the process before ``signed_distance`` asked ``fcl.collide`` first: run in a child process
 IN_CHILD = {("near-duplicate vertices", "primitive")}
@@ -240,6 +260,35 @@ def test_a_degenerate_mesh_loads_consistently_or_fails_clearly(folder, clean_ans
         assert result.returncode == 0 and "checked" in result.stdout, result.stderr[-2000:]
         return
     check_cube(urdf, level, vertices, clean)
+
+
+@pytest.mark.filterwarnings("ignore:invalid value encountered in divide:RuntimeWarning")
+@pytest.mark.parametrize("level", FIDELITY_LEVELS)
+@pytest.mark.parametrize("name", list(REFUSED))
+def test_a_nearly_flat_or_tiny_mesh_is_refused_at_every_level_naming_the_file(folder, name, level):
+    """A 0.2 m square with a 1e-6 m apex raised scipy's ``QhullError`` at ``sphere``, and a 2e-7 m cube a ``TypeError``
+    at ``primitive`` and an ``IndexError`` at ``auto`` (trimesh drops hull triangles under its absolute area
+    tolerance); the same shapes made by a URDF ``scale`` too. Each is one ``ValueError`` naming the file."""
+    vertices, faces, scale, problem = REFUSED[name]
+    urdf = write_mesh(folder, name, vertices, faces, "obj", scale)
+    with pytest.raises(ValueError, match=problem) as caught:
+        RobotCollisionModel.from_urdf(urdf, level, ("part",), self_collision=False)
+    assert urdf.with_suffix(".obj").name in str(caught.value)
+
+
+def test_the_link_sphere_of_a_nearly_flat_mesh_still_encloses_it():
+    """Where trimesh's minimum sphere fails on a nearly flat point set (Qhull's cospherical error: many points on one
+    circle), the link sphere takes another centre and still encloses every vertex; what loading lets through can be
+    that flat (4096 points on a circle failed up to a thickness of 1e-3 of the width)."""
+    ring = np.linspace(0.0, 2 * np.pi, 64, endpoint=False)
+    vertices = np.vstack([np.c_[H * np.cos(ring), H * np.sin(ring), np.zeros(64)], [0.0, 0.0, 1e-6]])
+    faces = np.array([[0, i + 1, i] for i in range(1, 63)] + [[i, (i + 1) % 64, 64] for i in range(64)])
+    mesh = trimesh.Trimesh(vertices, faces, process=False)
+    element = CollisionElement("part", "mesh", tuple(mesh.extents.tolist()), np.zeros(3), np.array([0, 0, 0, 1.0]),
+                               mesh)
+    [shape] = build_link_shapes([element], "sphere")
+    assert np.linalg.norm(vertices - shape.position, axis=1).max() <= shape.radius + 1e-12
+    assert shape.radius < 1.01 * H
 
 
 def test_touching_boxes_with_a_tiny_tilt_do_not_abort():
