@@ -132,12 +132,13 @@ def check_solid(mesh: trimesh.Trimesh, what: str) -> None:
     vertices = np.asarray(mesh.vertices, dtype=float)
     centred = vertices - vertices.mean(axis=0)
     axes = np.linalg.svd(centred, full_matrices=False)[2]
-    extents = np.ptp(centred @ axes.T, axis=0)  # widest first
-    if extents[0] < MIN_MESH_SIZE:
-        raise ValueError(f"{what} is {extents[0]:.3g} m across, under the {MIN_MESH_SIZE:g} m a collision mesh needs "
+    extents = np.ptp(centred @ axes.T, axis=0)
+    wide, thick = float(extents.max()), float(extents.min())
+    if wide < MIN_MESH_SIZE:
+        raise ValueError(f"{what} is {wide:.3g} m across, under the {MIN_MESH_SIZE:g} m a collision mesh needs "
                          f"(check the URDF's scale and the file's units)")
-    if extents[-1] <= MIN_THICKNESS * extents[0]:
-        raise ValueError(f"{what} is nearly flat: {extents[-1]:.3g} m thick and {extents[0]:.3g} m wide, at most "
+    if thick <= MIN_THICKNESS * wide:
+        raise ValueError(f"{what} is nearly flat: {thick:.3g} m thick and {wide:.3g} m wide, at most "
                          f"{MIN_THICKNESS:g} of its width; give it thickness or model it as a box")
 
 
