@@ -300,6 +300,17 @@ class ClutterEnv(gym.Env):
         """Disconnect the physics client; safe to call twice. The env cannot step, reset or render after it."""
         self.sim.close()
 
+    def __reduce_ex__(self, protocol: Any) -> Any:
+        """Refuse pickling and copying (``pickle``, ``copy.copy``, ``copy.deepcopy``, cloudpickle) with a message that
+        names the env: it owns a pybullet physics client and FCL objects, which cannot be serialised, and a shallow
+        copy would share them. Raises TypeError."""
+        name = f"{self.spec.id} ({type(self).__name__})" if self.spec is not None else type(self).__name__
+        raise TypeError(
+            f"{name} cannot be pickled or copied: it owns a pybullet physics client and FCL collision objects. Make "
+            f"a new env instead, with gym.make and the same id and kwargs, and reset it with the same seed; for a "
+            f"vector env pass a factory (e.g. lambda: gym.make(...)) rather than an env"
+        )
+
     def _check_open(self) -> None:
         if self.sim.client_id < 0:
             name = self.spec.id if self.spec is not None else type(self).__name__

@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import copy
 import gc
 import os
+import pickle
 
 import gymnasium as gym
 import numpy as np
@@ -248,3 +250,21 @@ def test_a_closed_env_says_so_instead_of_failing_inside_pybullet(env_id):
     for call in (lambda: env.reset(seed=0), lambda: env.step(env.action_space.sample()), env.render):
         with pytest.raises(RuntimeError, match=f"{env_id} is closed"):
             call()
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+@pytest.mark.parametrize("copier", [pickle.dumps, copy.deepcopy, copy.copy], ids=["pickle", "deepcopy", "copy"])
+def test_an_env_cannot_be_pickled_or_copied_and_says_what_to_do_instead(env_id, copier, make_env):
+    """An env owns a physics client and FCL objects, which cannot be serialised: the error names the env (through
+    gym.make's wrappers too) and says to make a new one, not FCL's Cython that names nothing. A shallow copy would
+    share the client while looking like a second env, so it is refused too (a wrapper's shallow copy is the
+    wrapper's: it wraps the same env). The env still works afterwards."""
+    env = make_env(env_id)
+    env.reset(seed=0)
+    for target in (env, env.unwrapped) if copier is not copy.copy else (env.unwrapped,):
+        with pytest.raises(TypeError) as caught:
+            copier(target)
+        message = str(caught.value)
+        assert f"{env_id} ({type(env.unwrapped).__name__})" in message and "cannot be pickled or copied" in message
+        assert "physics client" in message and "gym.make" in message and "factory" in message
+    env.step(env.action_space.sample())
