@@ -236,13 +236,19 @@ class ClutterEnv(gym.Env):
         return obs, float(outcome.reward), outcome.terminated, False, info
 
     def _checked_action(self, action: Any) -> np.ndarray:
-        """``action`` as float64 within the bounds: any real dtype and container of the right shape, clipped;
-        anything else (strings, None, bools, complex numbers, NaN, Inf) is a ``ValueError`` naming the action."""
+        """``action`` as float64 within the bounds: any real dtype and container of the right shape, clipped, and an
+        object array whose every element is a real number (Python's, numpy's, a Fraction); anything else (strings,
+        None, bools, complex numbers, NaN, Inf) is a ``ValueError`` naming the action."""
         shape = self.action_space.shape
         try:
             a = np.asarray(action)
         except ValueError:  # ragged nesting
             a = np.empty(0, dtype=object)
+        if a.dtype.kind == "O" and a.size and all(is_number(v) for v in a.flat):
+            try:
+                a = a.astype(np.float64)
+            except OverflowError:  # an integer beyond the float range
+                raise ValueError(f"action must be finite (no NaN/Inf), got {repr(action)[:200]}") from None
         if a.dtype.kind not in "fiu":
             raise ValueError(f"action must be {shape[0]} real numbers (floats or integers), got {repr(action)[:200]}")
         a = a.astype(np.float64, copy=False)

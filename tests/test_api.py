@@ -6,6 +6,7 @@ import copy
 import gc
 import os
 import pickle
+from fractions import Fraction
 
 import gymnasium as gym
 import numpy as np
@@ -144,8 +145,12 @@ def test_bad_actions_raise(action, message, make_env):
 @pytest.mark.parametrize("env_id", ["ClutterNav-v0", "ClutterReach-v0"])
 @pytest.mark.parametrize(
     "action", ["ab", None, {"v": 1.0}, [object(), object()], [1.0, "a"], [[0.0], [0.0, 1.0]], True, [True, False],
-               [1j, 0.0]],
-    ids=["str", "None", "dict", "objects", "mixed", "ragged", "bool", "bools", "complex"],
+               [1j, 0.0], np.array([True, 0.5], dtype=object), np.array([np.bool_(False), 0.5], dtype=object),
+               np.array([None, 0.5], dtype=object), np.array(["0.1", 0.5], dtype=object),
+               np.array([1j, 0.5], dtype=object), np.array([np.complex64(1), 0.5], dtype=object),
+               np.array([np.array([0.1]), 0.5], dtype=object)],
+    ids=["str", "None", "dict", "objects", "mixed", "ragged", "bool", "bools", "complex", "object-bool",
+         "object-numpy-bool", "object-None", "object-str", "object-complex", "object-numpy-complex", "object-array"],
 )
 def test_actions_that_are_not_real_numbers_name_the_action(env_id, action, make_env):
     env = make_env(env_id)
@@ -162,6 +167,29 @@ def test_every_real_dtype_and_container_steps_as_float64(dtype, make_env):
     action = [1, 0]
     given = dtype(action) if dtype in (list, tuple) else np.array(action, dtype=dtype)
     np.testing.assert_array_equal(a.step(given)[0]["lidar"], b.step(np.array([1.0, 0.0]))[0]["lidar"])
+
+
+@pytest.mark.parametrize("action", [
+    np.array([0.1, -0.2], dtype=object),
+    np.array([0.1, np.float32(-0.2)], dtype=object),
+    np.array([np.float16(0.1), np.float64(-0.2)], dtype=object),
+    np.array([1, np.int64(-1)], dtype=object),
+    np.array([np.uint8(1), Fraction(-1, 5)], dtype=object),
+], ids=["floats", "float-and-float32", "float16-and-float64", "int-and-int64", "uint8-and-fraction"])
+def test_object_arrays_of_real_numbers_step_as_float64(action, make_env):
+    """An object array whose every element is a real number (Python's, numpy's, a Fraction) is a real action."""
+    a, b = make_env(), make_env()
+    a.reset(seed=4)
+    b.reset(seed=4)
+    expected = np.array([float(v) for v in action])
+    np.testing.assert_array_equal(a.step(action)[0]["lidar"], b.step(expected)[0]["lidar"])
+
+
+def test_an_integer_too_large_for_a_float_is_not_finite(make_env):
+    env = make_env()
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match="action must be finite"):
+        env.step(np.array([10**400, 0], dtype=object))
 
 
 def test_out_of_range_actions_are_clipped(make_env):
