@@ -18,12 +18,12 @@ from clutter_gym.sensors import ImuConfig, LidarConfig, build_sensors, camera_co
 from clutter_gym.tasks import FlyRewardWeights, FlyTask
 from clutter_gym.util.checks import is_number
 from clutter_gym.worlds import VolumeArena, VolumeSpec
-from clutter_gym.worlds.volume_spec import SIZE_RANGE
 
 #: The link the LIDAR and the camera sit on, and the IMU's link (assets/robots/quadrotor.urdf).
 SENSOR_LINK, IMU_LINK = "sensor_mount", "imu"
-#: Lowest volume height, metres: the generator's wall openings (up to 1.6 m tall) must fit under the top.
-MIN_HEIGHT = 2.0
+#: The generator's wall openings, (min, max) width and height in metres, as a share of the volume's height where
+#: that is lower than their own: an opening must be lower than the top.
+OPENING_SIZE, OPENING_SHARE = (0.8, 1.6), (0.4, 0.8)
 #: Hz, the lowest physics rate: the body-rate loop runs once per tick behind the motors' lag, and below it the loop
 #: overshoots and no longer brings the airframe back level (docs/envs.md, "Physics rate").
 MIN_PHYSICS_HZ = 60.0
@@ -123,7 +123,7 @@ class ClutterFlyEnv(ClutterEnv):
 
     ``render_mode`` (None, "rgb_array", "human"); ``sensors`` (subset of ("imu", "lidar", "camera"));
     ``noise`` (profile name, override mapping or NoiseProfile); ``volume_size`` (x, y, z) m, x and y in [2, 30],
-    z in [2, 5]; ``obstacle_density`` volume fraction [0, 0.25]; ``ceiling``; ``n_rays`` [1, 4096];
+    z in [1, 5]; ``obstacle_density`` volume fraction [0, 0.25]; ``ceiling``; ``n_rays`` [1, 4096];
     ``lidar_fov`` rad (0, 2 pi]; ``lidar_range`` m; ``lidar_channels`` [1, 128] and ``lidar_vertical_fov`` rad
     [0, pi/2]; ``camera_size`` (width, height) px; ``camera_modes`` (subset of ("rgb", "depth", "segmentation"));
     ``camera_fov`` vertical, rad; ``camera_far`` m; ``camera_renderer`` ("rays": depth and
@@ -249,11 +249,15 @@ def bounding_radius(model: RobotCollisionModel, body: RigidBody) -> float:
 
 
 def _volume_spec(size: Any, density: float, ceiling: bool) -> VolumeSpec:
-    """The generated volume of the env's arguments; errors name ``volume_size`` where the spec says ``size``."""
-    if isinstance(size, (Sequence, np.ndarray)) and len(size) == 3 and is_number(size[2]) and size[2] < MIN_HEIGHT:
-        raise ValueError(f"volume_size z must be in [{MIN_HEIGHT:g}, {SIZE_RANGE[2][1]:g}] m, got {size[2]!r}")
+    """The generated volume of the env's arguments; errors name ``volume_size`` where the spec says ``size``. In a
+    volume lower than 2 m the wall openings shrink with the height (:data:`OPENING_SHARE`), so every height the spec
+    allows can be generated."""
+    height = size[2] if isinstance(size, (Sequence, np.ndarray)) and len(size) == 3 else None
+    opening = OPENING_SIZE
+    if is_number(height) and math.isfinite(height) and height > 0.0:
+        opening = tuple(min(own, share * float(height)) for own, share in zip(OPENING_SIZE, OPENING_SHARE))
     try:
-        return VolumeSpec(size=size, obstacle_density=density, ceiling=ceiling)
+        return VolumeSpec(size=size, obstacle_density=density, ceiling=ceiling, opening_size=opening)
     except ValueError as exc:
         message = str(exc)
         raise ValueError("volume_" + message if message.startswith("size") else message) from None

@@ -203,7 +203,7 @@ def test_a_generated_scene_round_trips_through_reset_options(make_env):
     ("kwargs", "message"),
     [
         ({"volume_size": (1.0, 4.0, 2.0)}, "volume_size x must be in"),
-        ({"volume_size": (4.0, 4.0, 1.5)}, r"volume_size z must be in \[2, 5\]"),
+        ({"volume_size": (4.0, 4.0, 0.5)}, r"volume_size z must be in \[1, 5\]"),
         ({"volume_size": "big"}, "volume_size must be 3 finite numbers"),
         ({"obstacle_density": 0.5}, r"obstacle_density must be a number in \[0, 0.25\]"),
         ({"obstacle_density": "dense"}, "obstacle_density must be a number"),

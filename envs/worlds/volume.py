@@ -67,12 +67,13 @@ def wall_with_opening(centre: tuple[float, float], yaw: float, length: float, th
 
 
 def _corridor(rng: np.random.Generator, spec: VolumeSpec, keep: float, far: float) -> np.ndarray | None:
-    """(3, 3) start, waypoint and goal, each ``keep`` inside the volume's faces, start and goal ``far`` apart; None
-    when the volume is too small for such a pair."""
+    """(3, 3) start, waypoint and goal, each ``keep`` inside the volume's faces (at the middle of an axis shorter than
+    twice that: a volume lower than it, whose middle is still clear enough to start from), start and goal ``far``
+    apart; None when the volume is too small for such a pair."""
     low = np.array([-0.5 * spec.size[0], -0.5 * spec.size[1], 0.0]) + keep
     high = np.array([0.5 * spec.size[0], 0.5 * spec.size[1], spec.size[2]]) - keep
-    if np.any(high <= low):
-        return None
+    middle = 0.5 * (low + high)
+    low, high = np.minimum(low, middle), np.maximum(high, middle)
     ends = rng.uniform(low, high, size=(64, 2, 3))
     apart = np.flatnonzero(np.linalg.norm(ends[:, 0] - ends[:, 1], axis=1) >= far)
     if apart.size == 0:
