@@ -198,7 +198,9 @@ def test_clearance_observation_matches_the_witness_points(make_env):
 
 def test_fcl_and_pybullet_agree_on_contact_in_most_random_steps(make_env):
     """Measured: 98% agreement (8 of 480 steps differ, all pybullet-only: its contact points reach out to its
-    collision margin while FCL's clearance is still above the 1 mm tolerance)."""
+    collision margin while FCL's clearance is still above the 1 mm tolerance); 1 of these 240. The steps in contact
+    move with any change to the hand's path: 50 of 240 with the IK target read in float32, 40 in float64 (the two
+    targets differ by under 3e-8 m), so the floor only checks that the rollouts touch things."""
     env = make_env("ClutterReach-v0", control="ee_position", n_obstacles=12)
     rng = np.random.default_rng(0)
     steps = disagreements = contacts = 0
@@ -211,7 +213,7 @@ def test_fcl_and_pybullet_agree_on_contact_in_most_random_steps(make_env):
             steps += 1
             disagreements += info["contact_disagreement"]
             contacts += info["n_contacts"] > 0
-    assert contacts > 40  # the rollouts do touch things
+    assert contacts > 20  # the rollouts do touch things
     assert disagreements / steps < 0.05
 
 

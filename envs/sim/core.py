@@ -376,10 +376,13 @@ class Sim(Actuation, ObstacleBodies, Rendering):
         ]
 
     def link_frame(self, body: int, link: int) -> tuple[np.ndarray, np.ndarray]:
-        """(origin (3,), rotation (3, 3)) of a link's URDF frame in world coordinates."""
-        state = pb.getLinkState(body, link, physicsClientId=self._cid)
-        rotation = np.array(pb.getMatrixFromQuaternion(state[5], physicsClientId=self._cid)).reshape(3, 3)
-        return np.array(state[4]), rotation
+        """(origin (3,), rotation (3, 3)) of a link's URDF frame in world coordinates, rebuilt from the link's centre
+        of mass and its inertial offset as :meth:`link_states` does: pybullet's own link frame is rounded to float32."""
+        com, com_quat, offset, offset_quat = pb.getLinkState(body, link, physicsClientId=self._cid)[:4]
+        rotation = np.array(pb.getMatrixFromQuaternion(com_quat, physicsClientId=self._cid)).reshape(3, 3)
+        if offset_quat != (0.0, 0.0, 0.0, 1.0):  # the inertial frame's axes in the link frame
+            rotation = rotation @ np.array(pb.getMatrixFromQuaternion(offset_quat)).reshape(3, 3).T
+        return np.array(com) - rotation @ np.array(offset), rotation
 
     def body_ids(self) -> list[int]:
         """Ids of every body in the world, in increasing order (kept here: pybullet's client does not list the bodies

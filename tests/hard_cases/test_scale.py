@@ -30,8 +30,8 @@ centre-of-mass pose with the inertial offset in Bullet3's single-precision ``b3T
 by up to half a float32 ulp of the coordinate: 1.2e-7 m at 2 m, 3e-5 m at 1e3, 4.9e-4 m at 1e4, and FCL clearances
 of every link but the base with them (a caster 0.12 mm off at 1e4). Inside the largest arena (|x| <= 15 m) that is
 at most 1e-6 m. The centre-of-mass pose (``linkWorldPosition``) is double, and ``Sim.link_states`` builds the link
-frames from it (``test_link_states_keep_double_precision``); ``Sim.link_frame`` (a camera's mount, the Panda's IK
-target) still reads the float32 frame.
+frames from it (``test_link_states_keep_double_precision``), and so does ``Sim.link_frame`` (a camera's mount, the
+Panda's IK target; ``test_link_frame_keeps_double_precision``), which read the float32 frame before.
 
 Millimetre obstacles (a 2 mm rod, a 1 mm cube on the floor and one at chassis height; 10 mm and 2 mm clear,
 touching, 0.3 mm deep; at the origin and at 1e4 m): FCL within 5.0e-6 of the closed forms (the exact touch of the
@@ -76,9 +76,10 @@ from benchmarks.scale import (
     read_placed,
     ulps,
 )
+from clutter_gym.collision.kinematics import UrdfKinematics
 from clutter_gym.robots.diffdrive import TRACKED_LINKS
 from clutter_gym.sensors.lidar import Lidar, LidarConfig
-from clutter_gym.sim import pb
+from clutter_gym.sim import Sim, pb
 
 
 @pytest.fixture(scope="module")
@@ -191,6 +192,52 @@ def test_link_states_keep_double_precision(worlds, offset):
         through_pybullet = world.checker.clearance()[0]
         world.checker.sync(exact)
         np.testing.assert_allclose(through_pybullet, world.checker.clearance()[0], rtol=0, atol=ulps(offset, 20))
+
+
+@pytest.mark.parametrize("offset", OFFSETS)
+def test_link_frame_keeps_double_precision(worlds, offset):
+    """``Sim.link_frame`` (a camera's mount, the Panda's IK target) builds the frame from the double-precision centre
+    of mass as ``Sim.link_states`` does: every tracked link's frame equals the exact one far from the origin (it
+    read pybullet's float32 frame, up to 4.9e-4 m off at 1e4 m)."""
+    world = worlds[offset]
+    for pose in HAND_POSES:
+        world.place(*pose)
+        exact = world.exact_state(*pose)
+        for row, name in enumerate(TRACKED_LINKS):
+            origin, rotation = world.sim.link_frame(world.robot.body, world.robot.link_index[name])
+            np.testing.assert_allclose(origin, exact.links.position[row], rtol=0, atol=ulps(offset, POSE_ULPS),
+                                       err_msg=f"{name} at {pose}")
+            np.testing.assert_allclose(rotation, exact.links.rotation[row], rtol=0, atol=1e-12, err_msg=name)
+
+
+TURNED_INERTIA_URDF = """<robot name="turned"><link name="base"><inertial><mass value="1"/>
+<inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial>
+<collision><geometry><box size="0.2 0.2 0.2"/></geometry></collision></link>
+<link name="arm"><inertial><origin xyz="0.05 -0.02 0.03" rpy="0.4 -0.3 0.7"/><mass value="0.5"/>
+<inertia ixx="0.002" iyy="0.003" izz="0.004" ixy="0" ixz="0" iyz="0"/></inertial>
+<collision><geometry><box size="0.1 0.05 0.05"/></geometry></collision></link>
+<joint name="hinge" type="revolute"><parent link="base"/><child link="arm"/>
+<origin xyz="0.3 0.1 0.2" rpy="0.3 0.2 0.1"/>
+<axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="10" velocity="1"/></joint></robot>
+"""
+
+
+@pytest.mark.parametrize("offset", (0.0, 1e4))
+def test_link_frame_of_a_link_whose_inertial_frame_is_turned(tmp_path, offset):
+    """A link whose centre of mass is offset and turned in its frame (the diffbot's are not): ``Sim.link_frame`` equals
+    the URDF's forward kinematics, at 1e4 m too."""
+    urdf = tmp_path / "turned.urdf"
+    urdf.write_text(TURNED_INERTIA_URDF)
+    sim = Sim()
+    try:
+        body = sim.load_urdf("turned", urdf, position=(offset, offset, 1.0), fixed_base=True)
+        sim.reset_joints(body, [0], [0.5])
+        origin, rotation = sim.link_frame(body, 0)
+        exact = UrdfKinematics(urdf).forward(np.array([[0.5]]))["arm"][0]
+        np.testing.assert_allclose(origin, exact[:3, 3] + [offset, offset, 1.0], rtol=0, atol=ulps(1.0 + offset, 20))
+        np.testing.assert_allclose(rotation, exact[:3, :3], rtol=0, atol=1e-12)
+    finally:
+        sim.close()
 
 
 # ------------------------------------------------------------------------------------------ millimetre obstacles
