@@ -13,8 +13,8 @@
    both sides (``resetJointState`` / numpy FK), as in an env step, where the link poses are already known.
 3. Broad-phase scaling: N in 10..10000 small boxes (5-15 cm) scattered over a square whose side grows as
    sqrt(N) (fixed density, so about as many near the arm), Panda in random configurations: FCL's obstacle tree
-   (``convex``), brute force (``fcl.distance`` on every moving-shape/obstacle pair) and pybullet (per-body loop
-   and broad-phase variant). A method is extrapolated linearly in N where one query would take > 20 s.
+   (``convex``), brute force (the checker's ``signed_distance`` on every moving-shape/obstacle pair) and pybullet
+   (per-body loop and broad-phase variant). A method is extrapolated linearly in N where one query would take > 20 s.
 4. Env throughput: ClutterReach-v0 at each level and panda-gym's PandaReach-v3, random actions, alternating
    blocks; medians over blocks.
 
@@ -33,7 +33,6 @@ import time
 from functools import partial
 from pathlib import Path
 
-import fcl
 import gymnasium as gym
 import numpy as np
 
@@ -49,6 +48,7 @@ from clutter_gym.collision import (
     load_collision_elements,
     obstacle_object,
 )
+from clutter_gym.collision.distance import signed_distance
 from clutter_gym.robots import DiffDriveRobot
 from clutter_gym.robots.panda import READY, PandaArm
 from clutter_gym.training.figures import plt, save_figure
@@ -275,18 +275,21 @@ def pybullet_table(panda: Robot, cases: list[dict], fcl_res: dict) -> dict[str, 
     return out
 
 
-def brute_force(model: RobotCollisionModel, moving: list, objects: list, pos: np.ndarray, rot: np.ndarray) -> float:
-    """Minimum of fcl.distance over every (moving shape, obstacle) pair, capped at RANGE."""
+def brute_force(model: RobotCollisionModel, moving: list[int], objects: list, pos: np.ndarray,
+                rot: np.ndarray) -> float:
+    """Minimum signed distance over every (moving shape, obstacle) pair, capped at RANGE; ``moving`` holds shape
+    indices. Each pair is asked as the checker asks (:func:`signed_distance`, a mesh's hull answering in overlap):
+    FCL's raw signed query aborts the process on some touching poses."""
     model.sync(pos, rot)
-    request = fcl.DistanceRequest(enable_nearest_points=True, enable_signed_distance=True)  # as the checker's
-    return min(RANGE, min(fcl.distance(a, b, request, fcl.DistanceResult()) for a in moving for b in objects))
+    return min(RANGE, min(signed_distance(model.objects[i], b, model.solid_objects[i])[0]
+                          for i in moving for b in objects))
 
 
 def scaling_table(panda: Robot, sizes: list[int], n_configs: int, budget_s: float) -> None:
     rng = np.random.default_rng(3)
     checker, world = panda.checkers["convex"], BulletWorld(panda.urdf)
     names = [j.name for j in panda.kin.joints]
-    moving = [o for o, s in zip(checker.model.objects, checker.model.shapes) if s.link in checker.links]
+    moving = [i for i, s in enumerate(checker.model.shapes) if s.link in checker.links]
     emit("\n### Broad phase: Panda (convex), N boxes of 5-15 cm over a square of side 1.5 sqrt(N/10) m, bottoms at "
          "z in [0, 0.9] m (fixed density); us per clearance query (n = queries timed)\n")
     emit(table_header("N obstacles", "checker (bounds, then FCL)", "brute force fcl.distance", "pybullet loop",

@@ -14,6 +14,8 @@ centimetres (docs/design-notes.md#signed-distance).
 
 from __future__ import annotations
 
+import functools
+
 import fcl
 
 SEPARATION = fcl.DistanceRequest(enable_nearest_points=True)
@@ -23,20 +25,24 @@ EPA_FLOOR = 1e-6  # metres: overlaps shallower than this take the collision quer
 
 
 def signed_distance(
-    a: fcl.CollisionObject, b: fcl.CollisionObject, a_solid: fcl.CollisionObject | None = None
+    a: fcl.CollisionObject, b: fcl.CollisionObject, a_solid: fcl.CollisionObject | None = None,
+    solver: fcl.GJKSolverType | None = None,
 ) -> tuple[float, fcl.DistanceResult]:
     """(distance in metres, negative = penetration depth; the result with world-frame witness points).
 
     ``a_solid`` answers for ``a`` in overlap (the convex hull of a triangle BVH, which has no depth). Pass the
-    robot shape as ``a``: a BVH second in the pair reports its witness points swapped.
+    robot shape as ``a``: a BVH second in the pair reports its witness points swapped. ``solver``: FCL's GJK solver
+    for every query (None: libccd, FCL's default, as the env uses); benchmarks compare solvers through it.
     """
+    separation, overlap_request, penetration = (SEPARATION, OVERLAP, PENETRATION) if solver is None \
+        else _requests(solver)
     result = fcl.DistanceResult()  # FCL only writes into a result when the new distance is smaller
-    d = fcl.distance(a, b, SEPARATION, result)
+    d = fcl.distance(a, b, separation, result)
     if d > 0.0:
         return d, result
     solid = a_solid or a
     overlap = fcl.CollisionResult()
-    if not fcl.collide(solid, b, OVERLAP, overlap):
+    if not fcl.collide(solid, b, overlap_request, overlap):
         return 0.0, result  # touching: the distance query's witness points are where
     deepest = max(overlap.contacts, key=lambda c: c.penetration_depth)
     if deepest.penetration_depth < EPA_FLOOR:
@@ -44,5 +50,13 @@ def signed_distance(
         result.nearest_points = [deepest.pos.copy(), deepest.pos.copy()]
         return -deepest.penetration_depth, result
     result = fcl.DistanceResult()
-    d = fcl.distance(solid, b, PENETRATION, result)
+    d = fcl.distance(solid, b, penetration, result)
     return d, result
+
+
+@functools.cache
+def _requests(solver: fcl.GJKSolverType) -> tuple[fcl.DistanceRequest, fcl.CollisionRequest, fcl.DistanceRequest]:
+    """The three requests of :func:`signed_distance` with ``solver``."""
+    return (fcl.DistanceRequest(enable_nearest_points=True, gjk_solver_type=solver),
+            fcl.CollisionRequest(num_max_contacts=16, enable_contact=True, gjk_solver_type=solver),
+            fcl.DistanceRequest(enable_nearest_points=True, enable_signed_distance=True, gjk_solver_type=solver))
