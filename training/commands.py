@@ -202,6 +202,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
                               "noise.lidar.range_sigma=0.05); the observation and action shapes must stay the same")
     p.add_argument("--json", action="store_true", help="print the summary as JSON (per-episode rows included)")
     p.add_argument("--video", default=None, help="write the first episode to this .gif or .mp4")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
     _add_trust_pickle_option(p)
     p.set_defaults(handler=run_eval)
 
@@ -277,7 +278,8 @@ def run_eval(args: argparse.Namespace) -> int:
 
     with user_errors():
         summary = evaluate(args.run, noise=args.noise, episodes=args.episodes, seed=args.seed, video=args.video,
-                           env_overrides=nest(args.env_kwargs), trust_pickle=args.trust_pickle)
+                           env_overrides=nest(args.env_kwargs), trust_pickle=args.trust_pickle,
+                           progress=not args.no_progress)
     if args.json:
         print(json.dumps(summary))
     else:

@@ -9,6 +9,7 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
+from tqdm import tqdm
 
 from clutter_gym.noise.profiles import PROFILE_NAMES
 from clutter_gym.training.agent import load
@@ -28,6 +29,7 @@ def evaluate(
     video: str | Path | None = None,
     env_overrides: dict[str, Any] | None = None,
     trust_pickle: bool = False,
+    progress: bool = False,
 ) -> dict[str, Any]:
     """Roll out ``episodes`` episodes of the run's policy; episode ``i`` is reset with seed ``seed + i``.
 
@@ -35,6 +37,7 @@ def evaluate(
     the same scenes (a paired comparison). The env takes the run's ``env_kwargs`` (and its noise-section
     overrides, on top of ``noise``), updated by ``env_overrides``. ``trust_pickle`` reads the normalisation
     statistics of a run written by clutter-gym 0.1, which are a pickle (see :func:`~clutter_gym.training.load`).
+    ``progress`` shows a bar of the episodes on stderr.
 
     Returns:
         JSON-ready summary: run, env, noise profiles, env overrides, seed, the model's training step, ``metrics``
@@ -49,7 +52,7 @@ def evaluate(
     noise_spec = {"profile": noise, **overrides.pop("noise", {})}
     env = agent.make_env(noise=noise_spec, render_mode="rgb_array" if video else None, **overrides)
     try:
-        rows = rollouts(env, agent.predict, episodes, seed, video)
+        rows = rollouts(env, agent.predict, episodes, seed, video, progress=progress)
     finally:
         env.close()
     return {
@@ -69,7 +72,7 @@ def evaluate(
 
 
 def rollouts(env: gym.Env, policy: Callable[[Any, Any], tuple[np.ndarray, Any]], episodes: int, seed: int,
-             video: str | Path | None = None) -> list[dict[str, float]]:
+             video: str | Path | None = None, progress: bool = False) -> list[dict[str, float]]:
     """``info["episode_stats"]`` of ``episodes`` episodes of ``policy`` in ``env`` (episode ``i`` reset with seed
     ``seed + i``); the first one is written to ``video`` if given (the env must render ``rgb_array``).
 
@@ -77,7 +80,7 @@ def rollouts(env: gym.Env, policy: Callable[[Any, Any], tuple[np.ndarray, Any]],
     """
     env = EpisodeStats(env)
     rows, frames = [], []
-    for i in range(episodes):
+    for i in tqdm(range(episodes), desc="evaluation", unit="episode", disable=not progress, dynamic_ncols=True):
         obs, _ = env.reset(seed=seed + i)
         state, record = None, video is not None and i == 0
         if record:

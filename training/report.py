@@ -72,7 +72,7 @@ def main_job(run: RunDir, out: Path, timesteps: int | None, episodes: int, progr
     navigation = run.read_config().env_id == "ClutterNav-v0"
     for profile in PROFILES:
         video = out / "episode.gif" if profile == "none" and not navigation else None
-        summary = evaluate(run.root, noise=profile, episodes=episodes, seed=EVAL_SEED, video=video)
+        summary = evaluate(run.root, noise=profile, episodes=episodes, seed=EVAL_SEED, video=video, progress=progress)
         write_text_atomically(out / f"eval-{profile}.json", json.dumps(summary, indent=2))
         summaries[profile] = summary
     eval_s = time.perf_counter() - t0

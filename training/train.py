@@ -124,7 +124,7 @@ def train(run: RunDir, progress: bool = True, timesteps: int | None = None, trus
     if config.final_eval_episodes == 0:
         return None
     summary = evaluate(run.root, noise=config.noise, episodes=config.final_eval_episodes,
-                       seed=config.seed + EVAL_SEED)
+                       seed=config.seed + EVAL_SEED, progress=progress)
     write_text_atomically(run.eval_file, json.dumps(summary, indent=2))
     return summary
 

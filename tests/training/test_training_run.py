@@ -96,7 +96,9 @@ def test_eval_json_schema_and_intervals(trained, tmp_path, capsys):
     video = tmp_path / "episode.gif"
     assert main(["eval", str(run.root), "--noise", "nominal", "--episodes", "3", "--seed", "5", "--json",
                  "--video", str(video)]) == 0
-    summary = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    captured = capsys.readouterr()
+    summary = json.loads(captured.out.strip().splitlines()[-1])
+    assert "evaluation: 100%" in captured.err and "3/3" in captured.err  # the progress bar, on stderr
     assert {"run", "env_id", "train_noise", "eval_noise", "seed", "episodes", "model_step", "metrics", "video",
             "per_episode"} <= summary.keys()
     assert summary["eval_noise"] == "nominal" and summary["episodes"] == 3 and len(summary["per_episode"]) == 3
