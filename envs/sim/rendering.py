@@ -14,6 +14,7 @@ import numpy as np
 import pybullet as pb
 
 from clutter_gym.sim.ray_casting import cast_depth
+from clutter_gym.util.camera_view import FAR, FOV_DEG, NEAR, UP
 from clutter_gym.util.quiet import quiet_c_output
 
 _INVISIBLE = (0.0, 0.0, 0.0, 0.0)
@@ -28,27 +29,42 @@ class Rendering:
         height: int,
         eye: Sequence[float],
         target: Sequence[float],
-        fov_deg: float = 60.0,
+        fov_deg: float = FOV_DEG,
     ) -> np.ndarray:
         """An RGB image (height, width, 3) uint8 from TinyRenderer looking from ``eye`` to ``target`` (world frame,
-        metres) with a vertical field of view of ``fov_deg`` degrees.
+        metres, z up) with a vertical field of view of ``fov_deg`` degrees; :class:`clutter_gym.util.camera_view.
+        CameraView` places world points in it.
 
         Raises:
             RuntimeError: this Sim has no :attr:`visuals`.
         """
+        rgba, _ = self._look(width, height, eye, target, fov_deg, segmentation=False)
+        return rgba[:, :, :3].copy()
+
+    def render_segmentation(
+        self, width: int, height: int, eye: Sequence[float], target: Sequence[float], fov_deg: float = FOV_DEG,
+    ) -> np.ndarray:
+        """The body id per pixel (height, width), -1 where there is none, of the picture :meth:`render` takes with
+        the same arguments.
+
+        Raises:
+            RuntimeError: this Sim has no :attr:`visuals`.
+        """
+        _, seg = self._look(width, height, eye, target, fov_deg, segmentation=True)
+        return np.where(seg >= 0, seg & ((1 << 24) - 1), -1)  # low 24 bits: the body id
+
+    def _look(self, width: int, height: int, eye: Sequence[float], target: Sequence[float], fov_deg: float,
+              segmentation: bool) -> tuple[np.ndarray, np.ndarray | None]:
+        """One TinyRenderer ``getCameraImage`` of a look-at camera: RGBA, and the raw segmentation if asked."""
         self._check_visuals()
-        view = pb.computeViewMatrix(eye, target, (0.0, 0.0, 1.0), physicsClientId=self._cid)
-        proj = pb.computeProjectionMatrixFOV(fov_deg, width / height, 0.05, 50.0, physicsClientId=self._cid)
-        _, _, rgba, _, _ = pb.getCameraImage(
-            width,
-            height,
-            view,
-            proj,
-            renderer=pb.ER_TINY_RENDERER,
-            flags=pb.ER_NO_SEGMENTATION_MASK,
-            physicsClientId=self._cid,
+        view = pb.computeViewMatrix(eye, target, UP, physicsClientId=self._cid)
+        proj = pb.computeProjectionMatrixFOV(fov_deg, width / height, NEAR, FAR, physicsClientId=self._cid)
+        flags = pb.ER_SEGMENTATION_MASK_OBJECT_AND_LINKINDEX if segmentation else pb.ER_NO_SEGMENTATION_MASK
+        _, _, rgba, _, seg = pb.getCameraImage(
+            width, height, view, proj, renderer=pb.ER_TINY_RENDERER, flags=flags, physicsClientId=self._cid
         )
-        return np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)[:, :, :3].copy()
+        rgba = np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)
+        return rgba, np.asarray(seg, dtype=np.int64).reshape(height, width) if segmentation else None
 
     def camera_image(
         self,
