@@ -11,6 +11,7 @@ import inspect
 import math
 import os
 import sys
+from collections import deque
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
@@ -27,7 +28,9 @@ from clutter_gym.robots.safety import SafetyFilter
 from clutter_gym.robots.state import RobotState
 from clutter_gym.sensors.timing import SampleHoldDelay, timed_reading
 from clutter_gym.sim import Sim
+from clutter_gym.util.camera_view import CameraView, orbit_angles
 from clutter_gym.util.checks import check_integer, is_number
+from clutter_gym.util.overlay import draw_marks
 from clutter_gym.util.transforms import yaw_quat
 
 RENDER_MODES = ("human", "rgb_array")
@@ -36,6 +39,7 @@ MAX_CONTROL_HZ = 1000.0  # actions per simulated second, at most
 #: physics ticks one step may run: a step stays a bounded stretch of simulated and wall time (docs/envs.md,
 #: "Physics rate")
 MAX_TICKS_PER_STEP = 1000
+TRAIL_LENGTH = 400  # control steps of the robot's path that rgb_array frames draw
 
 
 class ClutterEnv(gym.Env):
@@ -95,6 +99,9 @@ class ClutterEnv(gym.Env):
         self._noise_rng = np.random.default_rng(0)  # replaced at every reset from np_random
         self.render_mode = render_mode
         self.render_size = render_size
+        # render-only state, kept while a render_mode is set: where the robot's focus has been (the frames' trail)
+        self._trail: deque[np.ndarray] = deque(maxlen=TRAIL_LENGTH)
+        self._focus_radius = 0.0
         self.metadata = {**self.metadata, "render_fps": control_hz}
         self.substeps = int(round(sim.physics_hz / control_hz))  # physics ticks per action
         # a TickedRobot (interfaces.py) acts before every physics tick; others once per action
@@ -161,6 +168,7 @@ class ClutterEnv(gym.Env):
         self.sim.move_static(self._goal_marker, self.task.marker_position(scene), yaw_quat(0.0))
         self.scene = scene
         state = self.robot.state()
+        self._note_focus(state, restart=True)
         for sensor, clock in zip(self.sensors, self._clocks):
             sensor.reset(self.sim, state, rng)
             clock.reset(rng)
@@ -208,6 +216,7 @@ class ClutterEnv(gym.Env):
         if self._movable[1]:  # the checker follows what the physics pushed
             self.checker.move_obstacles(self._movable[0], *self.sim.body_poses(self._movable[1]))
         state = self.robot.state()
+        self._note_focus(state)
         report = self.checker.check(state, self.sim.contact_distances(self.robot.body))
         obs, info = self._observe(state, report)
         outcome = self.task.evaluate(state, report, a)
@@ -289,18 +298,45 @@ class ClutterEnv(gym.Env):
 
     # ---------------------------------------------------------------------------------------- rendering
     def render(self) -> np.ndarray | None:
-        """rgb_array: an overview of the arena (H, W, 3) uint8; human: points the GUI camera at the robot."""
+        """rgb_array: the view of :meth:`render_view` (H, W, 3) uint8, with the robot and the goal ringed and the
+        robot's recent trail drawn (:func:`clutter_gym.util.overlay.draw_marks`); human: points the GUI camera
+        the same way. Rendering reads the world and draws nothing into it: it never changes a trajectory."""
         self._check_open()
         if self.render_mode is None:
             gym.logger.warn("render() called without a render_mode; pass render_mode= to gym.make")
             return None
-        eye, target = self.arena.overview_camera()
+        view = self.render_view()
         if self.render_mode == "human":
-            position = self.robot.state().position if self.scene is not None else (0.0, 0.0, 0.0)
-            self.sim.follow_camera(position, 0.9 * float(np.linalg.norm(np.subtract(eye, target))), 0.0, -60.0)
+            self.sim.follow_camera(view.target, *orbit_angles(view.eye, view.target))
             return None
+        frame = self.sim.render(view.width, view.height, view.eye, view.target, view.fov_deg)
+        focus, goal = self._focus_and_goal()
+        return draw_marks(frame, view, (focus, self._focus_radius), (goal, self.task.success_radius), self._trail)
+
+    def render_view(self) -> CameraView:
+        """The camera of the next rgb_array frame, chosen by the arena (``Arena.render_camera``) from where the
+        robot's focus and the goal are: for measuring things in its pixels."""
+        focus, goal = self._focus_and_goal()
+        eye, target = self.arena.render_camera(self.sim, focus, goal)
         width, height = self.render_size
-        return self.sim.render(width, height, eye=eye, target=target)
+        return CameraView(tuple(map(float, eye)), tuple(map(float, target)), width, height)
+
+    def _note_focus(self, state: RobotState, restart: bool = False) -> None:
+        """Remember where the robot's focus is, for the trail the frames draw; only while a render mode is set."""
+        if self.render_mode is None:
+            return
+        if restart:
+            self._trail.clear()
+        centre, self._focus_radius = self.robot.render_focus(state)
+        self._trail.append(np.array(centre, dtype=float))
+
+    def _focus_and_goal(self) -> tuple[np.ndarray, np.ndarray]:
+        """The robot's focus and the goal marker's centre, world frame (before the first reset: where the robot
+        stands, for both)."""
+        if not self._trail:
+            centre, self._focus_radius = self.robot.render_focus(self.robot.state())
+            return np.asarray(centre, dtype=float), np.asarray(centre, dtype=float)
+        return self._trail[-1], np.asarray(self.task.marker_position(self.scene), dtype=float)
 
     def close(self) -> None:
         """Disconnect the physics client; safe to call twice. The env cannot step, reset or render after it."""

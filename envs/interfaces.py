@@ -81,6 +81,10 @@ class Robot(Protocol):
     def observe(self, state: RobotState) -> dict[str, np.ndarray]:
         """Proprioceptive observation entries."""
 
+    def render_focus(self, state: RobotState) -> tuple[np.ndarray, float]:
+        """(centre (3,), radius) in metres, world frame, of the part of the robot the ``rgb_array`` view marks,
+        trails and keeps in sight: the base of a mobile robot, an arm's end effector."""
+
 
 class TickedRobot(Robot, Protocol):
     """A robot that must act before every physics tick, not once per control step: one driven by external forces
@@ -112,8 +116,11 @@ class Arena(Protocol):
         """Move pooled bodies into ``scene``; returns every obstacle (fixed structure included) and its body ids,
         in the same order, for the collision checker."""
 
-    def overview_camera(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
-        """(eye, target) of the ``rgb_array`` view, world frame."""
+    def render_camera(self, sim: Sim, robot: np.ndarray, goal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(eye, target) in metres, world frame, of the ``rgb_array`` view (and of the GUI camera under
+        ``render_mode="human"``) when the robot's focus (:meth:`Robot.render_focus`) is at ``robot`` and the goal
+        marker at ``goal``: a view in which both can be made out. It may cast rays in ``sim`` (a camera pulled in
+        front of an obstacle) but never changes the world."""
 
 
 @dataclass(frozen=True, slots=True)

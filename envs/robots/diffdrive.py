@@ -18,6 +18,7 @@ from clutter_gym.util.transforms import quat_to_matrix, yaw_quat
 #: Links whose states are read every step: the IMU and every link with collision geometry. The LIDAR needs only
 #: its link's index: its rays are cast in the link's frame.
 TRACKED_LINKS = ("left_wheel", "right_wheel", "front_caster", "rear_caster", "imu_link")
+CHASSIS_CENTRE_HEIGHT = 0.025  # metres above the base frame (the wheel axle), as in the URDF
 
 
 @dataclass(frozen=True)
@@ -161,6 +162,10 @@ class DiffDriveRobot:
         """Ground-truth state from batched pybullet reads."""
         return floating_base_state(self._sim, self._body, self._com_offset, self._tracked, self.link_names,
                                    self.link_index)
+
+    def render_focus(self, state: RobotState) -> tuple[np.ndarray, float]:
+        """The chassis centre (world frame, metres) and its footprint radius: what the ``rgb_array`` view rings."""
+        return state.position + state.rotation[:, 2] * CHASSIS_CENTRE_HEIGHT, self.config.footprint_radius
 
     def observe(self, state: RobotState) -> dict[str, np.ndarray]:
         """``velocity``: (forward speed m/s, yaw rate rad/s) in the base frame, clipped to twice the commanded

@@ -23,6 +23,7 @@ TRACKED_LINKS = (*(f"panda_link{i}" for i in range(1, 8)), "panda_hand", "panda_
                  EE_LINK)
 #: Row of the end-effector link in the state's tracked links.
 EE_ROW = TRACKED_LINKS.index(EE_LINK)
+HAND_RADIUS = 0.08  # metres about the end effector that take in the fingers and most of the hand
 #: Joint positions of the "ready" pose (hand 0.49 m above the base, pointing down), rad.
 READY = (0.0, -math.pi / 4, 0.0, -3 * math.pi / 4, 0.0, math.pi / 2, math.pi / 4)
 LOWER = np.array([-2.9671, -1.8326, -2.9671, -3.1416, -2.9671, -0.0873, -2.9671])
@@ -177,6 +178,11 @@ class PandaArm:
     def ee_position(self, state: RobotState) -> np.ndarray:
         """End-effector (between the fingertips) position, world frame, metres."""
         return state.links.position[EE_ROW]
+
+    def render_focus(self, state: RobotState) -> tuple[np.ndarray, float]:
+        """The end effector (world frame, metres) and a radius that takes in the hand's fingers: what the
+        ``rgb_array`` view rings and trails, as the point that must reach the target."""
+        return self.ee_position(state), HAND_RADIUS
 
     def observe(self, state: RobotState) -> dict[str, np.ndarray]:
         """Joint positions (rad), joint velocities (rad/s, clipped to twice the limits), end-effector position (m)."""

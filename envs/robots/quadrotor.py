@@ -33,6 +33,7 @@ ROTOR_LINKS = ("rotor_1", "rotor_2", "rotor_3", "rotor_4")
 ROTOR_SPIN = (1.0, -1.0, 1.0, -1.0)
 #: Links whose states are read every control step: every link with collision geometry, the IMU and the sensor mount.
 TRACKED_LINKS = ("battery", "arm_1", "arm_2", "arm_3", "arm_4", *ROTOR_LINKS, "imu", "sensor_mount")
+RING_RADIUS = 0.066  # metres from the base origin to a propeller tip, as in the URDF
 CONTROL_MODES = ("rates", "motors")
 #: The whole airframe's colour in renders (the URDF's "frame" material): a merged body's base takes one colour.
 AIRFRAME_COLOUR = (0.15, 0.15, 0.15, 1.0)
@@ -348,6 +349,11 @@ class Quadrotor:
             link_index=self.link_index,
             body=self._body,
         )
+
+    def render_focus(self, state: RobotState) -> tuple[np.ndarray, float]:
+        """The base origin (world frame, metres) and the radius that encloses the rotors: what the ``rgb_array``
+        view rings."""
+        return state.position, RING_RADIUS
 
     def observe(self, state: RobotState) -> dict[str, np.ndarray]:
         """Proprioception, as a flight controller's state estimate gives it (ground truth here):

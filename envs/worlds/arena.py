@@ -2,15 +2,25 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
 from clutter_gym.sim import Sim
+from clutter_gym.util.camera_view import fitting_distance
 from clutter_gym.worlds.clutter import ClutterSpec, sample_scene
 from clutter_gym.worlds.pool import ObstaclePool, arena_walls
 from clutter_gym.worlds.scene import Obstacle, Scene, parse_scene, scene_from_options
+
+#: The rgb_array view (:meth:`ClutterArena.render_camera`): its angle above the floor, how far inside the frame's
+#: edges it keeps the robot and the goal (a fraction of the half-frame), the nearest it comes (metres), and the
+#: frame size it is fitted for (pixels: only its shape matters).
+VIEW_ELEVATION = math.radians(65.0)
+VIEW_INSET = 0.3
+NEAREST_VIEW = 2.5
+VIEW_SIZE = (320, 240)
 
 
 class ClutterArena:
@@ -52,10 +62,17 @@ class ClutterArena:
             sample=lambda: sample_scene(rng, self.spec, self.robot_radius),
         )
 
-    def overview_camera(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
-        """(eye, target) of the rgb_array view."""
-        a = self.spec.arena_size
-        return (0.0, -0.62 * a, 0.78 * a), (0.0, -0.1 * a, 0.0)
+    def render_camera(self, sim: Sim, robot: np.ndarray, goal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(eye, target) of the rgb_array view: from the -y side, :data:`VIEW_ELEVATION` above the floor, aimed
+        midway between the robot and the goal on the floor, as near as keeps both :data:`VIEW_INSET` inside the
+        frame's edges, yet never nearer than :data:`NEAREST_VIEW` (the robot readable when close to the goal) nor
+        further than the whole arena needs. It casts no rays."""
+        centre = np.array([0.5 * (robot[0] + goal[0]), 0.5 * (robot[1] + goal[1]), 0.0])
+        direction = np.array([0.0, -math.cos(VIEW_ELEVATION), math.sin(VIEW_ELEVATION)])
+        farthest = 0.94 * self.spec.arena_size  # the whole arena in view
+        points = np.array([robot, goal], dtype=float)
+        distance = fitting_distance(points, centre, direction, NEAREST_VIEW, farthest, *VIEW_SIZE, VIEW_INSET)
+        return centre + distance * direction, centre
 
     def place(self, scene: Scene) -> tuple[tuple[Obstacle, ...], list[int]]:
         """Move pooled bodies into ``scene``; returns every obstacle (walls included) and its body ids."""

@@ -32,6 +32,8 @@ TABLE = Obstacle("box", (1.6, 1.8, 0.05), (0.4, 0.0), 0.0, -0.05 - TABLE_GAP)
 REACH_RADIUS = 0.8  # metres from the shoulder (0, 0, 0.333) within which targets are drawn
 SHOULDER = np.array([0.0, 0.0, 0.333])
 TABLE_LIMIT = 0.8  # |x|, |y| of user obstacles and targets, metres
+#: The rgb_array view (:meth:`TabletopArena.render_camera`), world frame, metres.
+VIEW_EYE, VIEW_TARGET = (1.1, -0.8, 0.8), (0.3, 0.0, 0.3)
 ARM_KEEP_OUT = 0.15  # generated obstacles keep this far from the vertical plane of the start pose's arm, metres
 
 
@@ -227,6 +229,8 @@ class TabletopArena:
         bodies = self._pool.place(scene.obstacles)
         return scene.obstacles + self._pool.fixed, bodies + self._pool.fixed_bodies
 
-    def overview_camera(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
-        """(eye, target) of the rgb_array view."""
-        return (1.5, -1.1, 1.1), (0.35, 0.0, 0.15)
+    def render_camera(self, sim: Sim, robot: np.ndarray, goal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(eye, target) of the rgb_array view: a fixed view of the arm's workspace from the front right, near
+        enough for the hand and the target to read, with the arm's usual poses in frame (both are ringed, also when
+        the shelf or the arm hides them). It casts no rays."""
+        return np.array(VIEW_EYE), np.array(VIEW_TARGET)

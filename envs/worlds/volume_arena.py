@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from clutter_gym.sim import Sim
+from clutter_gym.util.camera_view import between, chase_eye, pull_in
 from clutter_gym.worlds.pool import ObstaclePool
 from clutter_gym.worlds.scene import Obstacle, scene_from_options
 from clutter_gym.worlds.volume import sample_volume_scene
@@ -15,6 +16,12 @@ from clutter_gym.worlds.volume_scene import VolumeScene, parse_volume_scene
 from clutter_gym.worlds.volume_spec import VolumeSpec
 
 BOUNDARY_THICKNESS = 0.1  # metres of the walls and the ceiling, outside the volume
+#: The rgb_array chase camera (:meth:`VolumeArena.render_camera`): metres behind and above the robot, how far towards
+#: the goal it aims (0: at the robot, 1: at the goal), how far in front of an obstacle its spring arm stops and the
+#: shortest the arm gets, metres.
+CHASE_BACK, CHASE_UP = 0.55, 0.35
+CHASE_GOAL_WEIGHT = 0.35
+CHASE_MARGIN, CHASE_SHORTEST = 0.08, 0.2
 
 
 def volume_boundary(spec: VolumeSpec) -> tuple[Obstacle, ...]:
@@ -89,8 +96,14 @@ class VolumeArena:
             return obstacles + floor_slab(self.spec), [*bodies, self._ground]
         return obstacles, bodies
 
-    def overview_camera(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
-        """(eye, target) of the rgb_array view: from a top corner inside the volume (under a ceiling) to the
-        centre of the floor."""
-        sx, sy, sz = self.spec.size
-        return (-0.45 * sx, -0.45 * sy, 0.9 * sz), (0.0, 0.0, 0.0)
+    def render_camera(self, sim: Sim, robot: np.ndarray, goal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(eye, target) of the rgb_array view: a chase camera :data:`CHASE_BACK` behind the robot (away from the
+        goal) and :data:`CHASE_UP` above it, aimed between the robot and the goal (:data:`CHASE_GOAL_WEIGHT`). A
+        spring arm keeps it in front of whatever stands between the robot and that place: one ray from the robot
+        (which rays pass through) to the eye, and the eye pulled in :data:`CHASE_MARGIN` short of the hit, so the
+        robot is never hidden behind a wall, the ceiling or clutter."""
+        robot = np.asarray(robot, dtype=float)
+        eye = chase_eye(robot, goal, CHASE_BACK, CHASE_UP)
+        (free,) = sim.ray_hit_fractions([robot.tolist()], [eye.tolist()])
+        eye = pull_in(robot, eye, float(free), CHASE_MARGIN, CHASE_SHORTEST)
+        return eye, between(robot, goal, eye, CHASE_GOAL_WEIGHT)
