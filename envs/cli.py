@@ -18,11 +18,13 @@ from clutter_gym.noise.profiles import PROFILE_NAMES, profile_description, profi
 from clutter_gym.training import commands as training_commands
 from clutter_gym.training.baselines import CascadedFlyer, PotentialFieldNavigator
 from clutter_gym.training.commands import UserError, positive_int
+from clutter_gym.training.joint_planner import JointPlannerReacher
 from clutter_gym.util.video import write_video
 
 #: Per demo env: its gym.make arguments, the scripted policy for the env, and the policy's name.
 DEMOS = {
     "ClutterNav-v0": ({}, PotentialFieldNavigator.for_env, "scripted potential-field policy"),
+    "ClutterReach-v0": ({}, JointPlannerReacher, "scripted joint-space planner on the known layout, tracked"),
     "ClutterFly-v0": ({"subgoal_lookahead": 0.5}, lambda env: CascadedFlyer.for_env(env, "subgoal"),
                       "scripted position controller on the planned path"),
 }
@@ -93,8 +95,10 @@ def build_parser() -> argparse.ArgumentParser:
                     "profiles, and PPO training, evaluation, sim-to-real sweeps and the main job's report.")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     p = sub.add_parser("demo", help="roll out a scripted policy, write an episode GIF and print a summary",
-                       description="Roll out a scripted policy (ClutterNav: a potential field; ClutterFly: a position "
-                                   "controller on the planned path), write an episode GIF and print a summary.")
+                       description="Roll out a scripted policy (ClutterNav: a potential field; ClutterReach: a "
+                                   "joint-space planner on the known layout and a path tracker; ClutterFly: a "
+                                   "position controller on the planned path), write an episode GIF of the rgb_array "
+                                   "frames (robot and goal ringed, the robot's trail drawn) and print a summary.")
     p.add_argument("--env", choices=DEMO_ENVS, default="ClutterNav-v0", help="env id")
     p.add_argument("--seed", type=int, default=0, help="reset seed (the layout)")
     p.add_argument("--max-steps", type=positive_int, default=600, help="stop the episode after this many steps")

@@ -155,11 +155,19 @@ def test_report_refuses_a_run_with_other_settings(tmp_path, capsys):
 
 
 def test_demo_refuses_envs_without_a_scripted_policy(capsys):
-    """Scripted policies drive the ground robot and the quadrotor: the arm's id is refused by argparse, in one line."""
+    """Every clutter-gym env has a scripted demo; another id is refused by argparse, in one line."""
     with pytest.raises(SystemExit) as exit_info:
-        build_parser().parse_args(["demo", "--env", "ClutterReach-v0"])
+        build_parser().parse_args(["demo", "--env", "CartPole-v1"])
     err = capsys.readouterr().err.strip()
-    assert exit_info.value.code == 2 and "--env" in err and "ClutterFly-v0" in err and len(err.splitlines()) == 1
+    assert exit_info.value.code == 2 and "--env" in err and "ClutterReach-v0" in err and len(err.splitlines()) == 1
+
+
+def test_the_reach_demo_plans_to_the_target_and_writes_a_gif(tmp_path, capsys):
+    assert main(["demo", "--env", "ClutterReach-v0", "--seed", "1", "--out", str(tmp_path), "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["policy"].startswith("scripted joint-space planner")
+    assert summary["success"] and summary["contact_steps"] == 0
+    assert Path(summary["gif"]).stat().st_size > 0
 
 
 def test_the_fly_demo_flies_the_planned_path_to_the_goal_and_writes_a_gif(tmp_path, capsys):
