@@ -12,7 +12,7 @@ from clutter_gym.util.camera_view import orbit_angles
 from clutter_gym.util.overlay import GOAL_COLOUR, ROBOT_COLOUR, ring_pixels
 
 #: Least robot pixels in a 320x240 frame, per env, over the frames the demo policy's episodes give at reset and
-#: every 25 steps (the measured least is about twice each bound: docs/envs.md, "What rgb_array shows").
+#: every 25 steps, with margin under the measured counts (docs/envs.md, "What rgb_array shows").
 LEAST_ROBOT_PIXELS = {"ClutterNav-v0": 150, "ClutterReach-v0": 2000, "ClutterFly-v0": 250}
 LEAST_RING_PIXELS = 80  # a ring of the least radius is about 2 pi 8 px by 2 px
 
