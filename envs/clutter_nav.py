@@ -9,7 +9,8 @@ from typing import Any
 import numpy as np
 
 from clutter_gym.collision.kinematics import UrdfKinematics
-from clutter_gym.core import ClutterEnv, check_env_settings, check_flags, check_numbers, collision_checker
+from clutter_gym.core import ClutterEnv, collision_checker
+from clutter_gym.make_checks import check_env_settings, check_flags, check_numbers
 from clutter_gym.noise.profiles import NoiseProfile, resolve_noise
 from clutter_gym.robots import DiffDriveConfig, DiffDriveRobot
 from clutter_gym.robots.diffdrive import TRACKED_LINKS

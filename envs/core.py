@@ -6,13 +6,9 @@ sensing, collision or reward lives in the part that owns it, behind the contract
 
 from __future__ import annotations
 
-import difflib
-import inspect
 import math
-import os
-import sys
 from collections import deque
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import gymnasium as gym
@@ -21,6 +17,7 @@ from gymnasium import spaces
 
 from clutter_gym.collision import CollisionChecker, CollisionReport, RobotCollisionModel, check_fidelity
 from clutter_gym.interfaces import Arena, Layout, Robot, Sensor, Task
+from clutter_gym.make_checks import RENDER_MODES, check_keywords
 from clutter_gym.noise.action import ActionChannel
 from clutter_gym.noise.dynamics import sample_dynamics
 from clutter_gym.noise.profiles import NoiseProfile
@@ -29,16 +26,10 @@ from clutter_gym.robots.state import RobotState
 from clutter_gym.sensors.timing import SampleHoldDelay, timed_reading
 from clutter_gym.sim import Sim
 from clutter_gym.util.camera_view import CameraView, orbit_angles
-from clutter_gym.util.checks import check_integer, is_number
+from clutter_gym.util.checks import is_number
 from clutter_gym.util.overlay import draw_marks
 from clutter_gym.util.transforms import yaw_quat
 
-RENDER_MODES = ("human", "rgb_array")
-MAX_PHYSICS_HZ = 10000.0  # physics ticks per simulated second, at most
-MAX_CONTROL_HZ = 1000.0  # actions per simulated second, at most
-#: physics ticks one step may run: a step stays a bounded stretch of simulated and wall time (docs/envs.md,
-#: "Physics rate")
-MAX_TICKS_PER_STEP = 1000
 TRAIL_LENGTH = 400  # control steps of the robot's path that rgb_array frames draw
 
 
@@ -271,11 +262,9 @@ class ClutterEnv(gym.Env):
         """Refuse a user scene that starts in collision: a contact, or self-collision of a pair the ACM checks (at a
         coarse level confirmed with the convex shapes, so the robot's own, not its coarse shapes').
 
-        A generated scene is not checked: its sampler keeps the clutter clear of the start pose, and without
-        ``collision_padding`` it starts clear at every fidelity level, so it is accepted back as a user scene
-        (tests/test_reach.py checks every level). A padding also pads self-collision, and neighbouring links stand
-        close in the ready pose: a padded generated start can touch, and that episode begins in collision while the
-        same scene passed back is refused (docs/limitations.md)."""
+        A generated scene is not checked: its sampler keeps the clutter clear of the start pose, and it starts clear
+        at every fidelity level, so it is accepted back as a user scene (tests/test_reach.py checks every level and a
+        padded arm: padding is a margin against the world, and self-collision is judged unpadded)."""
         if options and "scene" in options and (report.in_contact or report.self_collision is not None):
             what = report.contacts[0] if report.contacts else f"self-collision {report.self_collision}"
             raise ValueError(f"scene starts in collision: {what}")
@@ -359,27 +348,8 @@ class ClutterEnv(gym.Env):
             raise RuntimeError(f"{name} is closed: make a new env with gym.make")
 
 
-def check_keywords(cls: type, kwargs: Mapping[str, Any]) -> None:
-    """Raise a ``TypeError`` naming each keyword ``cls.__init__`` does not take, with the closest allowed name and
-    the list of them."""
-    allowed = [name for name, p in inspect.signature(cls.__init__).parameters.items()
-               if name != "self" and p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
-    unknown = [name for name in kwargs if name not in allowed]
-    if unknown:
-        hints = [f"{name!r}" + "".join(f" (did you mean {m!r}?)" for m in difflib.get_close_matches(name, allowed, 1))
-                 for name in unknown]
-        raise TypeError(f"{cls.__name__} got unknown keyword argument(s) {', '.join(hints)}; it takes "
-                        f"{sorted(allowed)}")
 
 
-def check_env_settings(render_mode: str | None, physics_hz: float, control_hz: float, solver_iterations: int,
-                       contact_tolerance: float, *, env_id: str, min_physics_hz: float) -> None:
-    """Raise at make time, naming the argument, for the settings every env shares (before anything is built);
-    ``min_physics_hz`` is the env's floor on the physics rate (``env_id`` names the env in its message)."""
-    check_render_mode(render_mode)
-    check_rates(physics_hz, control_hz, solver_iterations, env_id=env_id, min_physics_hz=min_physics_hz)
-    if not (math.isfinite(contact_tolerance) and 0.0 <= contact_tolerance <= 0.05):
-        raise ValueError(f"contact_tolerance must be in [0, 0.05] metres, got {contact_tolerance!r}")
 
 
 def collision_checker(robot: Robot, tracked_links: Sequence[str], fidelity: str, padding: float,
@@ -399,60 +369,9 @@ def collision_checker(robot: Robot, tracked_links: Sequence[str], fidelity: str,
                             fixed_links=fixed_links, per_link=per_link)
 
 
-def check_numbers(init: Callable[..., None], arguments: Mapping[str, Any]) -> None:
-    """Raise at make time, naming the argument, for a number argument of ``init`` (annotated ``float`` or ``int``)
-    given something else, such as a string or None: the range checks after this would fail with Python's or
-    numpy's message, which names no argument. numpy scalars are numbers."""
-    for name, parameter in inspect.signature(init).parameters.items():
-        if parameter.annotation in ("float", "int") and name in arguments:
-            if not is_number(arguments[name]):
-                raise ValueError(f"{name} must be a number, got {arguments[name]!r}")
 
 
-def check_flags(**flags: Any) -> None:
-    """Raise at make time, naming the argument, for a switch that is not a bool: ``"no"`` or ``[1]`` would
-    otherwise switch by truthiness."""
-    for name, value in flags.items():
-        if not isinstance(value, (bool, np.bool_)):
-            raise ValueError(f"{name} must be True or False, got {value!r}")
 
 
-def check_render_mode(render_mode: str | None) -> None:
-    """Raise at make time for an unknown mode, or for "human" where no display can show a window."""
-    if render_mode is not None and render_mode not in RENDER_MODES:
-        raise ValueError(f"render_mode must be None or one of {RENDER_MODES}, got {render_mode!r}")
-    if render_mode == "human" and sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
-        raise RuntimeError(
-            "render_mode='human' opens the pybullet GUI and needs a display (DISPLAY is not set); "
-            "use render_mode='rgb_array' on a headless machine"
-        )
 
 
-def check_rates(physics_hz: float, control_hz: float, solver_iterations: int, *, env_id: str = "this env",
-                min_physics_hz: float = 1.0) -> None:
-    """Raise at make time, naming the argument, for rates or solver settings the control loop cannot run.
-
-    ``min_physics_hz`` is the env's floor: below it the stiffest dynamics it simulates (a rate loop, wheel contact,
-    joint motors) break. One step runs ``physics_hz / control_hz`` ticks, at most :data:`MAX_TICKS_PER_STEP`, so a
-    step is a bounded stretch of simulated time and of wall time (docs/envs.md, "Physics rate").
-    """
-    if not (math.isfinite(control_hz) and 0.0 < control_hz <= MAX_CONTROL_HZ):
-        raise ValueError(f"control_hz must be in (0, {MAX_CONTROL_HZ:g}] Hz, got {control_hz!r}")
-    if not (math.isfinite(physics_hz) and min_physics_hz <= physics_hz <= MAX_PHYSICS_HZ):
-        raise ValueError(f"physics_hz must be in [{min_physics_hz:g}, {MAX_PHYSICS_HZ:g}] Hz for {env_id} (below "
-                         f"{min_physics_hz:g} Hz its physics is not stable; docs/envs.md, \"Physics rate\"), "
-                         f"got {physics_hz!r}")
-    if physics_hz < control_hz:
-        raise ValueError(f"physics_hz must be in [control_hz={control_hz}, {MAX_PHYSICS_HZ:g}] Hz, got {physics_hz!r}")
-    ratio = physics_hz / control_hz
-    if ratio > MAX_TICKS_PER_STEP * (1.0 + 1e-9):
-        raise ValueError(
-            f"control_hz must be at least physics_hz / {MAX_TICKS_PER_STEP} = {physics_hz / MAX_TICKS_PER_STEP:g} Hz "
-            f"(a step runs at most {MAX_TICKS_PER_STEP} physics ticks, {MAX_TICKS_PER_STEP / physics_hz:g} s at "
-            f"physics_hz={physics_hz:g}), got {control_hz!r}"
-        )
-    if abs(ratio - round(ratio)) > 1e-9 * ratio:
-        raise ValueError(
-            f"physics_hz must be an integer multiple of control_hz; {physics_hz} / {control_hz} = {ratio:.6g}"
-        )
-    check_integer("solver_iterations", solver_iterations, 1, 1000)

@@ -64,7 +64,7 @@ def test_more_than_a_thousand_physics_ticks_per_step_are_refused(env_id, physics
 def test_the_rate_limits_themselves_are_allowed(make_env):
     """The floor and the cap on ticks per step are in range."""
     from clutter_gym.clutter_nav import MIN_PHYSICS_HZ
-    from clutter_gym.core import MAX_TICKS_PER_STEP
+    from clutter_gym.make_checks import MAX_TICKS_PER_STEP
 
     assert make_env("ClutterNav-v0", physics_hz=MIN_PHYSICS_HZ, control_hz=20.0).unwrapped.substeps == 3
     env = make_env("ClutterNav-v0", physics_hz=float(MAX_TICKS_PER_STEP), control_hz=1.0, sensors=())
