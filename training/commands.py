@@ -12,7 +12,7 @@ import json
 import re
 import typing
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import AbstractContextManager, contextmanager
 from dataclasses import fields
 from pathlib import Path
 from typing import Any
@@ -29,25 +29,23 @@ class UserError(Exception):
 
 
 @contextmanager
-def user_errors() -> Iterator[None]:
-    """Treat the checks' exceptions (bad values, missing or occupied folders, unloadable runs) as user errors."""
+def user_errors(*kinds: type[BaseException]) -> Iterator[None]:
+    """Treat exceptions of ``kinds`` as user errors, printed as one line; by default the checks' exceptions (bad
+    values, missing or occupied folders, unloadable runs)."""
     try:
         yield
-    except (ValueError, FileNotFoundError, FileExistsError) as exc:
+    except kinds or (ValueError, FileNotFoundError, FileExistsError) as exc:
         raise UserError(str(exc)) from None
 
 
-@contextmanager
-def run_errors() -> Iterator[None]:
+def run_errors() -> AbstractContextManager[None]:
     """Treat what stops training on a run folder as one line: a file it cannot write (a full disk), or
-    normalisation statistics that are missing or in a pickle nobody said to trust."""
+    normalisation statistics that are missing or in a pickle nobody said to trust. Other errors of training keep
+    their tracebacks."""
     from clutter_gym.training.normalizer import UntrustedFileError
     from clutter_gym.training.run_dir import RunWriteError
 
-    try:
-        yield
-    except (RunWriteError, UntrustedFileError, FileNotFoundError) as exc:
-        raise UserError(str(exc)) from None
+    return user_errors(RunWriteError, UntrustedFileError, FileNotFoundError)
 
 
 def positive_int(text: str) -> int:

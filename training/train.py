@@ -156,9 +156,11 @@ def resume_point(run: RunDir, config: TrainConfig, trust_pickle: bool = False) -
             if statistics is not None:
                 read_statistics(statistics)
         except ValueError as exc:
+            if folder == run.model_dir:  # the final model is kept: it is what load() and eval use
+                _say(f"{folder} cannot be continued from ({exc}); trying the newest checkpoint")
+                continue
             _say(f"{folder} cannot be continued from ({exc}): removed, trying the one before it")
-            if folder != run.model_dir:
-                shutil.rmtree(folder, ignore_errors=True)
+            shutil.rmtree(folder, ignore_errors=True)
             continue
         return step, folder, statistics
     return None
