@@ -38,6 +38,9 @@ class ClutterNavEnv(ClutterEnv):
     ``Box(-1, 1, (2,), float32)``: (linear, angular) velocity command, normalised by ``max_linear_speed`` (m/s)
     and ``max_angular_speed`` (rad/s, counter-clockwise positive). Finite values outside [-1, 1] are clipped;
     NaN/Inf or a wrong shape raise ``ValueError``. Wheel motors track the command under a 1.5 N m torque limit.
+    With ``reverse=False`` the base drives forwards only: the linear action maps onto [0, max_linear_speed]
+    (-1: stand, 0: half speed, 1: full speed), as in mapless-navigation work that gives the policy no way back;
+    the base still turns in place. Rewards and the monitor then see that command.
 
     With ``safety_horizon > 0`` a collision monitor (:mod:`clutter_gym.robots.safety`) sits between the action and
     the motors: it drives the command's arc ``safety_horizon`` seconds ahead against the latest LIDAR scan and
@@ -120,7 +123,7 @@ class ClutterNavEnv(ClutterEnv):
     ``clearance_margin`` m; ``terminate_on_collision``; ``contact_tolerance`` m;
     ``*_weight`` reward weights; ``subgoal_lookahead`` m (0: off); ``safety_horizon`` s [0, 2] (0: off),
     ``safety_margin`` m [0, 0.5] and ``safety_recovery`` s [0, 10] (0: never) (need a 2D ``lidar`` in
-    ``sensors``).
+    ``sensors``); ``reverse`` (False: forward driving only, see "Action space").
 
     ``subgoal_lookahead > 0`` makes the env map-based: the ``subgoal`` entry comes from a path planned on the
     known layout (shortest on a costmap that charges passing within 0.25 m of touching; see
@@ -143,7 +146,8 @@ class ClutterNavEnv(ClutterEnv):
       added without changing the clean defaults. The progress term follows the path distance around the
       clutter instead of the straight-line distance (PPO stalled behind obstacles with the latter). The collision
       monitor (``safety_horizon``) and its recovery spin (``safety_recovery``) added, off by default. Movable
-      obstacles (``movable_obstacles``, a scene's ``mass``) added, off by default.
+      obstacles (``movable_obstacles``, a scene's ``mass``) added, off by default. Forward-only driving
+      (``reverse=False``) added, off by default.
     """
 
     def __init__(
@@ -187,11 +191,13 @@ class ClutterNavEnv(ClutterEnv):
         safety_horizon: float = 0.0,
         safety_margin: float = 0.02,
         safety_recovery: float = 0.0,
+        reverse: bool = True,
     ) -> None:
         check_numbers(ClutterNavEnv.__init__, locals())
         check_env_settings(render_mode, physics_hz, control_hz, solver_iterations, contact_tolerance,
                            env_id="ClutterNav-v0", min_physics_hz=MIN_PHYSICS_HZ)
-        check_flags(terminate_on_collision=terminate_on_collision)
+        check_flags(terminate_on_collision=terminate_on_collision, reverse=reverse)
+        self._forward_only = not reverse
         robot = DiffDriveRobot(DiffDriveConfig(max_linear_speed=max_linear_speed, max_angular_speed=max_angular_speed))
         spec = ClutterSpec(arena_size=arena_size, obstacle_density=obstacle_density,
                            movable_fraction=movable_obstacles)
@@ -229,6 +235,12 @@ class ClutterNavEnv(ClutterEnv):
             render_mode=render_mode,
             safety=safety,
         )
+
+
+    def _command(self, action: np.ndarray) -> np.ndarray:
+        if not self._forward_only:
+            return action
+        return np.array([0.5 * (action[0] + 1.0), action[1]])
 
 
 def _safety_filter(config: SafetyConfig, sensors: Sequence[str], lidar: LidarConfig,

@@ -192,7 +192,7 @@ class ClutterEnv(gym.Env):
             if self._failed_reset is not None:
                 raise RuntimeError(f"the last reset() failed ({self._failed_reset}); call reset() again before step()")
             raise RuntimeError("call reset() before step()")
-        a = self._checked_action(action)
+        a = self._command(self._checked_action(action))
         applied, speed_scale = self.safety.filter(a, self._scan) if self.safety else (a, 1.0)
         command = self._action_channel.send(applied, self._noise_rng)
         if command is not applied:
@@ -234,6 +234,12 @@ class ClutterEnv(gym.Env):
         if self.render_mode == "human":
             self.render()
         return obs, float(outcome.reward), outcome.terminated, False, info
+
+    def _command(self, action: np.ndarray) -> np.ndarray:
+        """The normalised command the robot is to drive for a checked policy action (the action itself; an env
+        whose actions map onto commands another way overrides it). The monitor, the action noise and the reward
+        all see the command."""
+        return action
 
     def _checked_action(self, action: Any) -> np.ndarray:
         """``action`` as float64 within the bounds: any real dtype and container of the right shape, clipped, and an

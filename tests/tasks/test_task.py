@@ -77,3 +77,27 @@ def test_the_reverse_term_charges_backward_speed_only_when_asked():
             assert speed < -0.3 and info["reward_terms"]["reverse"] == pytest.approx(weight * speed, abs=0.02)
         else:
             assert info["reward_terms"]["reverse"] == 0.0
+
+
+def test_forward_only_driving_maps_the_linear_action_onto_stand_to_full_speed(make_env):
+    """reverse=False: -1 stands, 0 drives at half speed, 1 at full speed; the control charge is on that command."""
+    for action, speed in ((-1.0, 0.0), (0.0, 0.25), (1.0, 0.5)):
+        env = make_env(reverse=False)
+        env.reset(seed=0, options={"scene": empty_scene()})
+        for _ in range(20):
+            obs, _, _, _, info = env.step(np.array([action, 0.0], dtype=np.float32))
+        assert float(obs["velocity"][0]) == pytest.approx(speed, abs=0.01)
+        assert info["reward_terms"]["control"] == pytest.approx(-0.01 * ((action + 1.0) / 2.0) ** 2)
+    with pytest.raises(ValueError, match="reverse must be True or False"):
+        make_env(reverse="no")
+
+
+def test_the_monitor_holds_the_forward_only_command_it_drives(make_env):
+    """A wall ahead at full speed: the monitor stops the base whether the action is 1 (full) or 0 (half speed)."""
+    wall = {"shape": "box", "size": [0.1, 2.0, 0.5], "position": [0.6, 0.0], "yaw": 0.0}
+    for action in (1.0, 0.0):
+        env = make_env(reverse=False, sensors=["lidar"], safety_horizon=0.5)
+        env.reset(seed=0, options={"scene": empty_scene(goal=(-2.5, 2.5), obstacles=[wall])})
+        for _ in range(60):
+            _, _, _, _, info = env.step(np.array([action, 0.0], dtype=np.float32))
+        assert info["cost"] == 0.0 and info["safety_scale"] == 0.0 and info["min_clearance"] > 0.0
