@@ -15,8 +15,8 @@ while not done:
 
 The run folder's ``config.yaml`` is the recipe: env id, env arguments, noise profile and the PPO settings, which
 say which observation processing the policy was trained behind (normalisation, and a frame stack whose frames
-the agent keeps in ``state``) and whether its actions are residuals on the subgoal pursuit, which ``predict``
-then adds. The model folder holds SB3's ``model.zip`` and, when observations were normalised, the ``VecNormalize``
+the agent keeps in ``state``) and whether its actions are residuals on a base controller
+(:mod:`clutter_gym.training.residual`), which ``predict`` then adds. The model folder holds SB3's ``model.zip`` and, when observations were normalised, the ``VecNormalize``
 statistics (``vecnormalize.npz``); loading either runs no code from the files.
 """
 
@@ -34,7 +34,7 @@ from clutter_gym.training.config import TrainConfig, deep_merge
 from clutter_gym.training.memory import frame_space, push_frame
 from clutter_gym.training.normalizer import NORMALIZER_FILE, detached, normalizer_path
 from clutter_gym.training.policy_file import load_ppo
-from clutter_gym.training.residual import residual_action, subgoal_pursuit
+from clutter_gym.training.residual import FIELD_ENVS, residual_action, subgoal_pursuit
 from clutter_gym.training.run_dir import MODEL_FILE, IncompatibleRunError, RunDir
 
 if TYPE_CHECKING:
@@ -60,7 +60,7 @@ class Agent:
         self.step = int(model.num_timesteps)
         self.observation_space = frame_space(model.observation_space, config.frame_stack)
         self._normalizer = normalizer if normalizer is not None and normalizer.norm_obs else None
-        self._pursuit = subgoal_pursuit(config.env_id, config.residual_gain) if config.residual_gain else None
+        self._pursuit = _pursuit(config) if config.residual_gain else None
 
     def predict(self, obs: dict[str, np.ndarray] | np.ndarray, state: Any = None,
                 deterministic: bool = True) -> tuple[np.ndarray, Any]:
@@ -137,6 +137,17 @@ class Agent:
                 raise ValueError("obs entries must all be single observations or all batches of the same size")
             return singles[0]
         return _check_shape("obs", np.shape(obs), expected.shape)
+
+
+def _pursuit(config: TrainConfig):
+    """The run's base controller; ClutterNav's is built on an env made with the run's settings (it reads the LIDAR)."""
+    if config.env_id not in FIELD_ENVS:
+        return subgoal_pursuit(config.env_id, config.residual_gain)
+    env = gym.make(config.env_id, **config.make_kwargs())
+    try:
+        return subgoal_pursuit(config.env_id, config.residual_gain, env)
+    finally:
+        env.close()
 
 
 def _as_batch(obs: dict[str, np.ndarray] | np.ndarray) -> dict[str, np.ndarray] | np.ndarray:

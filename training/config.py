@@ -18,7 +18,7 @@ from typing import Any
 
 import yaml
 
-from clutter_gym.training.residual import PURSUIT_ENVS
+from clutter_gym.training.residual import FIELD_ENVS, PURSUIT_ENVS
 
 HYPERPARAMS_FILE = "ppo.yml"
 #: First evaluation seed by default: far from the seeds training starts its envs with (seed, seed + 1, ...).
@@ -116,10 +116,15 @@ class TrainConfig:
         train_layouts: 0: every training reset samples a new layout; N > 0: the training envs share out N
             fixed layouts (``ceil(N / n_envs)`` each; see :mod:`clutter_gym.training.layout_pool`), so per-layout
             work such as the ClutterReach subgoal's plan is done once. Validation and evaluation are unaffected.
+        train_env_mix: a training device: ``{argument: [v0, v1, ...]}`` gives env ``i`` of the training vector
+            the ``i mod n``-th value of each listed ``gym.make`` argument on top of ``env_kwargs`` (for instance
+            ``{obstacle_density: [0.05, 0.12, 0.2]}`` trains over three clutter levels). Validation, evaluation
+            and ``load()`` use ``env_kwargs`` alone.
         residual_gain: 0: the policy's action is the env's; g > 0: the env's action is
-            ``clip(pursuit(obs) + policy action, -1, 1)``, a residual policy on a pursuit of the subgoal with gain
-            g (ClutterReach-v0 or ClutterFly-v0 with ``subgoal_lookahead > 0``; the pursuits and what their gain
-            means: :mod:`clutter_gym.training.residual`).
+            ``clip(pursuit(obs) + policy action, -1, 1)``, a residual policy on a base controller with gain g
+            (ClutterNav-v0's potential field on the goal, or ClutterReach-v0's and ClutterFly-v0's pursuit of the
+            subgoal with ``subgoal_lookahead > 0``; the pursuits and what their gain means:
+            :mod:`clutter_gym.training.residual`).
         env_kwargs: extra ``gym.make`` keyword arguments. Its ``noise`` entry, if any, holds noise-section
             overrides (``{"lidar": {"range_sigma": 0.02}}``) applied on top of whichever profile the env is
             made under, for training and evaluation alike.
@@ -140,6 +145,7 @@ class TrainConfig:
     frame_stack: int = 1
     train_layouts: int = 0
     residual_gain: float = 0.0
+    train_env_mix: dict[str, list[Any]] = field(default_factory=dict)
     env_kwargs: dict[str, Any] = field(default_factory=dict)
     ppo: PPOHyperparams = field(default_factory=PPOHyperparams)
 
@@ -163,12 +169,21 @@ class TrainConfig:
         _check_range("frame_stack", self.frame_stack, 1, 32)
         _check_range("train_layouts", self.train_layouts, 0, 10**7)
         _check_range("residual_gain", self.residual_gain, 0.0, 1000.0)
-        if self.residual_gain and not (self.env_id in PURSUIT_ENVS and self.env_kwargs.get("subgoal_lookahead")):
-            raise ValueError(f"residual_gain > 0 needs env_id in {PURSUIT_ENVS} with env_kwargs.subgoal_lookahead > 0")
+        if self.residual_gain and not (self.env_id in FIELD_ENVS
+                                       or self.env_id in PURSUIT_ENVS and self.env_kwargs.get("subgoal_lookahead")):
+            raise ValueError(f"residual_gain > 0 needs env_id in {FIELD_ENVS}, or in {PURSUIT_ENVS} with "
+                             "env_kwargs.subgoal_lookahead > 0")
         check_env_kwargs(self.env_id, self.noise, self.env_kwargs)
+        _check_mix(self.env_id, self.train_env_mix)
         if self.ppo.batch_size > self.ppo.n_steps * self.n_envs:
             raise ValueError(f"ppo.batch_size must be in [2, n_steps * n_envs = {self.ppo.n_steps * self.n_envs}], "
                              f"got {self.ppo.batch_size}")
+
+    def train_kwargs(self, index: int) -> dict[str, Any]:
+        """``gym.make`` keyword arguments of training env ``index``: :meth:`make_kwargs` with its share of
+        ``train_env_mix``."""
+        mixed = {key: values[index % len(values)] for key, values in self.train_env_mix.items()}
+        return {**self.make_kwargs(), **mixed}
 
     @property
     def layouts_per_env(self) -> int:
@@ -246,6 +261,13 @@ def check_env_kwargs(env_id: str, noise: str, env_kwargs: Any) -> None:
     resolve_noise({"profile": noise, **sections})
 
 
+def _check_mix(env_id: str, mix: Any) -> None:
+    if not isinstance(mix, dict) or not all(isinstance(v, list) and v for v in mix.values()):
+        raise ValueError("train_env_mix must map gym.make arguments to non-empty lists of values "
+                         f"({{obstacle_density: [0.05, 0.12, 0.2]}}), got {mix!r}")
+    _reject_unknown(f"train_env_mix key(s) for {env_id}", mix, set(env_arguments(env_id)) - {"noise"})
+
+
 def deep_merge(base: dict[str, Any], top: dict[str, Any]) -> dict[str, Any]:
     """``base`` updated by ``top``: mappings merge key by key at every depth, other values replace."""
     merged = dict(base)
@@ -263,18 +285,30 @@ def hyperparams_table() -> dict[str, Any]:
     return yaml.safe_load(text)
 
 
+def shipped_hyperparams() -> list[str]:
+    """Names of the hyperparameter files shipped beside ``ppo.yml`` (``sensors``, ``robust``), for
+    ``--hyperparams NAME``."""
+    folder = resources.files("clutter_gym.training").joinpath("hyperparams")
+    return sorted(f.name[:-4] for f in folder.iterdir() if f.name.endswith(".yml") and f.name != HYPERPARAMS_FILE)
+
+
 def read_hyperparams_file(path: str | Path) -> dict[str, Any]:
-    """A user's hyperparameter file: the shipped file's form (``default`` and env-id blocks), checked by name.
+    """A user's hyperparameter file, or a shipped one by name: the shipped file's form (``default`` and env-id
+    blocks), checked by name.
 
     Raises:
-        FileNotFoundError: no such file.
+        FileNotFoundError: no such file, and not a shipped name (the message lists those).
         ValueError: not YAML, not a mapping of blocks, or a block named neither ``default`` nor an env id.
     """
     from clutter_gym import ENV_IDS
 
+    name = str(path)
+    if name in shipped_hyperparams() and not Path(name).is_file():
+        path = Path(str(resources.files("clutter_gym.training").joinpath("hyperparams", f"{name}.yml")))
     path = Path(path)
     if not path.is_file():
-        raise FileNotFoundError(f"hyperparameter file {str(path)!r} does not exist")
+        raise FileNotFoundError(f"hyperparameter file {name!r} does not exist (nor is it a shipped name: "
+                                f"{', '.join(shipped_hyperparams())})")
     try:
         table = yaml.safe_load(path.read_text())
     except yaml.YAMLError as exc:

@@ -39,10 +39,10 @@ def make_env(env_id: str, make_kwargs: dict[str, Any], render_mode: str | None =
 
 def build_vec_env(config: TrainConfig, seed: int) -> VecEnv:
     """``config.n_envs`` envs over ``env_workers(config)`` processes, seeded ``seed, seed + 1, ...`` at their first
-    reset; with ``config.train_layouts`` each env resets from its share of that many fixed layouts."""
-    factory = functools.partial(make_env, config.env_id, config.make_kwargs(), layouts=config.layouts_per_env,
-                                residual_gain=config.residual_gain)
-    fns = [factory] * config.n_envs
+    reset; with ``config.train_layouts`` each env resets from its share of that many fixed layouts, and env ``i``
+    takes its share of ``config.train_env_mix``."""
+    fns = [functools.partial(make_env, config.env_id, config.train_kwargs(i), layouts=config.layouts_per_env,
+                             residual_gain=config.residual_gain) for i in range(config.n_envs)]
     workers = env_workers(config)
     venv: VecEnv = DummyVecEnv(fns) if workers == 1 else WorkerVecEnv(fns, workers)
     venv.seed(seed)

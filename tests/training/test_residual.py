@@ -1,5 +1,5 @@
-"""The residual policy on a subgoal pursuit (ClutterReach, ClutterFly): the wrapper and a loaded agent add the same
-term."""
+"""The residual policy on a base controller (ClutterNav's potential field, ClutterReach's and ClutterFly's subgoal
+pursuits): the wrapper and a loaded agent add the same term."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import pytest
 from helpers import SHELF_SEED
 
 from clutter_gym.training import load
-from clutter_gym.training.baselines import CascadedFlyer
+from clutter_gym.training.baselines import CascadedFlyer, PotentialFieldNavigator
 from clutter_gym.training.config import config_for
 from clutter_gym.training.residual import SubgoalResidual, residual_action, subgoal_pursuit
 from clutter_gym.training.train import start, train
@@ -42,13 +42,31 @@ def test_a_zero_residual_is_the_pursuit_that_reaches_the_shelf_target(make_env):
 def test_the_wrapper_needs_an_env_with_a_subgoal_pursuit(make_env):
     with pytest.raises(ValueError, match="needs an env with a 'subgoal' observation"):
         SubgoalResidual(make_env("ClutterReach-v0"), gain=15.0)
-    with pytest.raises(ValueError, match=r"subgoal pursuit, one of \('ClutterReach-v0', 'ClutterFly-v0'\); "
-                                         "got 'ClutterNav-v0'"):
-        SubgoalResidual(make_env("ClutterNav-v0", subgoal_lookahead=0.5), gain=15.0)
-    with pytest.raises(ValueError, match=r"residual_gain > 0 needs env_id in \('ClutterReach-v0', 'ClutterFly-v0'\)"):
+    with pytest.raises(ValueError, match="potential field needs 'lidar' in sensors"):
+        SubgoalResidual(make_env("ClutterNav-v0", sensors=["imu"]), gain=1.5)
+    with pytest.raises(ValueError, match=r"or in \('ClutterReach-v0', 'ClutterFly-v0'\) with "
+                                         "env_kwargs.subgoal_lookahead > 0"):
         config_for("ClutterReach-v0", {"env_kwargs": {"subgoal_lookahead": 0.0}})
-    with pytest.raises(ValueError, match="residual_gain"):
-        config_for("ClutterNav-v0", {"residual_gain": 10.0})
+    with pytest.raises(ValueError, match="pursuit, one of .*got 'ClutterReachGoal-v0'"):
+        subgoal_pursuit("ClutterReachGoal-v0", 1.0)
+    with pytest.raises(ValueError, match="needs the env"):
+        subgoal_pursuit("ClutterNav-v0", 1.5)
+
+
+def test_the_nav_pursuit_is_the_potential_field_on_the_goal_with_the_gain_as_turn_gain(make_env):
+    env = SubgoalResidual(make_env("ClutterNav-v0", sensors=["lidar"]), gain=2.5)
+    obs, _ = env.reset(seed=4)
+    field = PotentialFieldNavigator.for_env(env)
+    field.turn_gain = 2.5
+    np.testing.assert_allclose(env.pursuit(obs), field(obs), atol=0)
+    plain = make_env("ClutterNav-v0", sensors=["lidar"])
+    plain.reset(seed=4)
+    residual = np.array([0.2, -0.3], dtype=np.float32)
+    a, *_ = plain.step(np.clip(field(obs) + residual, -1.0, 1.0))
+    b, *_ = env.step(residual)
+    np.testing.assert_array_equal(a["lidar"], b["lidar"])
+    batch = {k: np.stack([v, v]) for k, v in obs.items()}
+    np.testing.assert_allclose(env.pursuit(batch), [field(obs)] * 2, atol=0)
 
 
 def test_a_loaded_residual_agent_adds_the_pursuit(tmp_path):
