@@ -197,7 +197,7 @@ class ClutterNavEnv(ClutterEnv):
         check_env_settings(render_mode, physics_hz, control_hz, solver_iterations, contact_tolerance,
                            env_id="ClutterNav-v0", min_physics_hz=MIN_PHYSICS_HZ)
         check_flags(terminate_on_collision=terminate_on_collision, reverse=reverse)
-        self._forward_only = not reverse
+        self.forward_only = not reverse  # the linear action maps onto stand..full speed (see _command)
         robot = DiffDriveRobot(DiffDriveConfig(max_linear_speed=max_linear_speed, max_angular_speed=max_angular_speed))
         spec = ClutterSpec(arena_size=arena_size, obstacle_density=obstacle_density,
                            movable_fraction=movable_obstacles)
@@ -238,7 +238,7 @@ class ClutterNavEnv(ClutterEnv):
 
 
     def _command(self, action: np.ndarray) -> np.ndarray:
-        if not self._forward_only:
+        if not self.forward_only:
             return action
         return np.array([0.5 * (action[0] + 1.0), action[1]])
 

@@ -28,6 +28,8 @@ class PotentialFieldNavigator:
         repulsion: weight of the repulsive sum relative to the unit goal vector.
         turn_gain: angular command per radian of heading error.
         goal_key: the observation entry to steer for, ``"goal"`` or ``"subgoal"``.
+        forward_only: the env drives forwards only (``reverse=False``): its linear action -1..1 means stand..full
+            speed, and the field's speed fraction is mapped onto it, so it drives the same either way.
     """
 
     def __init__(
@@ -38,6 +40,7 @@ class PotentialFieldNavigator:
         repulsion: float = 0.1,
         turn_gain: float = 1.5,
         goal_key: str = "goal",
+        forward_only: bool = False,
     ) -> None:
         if goal_key not in ("goal", "subgoal"):
             raise ValueError(f"goal_key must be 'goal' or 'subgoal', got {goal_key!r}")
@@ -45,6 +48,7 @@ class PotentialFieldNavigator:
         self.lidar_range = lidar_range
         self.influence, self.repulsion, self.turn_gain = influence, repulsion, turn_gain
         self.goal_key = goal_key
+        self.forward_only = forward_only
 
     @classmethod
     def for_env(cls, env: gym.Env, goal_key: str = "goal") -> PotentialFieldNavigator:
@@ -57,9 +61,10 @@ class PotentialFieldNavigator:
             raise ValueError(f"the env has no {goal_key!r} observation"
                              + (" (make it with subgoal_lookahead > 0)" if goal_key == "subgoal" else ""))
         lidar = next((s for s in env.unwrapped.sensors if s.name == "lidar"), None)
+        forward_only = bool(getattr(env.unwrapped, "forward_only", False))
         if lidar is None:
-            return cls(None, 1.0, goal_key=goal_key)
-        return cls(lidar.config.angles, lidar.config.max_range, goal_key=goal_key)
+            return cls(None, 1.0, goal_key=goal_key, forward_only=forward_only)
+        return cls(lidar.config.angles, lidar.config.max_range, goal_key=goal_key, forward_only=forward_only)
 
     def __call__(self, obs: Mapping[str, np.ndarray]) -> np.ndarray:
         _, sin_b, cos_b = (float(v) for v in obs[self.goal_key])
@@ -76,6 +81,8 @@ class PotentialFieldNavigator:
         error = math.atan2(heading[1], heading[0])
         angular = float(np.clip(self.turn_gain * error, -1.0, 1.0))
         linear = float(np.clip(math.cos(error), 0.0, 1.0)) * max(ahead, 0.15)
+        if self.forward_only:
+            linear = 2.0 * linear - 1.0
         return np.array([linear, angular], dtype=np.float32)
 
 

@@ -116,3 +116,17 @@ def test_the_report_says_the_fly_agent_is_a_residual_on_a_position_controller():
     line = _observation_line(config_for("ClutterFly-v0"))
     assert "**Map-based agent.**" in line and "0.5 m ahead on the shortest path" in line
     assert "residuals on a cascaded position controller" in line and "LIDAR" not in line
+
+
+def test_the_potential_field_drives_the_same_on_a_forward_only_env(make_env):
+    """reverse=False remaps the linear action; the field reads that from the env and drives the same path."""
+    ends = []
+    for reverse in (True, False):
+        env = make_env("ClutterNav-v0", sensors=["lidar"], reverse=reverse)
+        field = PotentialFieldNavigator.for_env(env)
+        assert field.forward_only is not reverse
+        obs, _ = env.reset(seed=5)
+        for _ in range(60):
+            obs, *_ = env.step(field(obs))
+        ends.append(env.unwrapped.robot.state().position[:2])
+    np.testing.assert_allclose(ends[0], ends[1], atol=1e-6)
