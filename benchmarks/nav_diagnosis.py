@@ -107,8 +107,9 @@ def normalisation(agent, by_density: dict[float, list[dict]]) -> list[str]:
             raw = np.array([np.asarray(o[key], dtype=float).ravel() for t in traces for o in t["observations"]])
             z = (raw - stats.mean.ravel()) / std.ravel()
             clipped = np.mean(np.abs(z) > agent._normalizer.clip_obs)
-            lines.append(f"    density {density:<5} raw {_span(raw.mean(axis=0))}; |z| > 3: {np.mean(np.abs(z) > 3):.1%}"
-                         f", clipped at {agent._normalizer.clip_obs:g}: {clipped:.1%}, mean |z| {np.abs(z).mean():.2f}")
+            lines.append(f"    density {density:<5} raw {_span(raw.mean(axis=0))}; "
+                         f"|z| > 3: {np.mean(np.abs(z) > 3):.1%}, clipped at {agent._normalizer.clip_obs:g}: "
+                         f"{clipped:.1%}, mean |z| {np.abs(z).mean():.2f}")
     return lines
 
 

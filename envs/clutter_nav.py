@@ -60,7 +60,7 @@ class ClutterNavEnv(ClutterEnv):
     | ``camera_rgb`` | (h, w, 3) uint8 | colour image | -, camera link looking along +x | [0, 255] |
     | ``camera_depth`` | (h, w) | depth along the optical axis, 0 = no data | m | [0, camera_far] |
     | ``camera_segmentation`` | (h, w) uint8 | class per pixel: nothing, ground, obstacle, robot, goal | - | [0, 4] |
-    | ``goal`` | (3,) | distance, sin(bearing), cos(bearing) | m, -, -; robot frame | [0, arena diagonal], [-1, 1] |
+    | ``goal`` | (3,) or (4,) | distance, sin(bearing), cos(bearing) (and bearing / pi with ``observe_bearing``) | m, -, -, -; robot frame | [0, arena diagonal], [-1, 1] |
     | ``subgoal`` | (3,) | distance, sin(bearing), cos(bearing) of the waypoint ``subgoal_lookahead`` ahead on the planned path | m, -, -; robot frame | [0, subgoal_lookahead], [-1, 1] |
     | ``velocity`` | (2,) | forward speed, yaw rate | m/s, rad/s; base frame | +-2x the commanded maxima |
 
@@ -123,7 +123,9 @@ class ClutterNavEnv(ClutterEnv):
     ``clearance_margin`` m; ``terminate_on_collision``; ``contact_tolerance`` m;
     ``*_weight`` reward weights; ``subgoal_lookahead`` m (0: off); ``safety_horizon`` s [0, 2] (0: off),
     ``safety_margin`` m [0, 0.5] and ``safety_recovery`` s [0, 10] (0: never) (need a 2D ``lidar`` in
-    ``sensors``); ``reverse`` (False: forward driving only, see "Action space").
+    ``sensors``); ``reverse`` (False: forward driving only, see "Action space"); ``observe_bearing`` (the goal
+    entry ends with the bearing angle / pi, which jumps where the goal is straight behind: from sin and cos
+    alone, a continuous policy's turn passes through zero there, and a deterministic one can stop for good).
 
     ``subgoal_lookahead > 0`` makes the env map-based: the ``subgoal`` entry comes from a path planned on the
     known layout (shortest on a costmap that charges passing within 0.25 m of touching; see
@@ -147,7 +149,7 @@ class ClutterNavEnv(ClutterEnv):
       clutter instead of the straight-line distance (PPO stalled behind obstacles with the latter). The collision
       monitor (``safety_horizon``) and its recovery spin (``safety_recovery``) added, off by default. Movable
       obstacles (``movable_obstacles``, a scene's ``mass``) added, off by default. Forward-only driving
-      (``reverse=False``) added, off by default.
+      (``reverse=False``) and the bearing angle in the goal entry (``observe_bearing``) added, off by default.
     """
 
     def __init__(
@@ -192,11 +194,12 @@ class ClutterNavEnv(ClutterEnv):
         safety_margin: float = 0.02,
         safety_recovery: float = 0.0,
         reverse: bool = True,
+        observe_bearing: bool = False,
     ) -> None:
         check_numbers(ClutterNavEnv.__init__, locals())
         check_env_settings(render_mode, physics_hz, control_hz, solver_iterations, contact_tolerance,
                            env_id="ClutterNav-v0", min_physics_hz=MIN_PHYSICS_HZ)
-        check_flags(terminate_on_collision=terminate_on_collision, reverse=reverse)
+        check_flags(terminate_on_collision=terminate_on_collision, reverse=reverse, observe_bearing=observe_bearing)
         self.forward_only = not reverse  # the linear action maps onto stand..full speed (see _command)
         robot = DiffDriveRobot(DiffDriveConfig(max_linear_speed=max_linear_speed, max_angular_speed=max_angular_speed))
         spec = ClutterSpec(arena_size=arena_size, obstacle_density=obstacle_density,
@@ -216,6 +219,7 @@ class ClutterNavEnv(ClutterEnv):
             spec=spec,
             robot_radius=robot.config.footprint_radius,
             subgoal_lookahead=subgoal_lookahead,
+            observe_bearing=observe_bearing,
         )
         # the whole arena is in range: every step reports the distance to the nearest obstacle
         checker = collision_checker(robot, TRACKED_LINKS, collision_fidelity, collision_padding, contact_tolerance,

@@ -16,8 +16,9 @@ while not done:
 The run folder's ``config.yaml`` is the recipe: env id, env arguments, noise profile and the PPO settings, which
 say which observation processing the policy was trained behind (normalisation, and a frame stack whose frames
 the agent keeps in ``state``) and whether its actions are residuals on a base controller
-(:mod:`clutter_gym.training.residual`), which ``predict`` then adds. The model folder holds SB3's ``model.zip`` and, when observations were normalised, the ``VecNormalize``
-statistics (``vecnormalize.npz``); loading either runs no code from the files.
+(:mod:`clutter_gym.training.residual`), which ``predict`` then adds. The model folder holds SB3's ``model.zip``
+and, when observations were normalised, the ``VecNormalize`` statistics (``vecnormalize.npz``); loading either
+runs no code from the files.
 """
 
 from __future__ import annotations

@@ -67,7 +67,7 @@ class PotentialFieldNavigator:
         return cls(lidar.config.angles, lidar.config.max_range, goal_key=goal_key, forward_only=forward_only)
 
     def __call__(self, obs: Mapping[str, np.ndarray]) -> np.ndarray:
-        _, sin_b, cos_b = (float(v) for v in obs[self.goal_key])
+        sin_b, cos_b = (float(v) for v in obs[self.goal_key][1:3])
         heading = np.array([cos_b, sin_b])
         ahead = 1.0
         if self.angles is not None and "lidar" in obs:

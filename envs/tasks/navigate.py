@@ -70,6 +70,9 @@ class NavigateTask:
         robot_radius: footprint radius for the path-distance field, metres.
         subgoal_lookahead: metres along the planned path on the known layout to the ``subgoal`` observation
             entry, in [0, max_goal_distance]; 0 leaves the entry out (the mapless default).
+        observe_bearing: the goal entry also holds the bearing itself, as a fraction of pi in [-1, 1]. It jumps
+            from 1 to -1 where the goal is straight behind, so a policy can turn the short way on both sides;
+            from sin and cos alone any continuous policy's turn command passes through zero behind the robot.
     """
 
     def __init__(
@@ -82,6 +85,7 @@ class NavigateTask:
         spec: ClutterSpec,
         robot_radius: float,
         subgoal_lookahead: float = 0.0,
+        observe_bearing: bool = False,
     ) -> None:
         if not (math.isfinite(success_radius) and 0.0 < success_radius <= 2.0):
             raise ValueError(f"success_radius must be in (0, 2] metres, got {success_radius!r}")
@@ -96,7 +100,10 @@ class NavigateTask:
         self.terminate_on_collision = bool(terminate_on_collision)
         low = np.array([0.0, -1.0, -1.0], dtype=np.float32)
         high = np.array([max_goal_distance, 1.0, 1.0], dtype=np.float32)
-        self.spaces = {"goal": spaces.Box(low, high, dtype=np.float32)}
+        self.observe_bearing = bool(observe_bearing)
+        extra = 1 if self.observe_bearing else 0
+        self.spaces = {"goal": spaces.Box(np.append(low, [-1.0] * extra).astype(np.float32),
+                                          np.append(high, [1.0] * extra).astype(np.float32), dtype=np.float32)}
         self.subgoal_lookahead = float(subgoal_lookahead)
         if self.subgoal_lookahead > 0.0:
             sub_high = np.array([self.subgoal_lookahead, 1.0, 1.0], dtype=np.float32)
@@ -132,7 +139,10 @@ class NavigateTask:
         from +x. ``subgoal`` (when enabled): the same for the point ``subgoal_lookahead`` metres ahead on the
         planned path (the goal itself when nearer)."""
         x, y = float(state.position[0]), float(state.position[1])
-        obs = {"goal": _polar(self._goal, x, y, state.yaw, self._max_goal_distance)}
+        goal = _polar(self._goal, x, y, state.yaw, self._max_goal_distance)
+        if self.observe_bearing:
+            goal = np.append(goal, np.float32(math.atan2(goal[1], goal[2]) / math.pi))
+        obs = {"goal": goal}
         if self.subgoal_lookahead > 0.0:
             point = self._path_distance.waypoint(x, y, self.subgoal_lookahead)
             obs["subgoal"] = _polar(point, x, y, state.yaw, self.subgoal_lookahead)

@@ -101,3 +101,19 @@ def test_the_monitor_holds_the_forward_only_command_it_drives(make_env):
         for _ in range(60):
             _, _, _, _, info = env.step(np.array([action, 0.0], dtype=np.float32))
         assert info["cost"] == 0.0 and info["safety_scale"] == 0.0 and info["min_clearance"] > 0.0
+
+
+def test_the_bearing_entry_is_the_goal_angle_and_jumps_straight_behind(make_env):
+    """observe_bearing: goal = (distance, sin, cos, bearing / pi); just left of straight behind it reads near 1, just
+    right near -1, where sin and cos hardly differ."""
+    env = make_env(observe_bearing=True, sensors=["lidar"])
+    assert env.observation_space["goal"].shape == (4,)
+    readings = []
+    for goal_y in (0.05, -0.05):  # the goal 2.5 m behind the robot, a little to its left, then to its right
+        obs, _ = env.reset(options={"scene": empty_scene(start=(0.0, 0.0, 0.0), goal=(-2.5, goal_y))})
+        distance, sin_b, cos_b, angle = obs["goal"]
+        assert angle == pytest.approx(np.arctan2(goal_y, -2.5) / np.pi, abs=1e-6)
+        assert distance == pytest.approx(np.hypot(2.5, goal_y), abs=1e-3) and cos_b < -0.99
+        readings.append(angle)
+    assert readings[0] > 0.99 and readings[1] < -0.99
+    assert make_env(sensors=["lidar"]).observation_space["goal"].shape == (3,)  # the default is unchanged
