@@ -185,7 +185,14 @@ def _observation_line(config) -> str:
                 f"{lookahead} m ahead on the path a costmap planner finds over the known layout. It does not solve "
                 "the mapless task; train without `subgoal_lookahead` for that.")
     else:
-        line = "**Mapless agent.** The policy sees its sensors and the goal's relative position, no map."
+        line = ("**Sensor-only agent.** The policy reads only what the robot measures: its sensors "
+                f"({', '.join(config.env_kwargs.get('sensors', ['the env default']))}), its own velocity and the "
+                "goal's position relative to it; no map, no planner, no subgoal.")
+        if config.residual_gain:
+            line += (f" Its actions are residuals on a potential field over the same LIDAR and goal "
+                     f"(`residual_gain` {config.residual_gain:g}).")
+        if config.env_kwargs.get("reverse") is False:
+            line += " The base drives forwards only (`reverse: false`)."
     horizon = config.env_kwargs.get("safety_horizon", 0.0)
     if horizon:
         margin = config.env_kwargs.get("safety_margin", SafetyConfig.margin)

@@ -130,3 +130,12 @@ def test_the_potential_field_drives_the_same_on_a_forward_only_env(make_env):
             obs, *_ = env.step(field(obs))
         ends.append(env.unwrapped.robot.state().position[:2])
     np.testing.assert_allclose(ends[0], ends[1], atol=1e-6)
+
+
+def test_the_report_says_a_sensor_only_agent_reads_only_its_sensors():
+    from clutter_gym.training.report import _observation_line
+
+    line = _observation_line(config_for("ClutterNav-v0", {"env_kwargs": {"subgoal_lookahead": 0.0,
+                                                                         "reverse": False}}))
+    assert line.startswith("**Sensor-only agent.**") and "(lidar)" in line and "no map" in line
+    assert "forwards only" in line and "Map-based" not in line
