@@ -105,3 +105,42 @@ def test_mean_interval_covers_the_true_mean_about_95_percent_of_the_time():
     assert abs(covered / trials - 0.95) < 0.014
     assert mean_interval(np.array([3.0])) == (3.0, 3.0)
     assert all(math.isfinite(v) for v in mean_interval(np.array([1.0, 1.0, 1.0])))
+
+
+def test_a_training_mix_gives_each_training_env_its_share_and_leaves_evaluation_alone():
+    from clutter_gym.training.vec_env import build_vec_env
+
+    config = config_for("ClutterNav-v0", {"n_envs": 3, "env_workers": 1,
+                                          "train_env_mix": {"obstacle_density": [0.05, 0.2]}})
+    assert [config.train_kwargs(i)["obstacle_density"] for i in range(3)] == [0.05, 0.2, 0.05]
+    assert "obstacle_density" not in config.make_kwargs()
+    venv = build_vec_env(config, seed=0)
+    try:
+        assert [env.unwrapped.arena.spec.obstacle_density for env in venv.envs] == [0.05, 0.2, 0.05]
+    finally:
+        venv.close()
+    assert TrainConfig.from_dict(config.to_dict()) == config
+
+
+@pytest.mark.parametrize(("mix", "message"), [({"obstacle_densty": [0.1]}, "train_env_mix key"),
+                                              ({"obstacle_density": []}, "non-empty lists"),
+                                              ({"noise": ["harsh"]}, "train_env_mix key"),
+                                              ([0.1], "must map gym.make arguments")])
+def test_a_bad_training_mix_is_named(mix, message):
+    with pytest.raises(ValueError, match=message):
+        config_for("ClutterNav-v0", {"train_env_mix": mix})
+
+
+def test_shipped_hyperparameter_files_are_found_by_name(tmp_path, monkeypatch):
+    from clutter_gym.training.config import read_hyperparams_file, shipped_hyperparams, user_settings
+
+    assert "sensors" in shipped_hyperparams()
+    args = build_parser().parse_args(["train", "--env", "ClutterNav-v0", "--hyperparams", "sensors"])
+    config = config_for("ClutterNav-v0", train_overrides(args))
+    assert config.env_kwargs["subgoal_lookahead"] == 0.0  # sensor-only: no subgoal from a planner
+    assert config == config_for("ClutterNav-v0", user_settings(read_hyperparams_file("sensors"), "ClutterNav-v0"))
+    monkeypatch.chdir(tmp_path)  # a file of the user's own by that name comes first
+    (tmp_path / "sensors").write_text("ClutterNav-v0: {timesteps: 77}\n")
+    assert read_hyperparams_file("sensors") == {"ClutterNav-v0": {"timesteps": 77}}
+    with pytest.raises(FileNotFoundError, match="nor is it a shipped name: .*sensors"):
+        read_hyperparams_file("sensor")
