@@ -139,3 +139,27 @@ def test_the_report_says_a_sensor_only_agent_reads_only_its_sensors():
                                                                          "reverse": False}}))
     assert line.startswith("**Sensor-only agent.**") and "(lidar)" in line and "no map" in line
     assert "forwards only" in line and "Map-based" not in line
+
+
+def test_a_loaded_sensor_only_agent_and_a_field_residual_agent_act_as_trained(tmp_path):
+    """load() on the sensor-only block (forward only, bearing angle) and on a residual on the potential field."""
+    from clutter_gym.training.config import read_hyperparams_file, user_settings
+
+    tiny = {"timesteps": 64, "n_envs": 1, "validate_every": 0, "final_eval_episodes": 0, "checkpoint_every": 64,
+            "ppo": {"n_steps": 32, "batch_size": 32, "n_epochs": 1}}
+    sensors = user_settings(read_hyperparams_file("sensors"), "ClutterNav-v0")
+    for name, extra in (("sensors", {}), ("field", {"residual_gain": 1.5})):
+        run = start(config_for("ClutterNav-v0", {**sensors, **tiny, **extra}), tmp_path / name)
+        train(run, progress=False)
+        agent = load(run.root)
+        env = agent.make_env()
+        assert env.observation_space["goal"].shape == (4,) and env.unwrapped.forward_only
+        obs, _ = env.reset(seed=2)
+        action, _ = agent.predict(obs)
+        raw, _ = agent.model.predict(agent._normalizer.normalize_obs(obs), deterministic=True)
+        if extra:
+            field = PotentialFieldNavigator.for_env(env)
+            field.turn_gain = 1.5
+            raw = residual_action(obs, raw, field)
+        env.close()
+        np.testing.assert_allclose(action, raw, rtol=1e-6)
