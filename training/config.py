@@ -286,7 +286,7 @@ def hyperparams_table() -> dict[str, Any]:
 
 
 def shipped_hyperparams() -> list[str]:
-    """Names of the hyperparameter files shipped beside ``ppo.yml`` (``sensors``, ``robust``), for
+    """Names of the hyperparameter files shipped beside ``ppo.yml`` (such as ``sensors``), for
     ``--hyperparams NAME``."""
     folder = resources.files("clutter_gym.training").joinpath("hyperparams")
     return sorted(f.name[:-4] for f in folder.iterdir() if f.name.endswith(".yml") and f.name != HYPERPARAMS_FILE)
