@@ -30,6 +30,7 @@ import gymnasium as gym
 import numpy as np
 
 import clutter_gym  # noqa: F401  (registers the envs)
+from benchmarks.run_curves import scalars
 from clutter_gym.training import load
 from clutter_gym.training.baselines import PotentialFieldNavigator
 from clutter_gym.training.config import EVAL_SEED
@@ -121,22 +122,13 @@ def _span(values: np.ndarray) -> str:
 
 
 def curves(run: Path) -> list[str]:
-    from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
-
-    files = sorted((run / "tb").rglob("events.*"))
-    if not files:
-        return ["  (no TensorBoard file)"]
     lines = []
-    for path in files:
-        acc = EventAccumulator(str(path), size_guidance={"scalars": 0})
-        acc.Reload()
-        for tag in CURVE_TAGS:
-            if tag not in acc.Tags()["scalars"]:
-                continue
-            events = acc.Scalars(tag)
-            picks = events[:: max(1, len(events) // 8)] + [events[-1]]
-            lines.append(f"  {tag:<26} " + "  ".join(f"{e.step // 1000}k:{e.value:.3g}" for e in picks))
-    return lines
+    for tag in CURVE_TAGS:
+        steps, values = scalars(run, tag)
+        if len(steps):
+            picks = list(range(0, len(steps), max(1, len(steps) // 8))) + [len(steps) - 1]
+            lines.append(f"  {tag:<26} " + "  ".join(f"{steps[k] // 1000}k:{values[k]:.3g}" for k in picks))
+    return lines or ["  (no TensorBoard scalars)"]
 
 
 def main() -> None:
