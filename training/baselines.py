@@ -120,8 +120,9 @@ class CascadedFlyer:
     The target point (``obs[goal_key]``, body frame) sets a velocity towards it (``position_gain`` x the offset, at
     most ``max_speed``), the velocity error an acceleration (``velocity_gain`` x error, at most ``max_accel``), and
     that acceleration plus gravity the thrust vector: its length along body z is the collective thrust, and body
-    rates ``attitude_gain`` x (body z cross the thrust direction) tilt the airframe onto it. Yaw is held. It reads
-    only the observation (target offset, ``velocity``, ``attitude``), as a policy would, one or a batch (rows).
+    rates ``attitude_gain`` x (body z cross the thrust direction) tilt the airframe onto it. Yaw is held, or turned
+    with ``yaw_gain``. It reads only the observation (target offset, ``velocity``, ``attitude``), as a policy
+    would, one or a batch (rows).
     Without obstacle sensing it flies straight at its target: with ``goal_key="goal"`` a mapless reference that
     meets every obstacle on the line; with ``"subgoal"`` (an env made with ``subgoal_lookahead > 0``) the map-based
     planner reference, and the pursuit a residual ClutterFly policy adds its actions to.
@@ -136,17 +137,21 @@ class CascadedFlyer:
         max_speed: m/s.
         max_accel: m/s^2.
         attitude_gain: body rate per radian of tilt error, 1/s.
+        yaw_gain: 0 holds the yaw; > 0 turns the nose (body x, where the LIDAR and the camera look) towards the
+            horizontal velocity it wants, at this yaw rate per radian of bearing, 1/s.
     """
 
     def __init__(self, hover_thrust: float, rate_scale: tuple[float, float, float], gravity: float,
                  goal_key: str = "goal", position_gain: float = 1.5, velocity_gain: float = 3.0,
-                 max_speed: float = 1.0, max_accel: float = 4.0, attitude_gain: float = 6.0) -> None:
+                 max_speed: float = 1.0, max_accel: float = 4.0, attitude_gain: float = 6.0,
+                 yaw_gain: float = 0.0) -> None:
         if goal_key not in ("goal", "subgoal"):
             raise ValueError(f"goal_key must be 'goal' or 'subgoal', got {goal_key!r}")
         self.hover_thrust, self.rate_scale, self.gravity = hover_thrust, np.asarray(rate_scale, float), gravity
         self.goal_key = goal_key
         self.position_gain, self.velocity_gain = position_gain, velocity_gain
         self.max_speed, self.max_accel, self.attitude_gain = max_speed, max_accel, attitude_gain
+        self.yaw_gain = yaw_gain
 
     @classmethod
     def for_env(cls, env: gym.Env, goal_key: str = "goal", **gains: float) -> CascadedFlyer:
@@ -178,16 +183,28 @@ class CascadedFlyer:
         return cls(hover, (c.max_roll_rate, c.max_pitch_rate, c.max_yaw_rate), gravity, goal_key, **gains)
 
     def __call__(self, obs: Mapping[str, np.ndarray]) -> np.ndarray:
+        return self.track(self.velocity(obs), obs)
+
+    def velocity(self, obs: Mapping[str, np.ndarray]) -> np.ndarray:
+        """The outer loop: the velocity it commands towards its target (m/s, body frame; one or a batch)."""
         offset = np.asarray(obs[self.goal_key], dtype=float)[..., :3]
+        return _capped(self.position_gain * offset, self.max_speed)
+
+    def track(self, wanted: np.ndarray, obs: Mapping[str, np.ndarray]) -> np.ndarray:
+        """The action that flies velocity ``wanted`` (m/s, body frame; one or a batch of rows): the controller's
+        inner loops, for a caller that sets the velocity itself."""
         velocity = np.asarray(obs["velocity"], dtype=float)[..., :3]
         up = np.asarray(obs["attitude"], dtype=float)
-        wanted = _capped(self.position_gain * offset, self.max_speed)
         accel = _capped(self.velocity_gain * (wanted - velocity), self.max_accel)
         thrust = accel + self.gravity * up  # the specific force the rotors must give, body frame
         direction = thrust / np.maximum(np.linalg.norm(thrust, axis=-1, keepdims=True), 1e-9)
         collective = self.hover_thrust * thrust[..., 2:3] / self.gravity
-        rates = self.attitude_gain * np.stack([-direction[..., 1], direction[..., 0], np.zeros_like(up[..., 0])],
-                                              axis=-1)  # turns body z onto the thrust direction
+        yaw = np.zeros_like(up[..., 0])
+        if self.yaw_gain:  # turn body x (where the LIDAR and the camera look) towards the horizontal velocity wanted
+            horizontal = np.linalg.norm(wanted[..., :2], axis=-1)
+            yaw = np.where(horizontal > 0.2, self.yaw_gain * np.arctan2(wanted[..., 1], wanted[..., 0]), 0.0)
+        rates = self.attitude_gain * np.stack([-direction[..., 1], direction[..., 0], np.zeros_like(yaw)], axis=-1)
+        rates[..., 2] = yaw  # the tilt terms turn body z onto the thrust direction
         action = np.concatenate([2.0 * collective - 1.0, rates / self.rate_scale], axis=-1)
         return np.clip(action, -1.0, 1.0).astype(np.float32)
 
