@@ -35,7 +35,7 @@ from clutter_gym.training.config import TrainConfig, deep_merge
 from clutter_gym.training.memory import frame_space, push_frame
 from clutter_gym.training.normalizer import NORMALIZER_FILE, detached, normalizer_path
 from clutter_gym.training.policy_file import load_ppo
-from clutter_gym.training.residual import FIELD_ENVS, residual_action, subgoal_pursuit
+from clutter_gym.training.residual import policy_action_space, residual_map
 from clutter_gym.training.run_dir import MODEL_FILE, IncompatibleRunError, RunDir
 
 if TYPE_CHECKING:
@@ -61,7 +61,7 @@ class Agent:
         self.step = int(model.num_timesteps)
         self.observation_space = frame_space(model.observation_space, config.frame_stack)
         self._normalizer = normalizer if normalizer is not None and normalizer.norm_obs else None
-        self._pursuit = _pursuit(config) if config.residual_gain else None
+        self._residual = _residual(config) if config.residual_gain else None
 
     def predict(self, obs: dict[str, np.ndarray] | np.ndarray, state: Any = None,
                 deterministic: bool = True) -> tuple[np.ndarray, Any]:
@@ -88,8 +88,8 @@ class Agent:
             action = action[0] if single else action
         else:
             action, _ = self.model.predict(obs, deterministic=deterministic)
-        if self._pursuit is not None:
-            action = residual_action(raw, action, self._pursuit)
+        if self._residual is not None:
+            action = self._residual(raw, action)
         return action, state
 
     def make_env(self, noise: str | dict[str, Any] | None = None, render_mode: str | None = None,
@@ -115,7 +115,8 @@ class Agent:
         env = gym.make(config.env_id, render_mode=render_mode, **config.make_kwargs())
         try:
             for what, trained, built in (("observation", self.observation_space, env.observation_space),
-                                         ("action", self.model.action_space, env.action_space)):
+                                         ("action", self.model.action_space,
+                                          policy_action_space(env.action_space, self.config.residual_space))):
                 if _shapes(trained) != _shapes(built):
                     raise ValueError(f"these settings give {what}s of shape {_shapes(built)}; the policy of "
                                      f"{self.run.root} was trained on {_shapes(trained)}")
@@ -140,13 +141,15 @@ class Agent:
         return _check_shape("obs", np.shape(obs), expected.shape)
 
 
-def _pursuit(config: TrainConfig):
-    """The run's base controller; ClutterNav's is built on an env made with the run's settings (it reads the LIDAR)."""
-    if config.env_id not in FIELD_ENVS:
-        return subgoal_pursuit(config.env_id, config.residual_gain)
+def _residual(config: TrainConfig):
+    """The run's residual on its base controller; ClutterNav's is built on an env made with the run's settings (it
+    reads the LIDAR)."""
+    mapless = not config.env_kwargs.get("subgoal_lookahead")
+    if config.env_id != "ClutterNav-v0":
+        return residual_map(config.env_id, config.residual_gain, config.residual_space, mapless=mapless)
     env = gym.make(config.env_id, **config.make_kwargs())
     try:
-        return subgoal_pursuit(config.env_id, config.residual_gain, env)
+        return residual_map(config.env_id, config.residual_gain, config.residual_space, env, mapless=mapless)
     finally:
         env.close()
 
@@ -220,7 +223,8 @@ def policy_spaces(config: TrainConfig) -> tuple[spaces.Space, spaces.Space]:
     """The observation space the run's policy takes (a stack of ``frame_stack`` env observations) and its action
     space, from the env its config makes."""
     env = gym.make(config.env_id, **config.make_kwargs())
-    observation_space, action_space = env.observation_space, env.action_space
+    observation_space = env.observation_space
+    action_space = policy_action_space(env.action_space, config.residual_space)
     env.close()
     if config.frame_stack > 1:
         observation_space = StackedObservations(1, config.frame_stack, observation_space).stacked_observation_space

@@ -18,7 +18,7 @@ from typing import Any
 
 import yaml
 
-from clutter_gym.training.residual import FIELD_ENVS, PURSUIT_ENVS
+from clutter_gym.training.residual import MAPLESS_ENVS, PURSUIT_ENVS, RESIDUAL_SPACES
 
 HYPERPARAMS_FILE = "ppo.yml"
 #: First evaluation seed by default: far from the seeds training starts its envs with (seed, seed + 1, ...).
@@ -118,13 +118,17 @@ class TrainConfig:
             work such as the ClutterReach subgoal's plan is done once. Validation and evaluation are unaffected.
         train_env_mix: a training device: ``{argument: [v0, v1, ...]}`` gives env ``i`` of the training vector
             the ``i mod n``-th value of each listed ``gym.make`` argument on top of ``env_kwargs`` (for instance
-            ``{obstacle_density: [0.05, 0.12, 0.2]}`` trains over three clutter levels). Validation, evaluation
-            and ``load()`` use ``env_kwargs`` alone.
+            ``{obstacle_density: [0.05, 0.12, 0.2]}`` trains over three clutter levels; ``noise`` takes profile
+            names, with the run's noise-section overrides on each). Validation, evaluation and ``load()`` use
+            ``env_kwargs`` and ``noise`` alone.
         residual_gain: 0: the policy's action is the env's; g > 0: the env's action is
             ``clip(pursuit(obs) + policy action, -1, 1)``, a residual policy on a base controller with gain g
             (ClutterNav-v0's potential field on the goal, or ClutterReach-v0's and ClutterFly-v0's pursuit of the
             subgoal with ``subgoal_lookahead > 0``; the pursuits and what their gain means:
             :mod:`clutter_gym.training.residual`).
+        residual_space: what a residual policy's action adds to: ``"action"``, the base controller's action;
+            ``"velocity"`` (ClutterFly-v0), the velocity its flyer commands, the policy's action then being a
+            (3,) velocity offset in units of the flyer's top speed (:func:`clutter_gym.training.residual.residual_map`).
         env_kwargs: extra ``gym.make`` keyword arguments. Its ``noise`` entry, if any, holds noise-section
             overrides (``{"lidar": {"range_sigma": 0.02}}``) applied on top of whichever profile the env is
             made under, for training and evaluation alike.
@@ -145,6 +149,7 @@ class TrainConfig:
     frame_stack: int = 1
     train_layouts: int = 0
     residual_gain: float = 0.0
+    residual_space: str = "action"
     train_env_mix: dict[str, list[Any]] = field(default_factory=dict)
     env_kwargs: dict[str, Any] = field(default_factory=dict)
     ppo: PPOHyperparams = field(default_factory=PPOHyperparams)
@@ -169,10 +174,15 @@ class TrainConfig:
         _check_range("frame_stack", self.frame_stack, 1, 32)
         _check_range("train_layouts", self.train_layouts, 0, 10**7)
         _check_range("residual_gain", self.residual_gain, 0.0, 1000.0)
-        if self.residual_gain and not (self.env_id in FIELD_ENVS
+        if self.residual_gain and not (self.env_id in MAPLESS_ENVS
                                        or self.env_id in PURSUIT_ENVS and self.env_kwargs.get("subgoal_lookahead")):
-            raise ValueError(f"residual_gain > 0 needs env_id in {FIELD_ENVS}, or in {PURSUIT_ENVS} with "
+            raise ValueError(f"residual_gain > 0 needs env_id in {MAPLESS_ENVS}, or in {PURSUIT_ENVS} with "
                              "env_kwargs.subgoal_lookahead > 0")
+        if self.residual_space not in RESIDUAL_SPACES:
+            raise ValueError(f"residual_space must be one of {RESIDUAL_SPACES}, got {self.residual_space!r}")
+        if self.residual_space == "velocity" and not (self.residual_gain and self.env_id == "ClutterFly-v0"):
+            raise ValueError("residual_space 'velocity' needs env_id ClutterFly-v0 and residual_gain > 0, got "
+                             f"{self.env_id} with residual_gain {self.residual_gain:g}")
         check_env_kwargs(self.env_id, self.noise, self.env_kwargs)
         _check_mix(self.env_id, self.train_env_mix)
         if self.ppo.batch_size > self.ppo.n_steps * self.n_envs:
@@ -183,7 +193,7 @@ class TrainConfig:
         """``gym.make`` keyword arguments of training env ``index``: :meth:`make_kwargs` with its share of
         ``train_env_mix``."""
         mixed = {key: values[index % len(values)] for key, values in self.train_env_mix.items()}
-        return {**self.make_kwargs(), **mixed}
+        return {**self.make_kwargs(noise=mixed.pop("noise", None)), **mixed}
 
     @property
     def layouts_per_env(self) -> int:
@@ -265,7 +275,11 @@ def _check_mix(env_id: str, mix: Any) -> None:
     if not isinstance(mix, dict) or not all(isinstance(v, list) and v for v in mix.values()):
         raise ValueError("train_env_mix must map gym.make arguments to non-empty lists of values "
                          f"({{obstacle_density: [0.05, 0.12, 0.2]}}), got {mix!r}")
-    _reject_unknown(f"train_env_mix key(s) for {env_id}", mix, set(env_arguments(env_id)) - {"noise"})
+    _reject_unknown(f"train_env_mix key(s) for {env_id}", mix, set(env_arguments(env_id)))
+    from clutter_gym.noise.profiles import PROFILE_NAMES
+
+    if any(profile not in PROFILE_NAMES for profile in mix.get("noise", [])):
+        raise ValueError(f"train_env_mix noise takes profile names, each one of {PROFILE_NAMES}, got {mix['noise']!r}")
 
 
 def deep_merge(base: dict[str, Any], top: dict[str, Any]) -> dict[str, Any]:

@@ -170,6 +170,13 @@ _MAP_BASED = {
 }
 
 
+#: The sensor-only base controller a residual policy adds its actions to, per env.
+_MAPLESS_BASE = {
+    "ClutterNav-v0": "a potential field over the same LIDAR and goal",
+    "ClutterFly-v0": "a position controller flying straight at the goal, which sees no obstacle",
+}
+
+
 def _observation_line(config) -> str:
     lookahead = config.env_kwargs.get("subgoal_lookahead", 0.0)
     if lookahead and config.env_id in _MAP_BASED:
@@ -189,8 +196,9 @@ def _observation_line(config) -> str:
                 f"({', '.join(config.env_kwargs.get('sensors', ['the env default']))}), its own velocity and the "
                 "goal's position relative to it; no map, no planner, no subgoal.")
         if config.residual_gain:
-            line += (f" Its actions are residuals on a potential field over the same LIDAR and goal "
-                     f"(`residual_gain` {config.residual_gain:g}).")
+            line += (f" Its actions are residuals on {_MAPLESS_BASE[config.env_id]} "
+                     f"(`residual_gain` {config.residual_gain:g})"
+                     + (", added to the velocity it commands." if config.residual_space == "velocity" else "."))
         if config.env_kwargs.get("reverse") is False:
             line += " The base drives forwards only (`reverse: false`)."
     horizon = config.env_kwargs.get("safety_horizon", 0.0)

@@ -10,9 +10,10 @@ Training wraps each env in :class:`SubgoalResidual`; a loaded agent adds the sam
 * ClutterReach-v0 (map-based, ``subgoal_lookahead > 0``): ``clip(gain * subgoal, -1, 1)``, every joint driven
   towards the joint-space subgoal on a path planned over the known layout, at a speed proportional to its offset
   (``gain``: actions per radian);
-* ClutterFly-v0 (map-based, ``subgoal_lookahead > 0``): :class:`~clutter_gym.training.baselines.CascadedFlyer`
-  on the subgoal, a flight stack's position controller (``gain``: its position gain, commanded m/s per metre of
-  offset).
+* ClutterFly-v0: :class:`~clutter_gym.training.baselines.CascadedFlyer`, a flight stack's position controller
+  (``gain``: its position gain, commanded m/s per metre of offset), on the subgoal (map-based, with
+  ``subgoal_lookahead > 0``) or, without one, straight at the goal: sensor-only, it sees no obstacle, and the
+  policy's LIDAR or camera is what steers around them.
 """
 
 from __future__ import annotations
@@ -24,17 +25,22 @@ import gymnasium as gym
 import numpy as np
 
 Pursuit = Callable[[dict[str, np.ndarray]], np.ndarray]
-#: The envs with a pursuit of the subgoal (map-based), and ClutterNav-v0's on the goal (sensor-only).
+#: The envs with a pursuit of the subgoal (map-based), and those with a base controller on the goal (sensor-only).
 PURSUIT_ENVS = ("ClutterReach-v0", "ClutterFly-v0")
-FIELD_ENVS = ("ClutterNav-v0",)
+MAPLESS_ENVS = ("ClutterNav-v0", "ClutterFly-v0")
+#: What a residual policy's action adds to (:func:`residual_map`).
+RESIDUAL_SPACES = ("action", "velocity")
+#: Yaw rate per radian between the nose and the velocity commanded, 1/s, of the velocity residual's flyer.
+FACING_GAIN = 2.0
 
 
-def subgoal_pursuit(env_id: str, gain: float, env: gym.Env | None = None) -> Pursuit:
-    """The pursuit of ``env_id`` with ``gain`` (> 0): action(s) for one observation or a batch. ClutterNav-v0's
-    reads the LIDAR of ``env`` (an env made with the run's settings), which it then needs.
+def subgoal_pursuit(env_id: str, gain: float, env: gym.Env | None = None, mapless: bool = False) -> Pursuit:
+    """The pursuit of ``env_id`` with ``gain`` (> 0): action(s) for one observation or a batch; ``mapless``: the
+    sensor-only base on the goal instead of the subgoal (ClutterNav-v0 has only that one). ClutterNav-v0's reads
+    the LIDAR of ``env`` (an env made with the run's settings), which it then needs.
 
     Raises:
-        ValueError: ``env_id`` has no pursuit, or ClutterNav-v0 without an env.
+        ValueError: ``env_id`` has no such pursuit, or ClutterNav-v0 without an env.
     """
     from clutter_gym import TRAIN_IDS
 
@@ -43,14 +49,17 @@ def subgoal_pursuit(env_id: str, gain: float, env: gym.Env | None = None) -> Pur
         if env is None:
             raise ValueError("ClutterNav-v0's potential field needs the env, for its LIDAR's beam angles and range")
         return _batched(_field(env, gain))
-    if env_id == "ClutterReach-v0":
+    if env_id == "ClutterReach-v0" and not mapless:
         return lambda obs: np.clip(gain * np.asarray(obs["subgoal"], dtype=np.float32), -1.0, 1.0)
     if env_id == "ClutterFly-v0":
         from clutter_gym.training.baselines import CascadedFlyer
 
-        return CascadedFlyer.nominal("subgoal", position_gain=gain)
-    raise ValueError(f"a residual policy needs an env with a pursuit, one of {FIELD_ENVS + PURSUIT_ENVS}; "
-                     f"got {env_id!r}")
+        return CascadedFlyer.nominal("goal" if mapless else "subgoal", position_gain=gain)
+    if env_id == "ClutterReach-v0":
+        raise ValueError("ClutterReach-v0 has no sensor-only base controller: a residual on it needs the subgoal "
+                         "(subgoal_lookahead > 0)")
+    known = sorted(set(MAPLESS_ENVS + PURSUIT_ENVS))
+    raise ValueError(f"a residual policy needs an env with a pursuit, one of {known}; got {env_id!r}")
 
 
 def _field(env: gym.Env, gain: float) -> Pursuit:
@@ -77,25 +86,69 @@ def residual_action(obs: dict[str, np.ndarray], action: np.ndarray, pursuit: Pur
     return np.clip(pursuit(obs) + action, -1.0, 1.0).astype(np.float32)
 
 
+def residual_map(env_id: str, gain: float, space: str = "action", env: gym.Env | None = None,
+                 mapless: bool = False) -> Callable[[dict[str, np.ndarray], np.ndarray], np.ndarray]:
+    """``(raw observation, policy action) -> env action`` of a residual policy (one or a batch). ``space``:
+    ``"action"``, the policy's action adds to the base controller's (:func:`residual_action`); ``"velocity"``
+    (ClutterFly-v0 only), it adds to the velocity the :class:`~clutter_gym.training.baselines.CascadedFlyer`
+    commands, in units of its top speed along body x, y, z, and the sum, capped at that speed, goes to the
+    flyer's inner loops, which also turn the nose towards it (``yaw_gain`` :data:`FACING_GAIN`): the policy
+    steers, the flyer flies, and the LIDAR and the camera look where the drone goes.
+
+    Raises:
+        ValueError: an unknown ``space``, ``"velocity"`` for another env, or what :func:`subgoal_pursuit` raises.
+    """
+    if space not in RESIDUAL_SPACES:
+        raise ValueError(f"residual_space must be one of {RESIDUAL_SPACES}, got {space!r}")
+    if space == "action":
+        pursuit = subgoal_pursuit(env_id, gain, env, mapless=mapless)
+        return lambda obs, action: residual_action(obs, action, pursuit)
+    from clutter_gym import TRAIN_IDS
+    from clutter_gym.training.baselines import CascadedFlyer, _capped
+
+    if TRAIN_IDS.get(env_id, env_id) != "ClutterFly-v0":
+        raise ValueError(f"residual_space 'velocity' is ClutterFly-v0's (a residual on its flyer's velocity "
+                         f"command), got {env_id!r}")
+    pursuit = CascadedFlyer.nominal("goal" if mapless else "subgoal", position_gain=gain, yaw_gain=FACING_GAIN)
+
+    def act(obs: dict[str, np.ndarray], action: np.ndarray) -> np.ndarray:
+        offset = pursuit.max_speed * np.clip(np.asarray(action, dtype=float), -1.0, 1.0)
+        return pursuit.track(_capped(pursuit.velocity(obs) + offset, pursuit.max_speed), obs)
+    return act
+
+
+def policy_action_space(env_action_space: gym.spaces.Box, space: str = "action") -> gym.spaces.Box:
+    """The action space of a residual policy in ``space`` on an env with ``env_action_space``."""
+    if space == "velocity":
+        return gym.spaces.Box(-1.0, 1.0, (3,), np.float32)
+    return env_action_space
+
+
 class SubgoalResidual(gym.Wrapper):
-    """Turns the wrapped env's actions into residuals on its pursuit (same spaces).
+    """Turns the wrapped env's actions into residuals on its pursuit (the same observations; the same actions, or
+    ClutterFly's (3,) velocity offsets with ``space="velocity"``).
 
     Args:
-        env: a ClutterNav env with a LIDAR, or a ClutterReach or ClutterFly env made with ``subgoal_lookahead > 0``.
+        env: a ClutterNav env with a LIDAR, a ClutterReach env made with ``subgoal_lookahead > 0``, or a
+            ClutterFly env (on its subgoal when it has one, else on the goal).
         gain: the pursuit's gain (> 0; see :func:`subgoal_pursuit`).
+        space: what the residual adds to (:func:`residual_map`).
     """
 
-    def __init__(self, env: gym.Env, gain: float) -> None:
+    def __init__(self, env: gym.Env, gain: float, space: str = "action") -> None:
         from clutter_gym import TRAIN_IDS
 
-        space = env.observation_space
+        observations = env.observation_space
         env_id = TRAIN_IDS.get(env.spec.id, env.spec.id) if env.spec else type(env.unwrapped).__name__
-        if env_id in PURSUIT_ENVS and (not isinstance(space, gym.spaces.Dict) or "subgoal" not in space.spaces):
+        mapless = not isinstance(observations, gym.spaces.Dict) or "subgoal" not in observations.spaces
+        if mapless and env_id not in MAPLESS_ENVS:
             raise ValueError("a residual on the subgoal needs an env with a 'subgoal' observation "
                              f"({' or '.join(PURSUIT_ENVS)} with subgoal_lookahead > 0)")
         super().__init__(env)
         self.gain = gain
-        self.pursuit = subgoal_pursuit(env_id, gain, env)
+        self.pursuit = subgoal_pursuit(env_id, gain, env, mapless=mapless)
+        self.act = residual_map(env_id, gain, space, env, mapless=mapless)
+        self.action_space = policy_action_space(env.action_space, space)
         self._obs: dict[str, np.ndarray] | None = None
 
     def reset(self, **kwargs: Any) -> tuple[Any, dict]:
@@ -106,6 +159,6 @@ class SubgoalResidual(gym.Wrapper):
     def step(self, action: Any) -> tuple[Any, float, bool, bool, dict]:
         if self._obs is None:
             raise RuntimeError("call reset() before step()")
-        obs, reward, terminated, truncated, info = self.env.step(residual_action(self._obs, action, self.pursuit))
+        obs, reward, terminated, truncated, info = self.env.step(self.act(self._obs, action))
         self._obs = obs
         return obs, reward, terminated, truncated, info

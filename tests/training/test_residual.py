@@ -163,3 +163,87 @@ def test_a_loaded_sensor_only_agent_and_a_field_residual_agent_act_as_trained(tm
             raw = residual_action(obs, raw, field)
         env.close()
         np.testing.assert_allclose(action, raw, rtol=1e-6)
+
+
+def test_a_mapless_fly_residual_is_on_the_flyer_aimed_at_the_goal(make_env):
+    """Without a subgoal the ClutterFly base is sensor-only: the position controller straight at the goal."""
+    env = SubgoalResidual(make_env("ClutterFly-v0", volume_size=(4.0, 4.0, 2.0), sensors=["lidar"]), gain=1.5)
+    obs, _ = env.reset(seed=3)
+    flyer = CascadedFlyer.for_env(env, "goal")
+    np.testing.assert_allclose(env.pursuit(obs), flyer(obs), atol=1e-7)
+    plain = make_env("ClutterFly-v0", volume_size=(4.0, 4.0, 2.0), sensors=["lidar"])
+    plain.reset(seed=3)
+    residual = np.array([0.1, -0.2, 0.05, 0.0], dtype=np.float32)
+    a, *_ = plain.step(np.clip(flyer(obs) + residual, -1.0, 1.0))
+    b, *_ = env.step(residual)
+    np.testing.assert_array_equal(a["lidar"], b["lidar"])
+    with pytest.raises(ValueError, match="ClutterReach-v0 has no sensor-only base"):
+        subgoal_pursuit("ClutterReach-v0", 15.0, mapless=True)
+
+
+def test_a_loaded_mapless_fly_residual_agent_adds_the_flyer_on_the_goal(tmp_path):
+    tiny = {"timesteps": 64, "n_envs": 1, "validate_every": 0, "final_eval_episodes": 0, "checkpoint_every": 64,
+            "env_kwargs": {"subgoal_lookahead": 0.0, "sensors": ["lidar"], "volume_size": [4.0, 4.0, 2.0]},
+            "ppo": {"n_steps": 32, "batch_size": 32, "n_epochs": 1}}
+    run = start(config_for("ClutterFly-v0", tiny), tmp_path / "run")
+    train(run, progress=False)
+    agent = load(run.root)
+    env = agent.make_env()
+    obs, _ = env.reset(seed=1)
+    assert "subgoal" not in obs
+    flyer = CascadedFlyer.for_env(env, "goal", position_gain=agent.config.residual_gain)
+    env.close()
+    action, _ = agent.predict(obs)
+    raw, _ = agent.model.predict(agent._normalizer.normalize_obs(obs), deterministic=True)
+    np.testing.assert_allclose(action, residual_action(obs, raw, flyer), rtol=1e-6)
+    from clutter_gym.training.report import _observation_line
+
+    line = _observation_line(agent.config)
+    assert line.startswith("**Sensor-only agent.**") and "(lidar)" in line
+    assert "flying straight at the goal" in line and "potential field" not in line
+
+
+def test_a_velocity_residual_steers_the_flyer_it_does_not_fly_it(make_env):
+    """residual_space 'velocity': the policy's (3,) action offsets the flyer's commanded velocity (in units of its
+    top speed, capped there) and the flyer's inner loops fly the sum; a zero offset is the flyer alone."""
+    from clutter_gym.training.baselines import _capped
+    from clutter_gym.training.residual import FACING_GAIN, residual_map
+
+    env = SubgoalResidual(make_env("ClutterFly-v0", volume_size=(4.0, 4.0, 2.0), sensors=["lidar"]), 1.5, "velocity")
+    assert env.action_space.shape == (3,)
+    obs, _ = env.reset(seed=3)
+    flyer = CascadedFlyer.for_env(env, "goal", yaw_gain=FACING_GAIN)
+    np.testing.assert_allclose(env.act(obs, np.zeros(3)), flyer(obs), atol=1e-7)
+    sideways = np.array([0.0, 1.0, 0.0])
+    wanted = _capped(flyer.velocity(obs) + flyer.max_speed * sideways, flyer.max_speed)
+    assert np.linalg.norm(wanted) == pytest.approx(flyer.max_speed)
+    np.testing.assert_allclose(env.act(obs, sideways), flyer.track(wanted, obs), atol=1e-7)
+    batch = {k: np.stack([v, v]) for k, v in obs.items()}
+    np.testing.assert_allclose(env.act(batch, np.stack([sideways, sideways]))[1], env.act(obs, sideways), atol=1e-7)
+    with pytest.raises(ValueError, match="'velocity' is ClutterFly-v0's"):
+        residual_map("ClutterNav-v0", 1.5, "velocity", make_env("ClutterNav-v0", sensors=["lidar"]))
+    with pytest.raises(ValueError, match=r"residual_space must be one of \('action', 'velocity'\), got 'speed'"):
+        residual_map("ClutterFly-v0", 1.5, "speed")
+    with pytest.raises(ValueError, match="residual_space 'velocity' needs env_id ClutterFly-v0 and residual_gain > 0"):
+        config_for("ClutterNav-v0", {"residual_space": "velocity", "residual_gain": 1.5})
+
+
+def test_a_loaded_velocity_residual_agent_acts_on_plain_observations(tmp_path):
+    tiny = {"timesteps": 64, "n_envs": 1, "validate_every": 0, "final_eval_episodes": 0, "checkpoint_every": 64,
+            "residual_space": "velocity",
+            "env_kwargs": {"subgoal_lookahead": 0.0, "sensors": ["lidar"], "volume_size": [4.0, 4.0, 2.0]},
+            "ppo": {"n_steps": 32, "batch_size": 32, "n_epochs": 1}}
+    run = start(config_for("ClutterFly-v0", tiny), tmp_path / "run")
+    train(run, progress=False)
+    agent = load(run.root)
+    assert agent.model.action_space.shape == (3,)
+    env = agent.make_env()  # the env's (4,) rate actions; the policy's (3,) velocity offsets
+    obs, _ = env.reset(seed=1)
+    action, _ = agent.predict(obs)
+    assert action.shape == (4,)
+    env.step(action)
+    env.close()
+    raw, _ = agent.model.predict(agent._normalizer.normalize_obs(obs), deterministic=True)
+    wrapper = SubgoalResidual(agent.make_env(), agent.config.residual_gain, "velocity")
+    np.testing.assert_allclose(action, wrapper.act(obs, raw), rtol=1e-6)
+    wrapper.close()

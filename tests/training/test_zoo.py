@@ -31,7 +31,7 @@ def test_the_zoo_blocks_carry_the_shipped_settings():
     reach = config_for("ClutterReach-v0")
     assert hyperparams["ClutterReachTrain-v0"]["env_wrapper"] == [
         {"clutter_gym.training.layout_pool.LayoutPool": {"n_layouts": reach.layouts_per_env}},
-        {"clutter_gym.training.residual.SubgoalResidual": {"gain": reach.residual_gain}},
+        {"clutter_gym.training.residual.SubgoalResidual": {"gain": reach.residual_gain, "space": "action"}},
     ]
     assert "env_wrapper" not in hyperparams["ClutterNavTrain-v0"]
 
