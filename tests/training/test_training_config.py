@@ -122,9 +122,17 @@ def test_a_training_mix_gives_each_training_env_its_share_and_leaves_evaluation_
     assert TrainConfig.from_dict(config.to_dict()) == config
 
 
+def test_a_noise_mix_gives_each_training_env_its_profile_and_validation_the_run_s():
+    config = config_for("ClutterFly-v0", {"noise": "harsh", "train_env_mix": {"noise": ["none", "harsh"]},
+                                          "env_kwargs": {"noise": {"imu": {"latency_steps": 1}}}})
+    assert config.train_kwargs(0)["noise"] == {"profile": "none", "imu": {"latency_steps": 1}}
+    assert config.train_kwargs(3)["noise"] == {"profile": "harsh", "imu": {"latency_steps": 1}}
+    assert config.make_kwargs()["noise"]["profile"] == "harsh"
+
+
 @pytest.mark.parametrize(("mix", "message"), [({"obstacle_densty": [0.1]}, "train_env_mix key"),
                                               ({"obstacle_density": []}, "non-empty lists"),
-                                              ({"noise": ["harsh"]}, "train_env_mix key"),
+                                              ({"noise": ["harsh", "rough"]}, "noise takes profile names"),
                                               ([0.1], "must map gym.make arguments")])
 def test_a_bad_training_mix_is_named(mix, message):
     with pytest.raises(ValueError, match=message):
@@ -144,3 +152,18 @@ def test_shipped_hyperparameter_files_are_found_by_name(tmp_path, monkeypatch):
     assert read_hyperparams_file("sensors") == {"ClutterNav-v0": {"timesteps": 77}}
     with pytest.raises(FileNotFoundError, match="nor is it a shipped name: .*sensors"):
         read_hyperparams_file("sensor")
+
+
+def test_the_robust_block_trains_the_fly_residual_under_harsh_with_memory():
+    args = build_parser().parse_args(["train", "--env", "ClutterFly-v0", "--hyperparams", "robust"])
+    config = config_for("ClutterFly-v0", train_overrides(args))
+    assert config.noise == "harsh" and config.frame_stack > 1
+    assert config.residual_gain == config_for("ClutterFly-v0").residual_gain  # the shipped residual, trained harsh
+    assert config.make_kwargs(noise="harsh")["noise"] == "harsh"
+
+
+def test_the_sensor_only_fly_block_reads_no_map():
+    args = build_parser().parse_args(["train", "--env", "ClutterFly-v0", "--hyperparams", "sensors"])
+    config = config_for("ClutterFly-v0", train_overrides(args))
+    assert config.env_kwargs["subgoal_lookahead"] == 0.0 and config.env_kwargs["sensors"] == ["lidar"]
+    assert config.residual_gain > 0 and config.residual_space == "velocity"
