@@ -1,4 +1,6 @@
-"""A residual policy on a base controller: the env's action is ``clip(pursuit(obs) + policy action, -1, 1)``.
+"""A residual policy on a base controller: the env's action is ``clip(pursuit(obs) + policy action, -1, 1)``, or
+on ClutterFly-v0 with ``residual_space="velocity"`` the flyer's inner loops flying its commanded velocity plus
+the policy's offset (:func:`residual_map`).
 
 A simple controller (the pursuit) already does much of the task; the policy learns the correction: where the
 pursuit cuts a corner into an obstacle, overshoots, stops short of the target or sits in a local minimum.
