@@ -35,7 +35,7 @@ from clutter_gym.training.config import TrainConfig, deep_merge
 from clutter_gym.training.memory import frame_space, push_frame
 from clutter_gym.training.normalizer import NORMALIZER_FILE, detached, normalizer_path
 from clutter_gym.training.policy_file import load_ppo
-from clutter_gym.training.residual import policy_action_space, residual_map
+from clutter_gym.training.residual import policy_action_space, residual_map, subgoal_pursuit
 from clutter_gym.training.run_dir import MODEL_FILE, IncompatibleRunError, RunDir
 
 if TYPE_CHECKING:
@@ -145,13 +145,13 @@ def _residual(config: TrainConfig):
     """The run's residual on its base controller; ClutterNav's is built on an env made with the run's settings (it
     reads the LIDAR)."""
     mapless = not config.env_kwargs.get("subgoal_lookahead")
-    if config.env_id != "ClutterNav-v0":
-        return residual_map(config.env_id, config.residual_gain, config.residual_space, mapless=mapless)
-    env = gym.make(config.env_id, **config.make_kwargs())
+    env = gym.make(config.env_id, **config.make_kwargs()) if config.env_id == "ClutterNav-v0" else None
     try:
-        return residual_map(config.env_id, config.residual_gain, config.residual_space, env, mapless=mapless)
+        pursuit = subgoal_pursuit(config.env_id, config.residual_gain, env, mapless, config.residual_space)
     finally:
-        env.close()
+        if env is not None:
+            env.close()
+    return residual_map(pursuit, config.residual_space)
 
 
 def _as_batch(obs: dict[str, np.ndarray] | np.ndarray) -> dict[str, np.ndarray] | np.ndarray:

@@ -203,8 +203,8 @@ class CascadedFlyer:
         if self.yaw_gain:  # turn body x (where the LIDAR and the camera look) towards the horizontal velocity wanted
             horizontal = np.linalg.norm(wanted[..., :2], axis=-1)
             yaw = np.where(horizontal > 0.2, self.yaw_gain * np.arctan2(wanted[..., 1], wanted[..., 0]), 0.0)
-        rates = self.attitude_gain * np.stack([-direction[..., 1], direction[..., 0], np.zeros_like(yaw)], axis=-1)
-        rates[..., 2] = yaw  # the tilt terms turn body z onto the thrust direction
+        tilt = self.attitude_gain * np.stack([-direction[..., 1], direction[..., 0]], axis=-1)  # body z onto thrust
+        rates = np.concatenate([tilt, yaw[..., None]], axis=-1)
         action = np.concatenate([2.0 * collective - 1.0, rates / self.rate_scale], axis=-1)
         return np.clip(action, -1.0, 1.0).astype(np.float32)
 

@@ -18,7 +18,7 @@ from typing import Any
 
 import yaml
 
-from clutter_gym.training.residual import MAPLESS_ENVS, PURSUIT_ENVS, RESIDUAL_SPACES
+from clutter_gym.training.residual import MAPLESS_ENVS, PURSUIT_ENVS, check_residual_space
 
 HYPERPARAMS_FILE = "ppo.yml"
 #: First evaluation seed by default: far from the seeds training starts its envs with (seed, seed + 1, ...).
@@ -178,11 +178,9 @@ class TrainConfig:
                                        or self.env_id in PURSUIT_ENVS and self.env_kwargs.get("subgoal_lookahead")):
             raise ValueError(f"residual_gain > 0 needs env_id in {MAPLESS_ENVS}, or in {PURSUIT_ENVS} with "
                              "env_kwargs.subgoal_lookahead > 0")
-        if self.residual_space not in RESIDUAL_SPACES:
-            raise ValueError(f"residual_space must be one of {RESIDUAL_SPACES}, got {self.residual_space!r}")
-        if self.residual_space == "velocity" and not (self.residual_gain and self.env_id == "ClutterFly-v0"):
-            raise ValueError("residual_space 'velocity' needs env_id ClutterFly-v0 and residual_gain > 0, got "
-                             f"{self.env_id} with residual_gain {self.residual_gain:g}")
+        check_residual_space(self.env_id, self.residual_space)
+        if self.residual_space != "action" and not self.residual_gain:
+            raise ValueError(f"residual_space {self.residual_space!r} needs residual_gain > 0")
         check_env_kwargs(self.env_id, self.noise, self.env_kwargs)
         _check_mix(self.env_id, self.train_env_mix)
         if self.ppo.batch_size > self.ppo.n_steps * self.n_envs:

@@ -36,17 +36,21 @@ RESIDUAL_SPACES = ("action", "velocity")
 FACING_GAIN = 2.0
 
 
-def subgoal_pursuit(env_id: str, gain: float, env: gym.Env | None = None, mapless: bool = False) -> Pursuit:
+def subgoal_pursuit(env_id: str, gain: float, env: gym.Env | None = None, mapless: bool = False,
+                   space: str = "action") -> Pursuit:
     """The pursuit of ``env_id`` with ``gain`` (> 0): action(s) for one observation or a batch; ``mapless``: the
-    sensor-only base on the goal instead of the subgoal (ClutterNav-v0 has only that one). ClutterNav-v0's reads
-    the LIDAR of ``env`` (an env made with the run's settings), which it then needs.
+    sensor-only base on the goal instead of the subgoal (ClutterNav-v0 has only that one); ``space="velocity"``
+    (ClutterFly-v0): the flyer that turns its nose towards the velocity it flies (:func:`residual_map`).
+    ClutterNav-v0's reads the LIDAR of ``env`` (an env made with the run's settings), which it then needs.
 
     Raises:
-        ValueError: ``env_id`` has no such pursuit, or ClutterNav-v0 without an env.
+        ValueError: ``env_id`` has no such pursuit, ClutterNav-v0 without an env, or a bad ``space``
+            (:func:`check_residual_space`).
     """
     from clutter_gym import TRAIN_IDS
 
     env_id = TRAIN_IDS.get(env_id, env_id)  # a *Train-v0 id is its env with the shipped settings
+    check_residual_space(env_id, space)
     if env_id == "ClutterNav-v0":
         if env is None:
             raise ValueError("ClutterNav-v0's potential field needs the env, for its LIDAR's beam angles and range")
@@ -56,12 +60,22 @@ def subgoal_pursuit(env_id: str, gain: float, env: gym.Env | None = None, maples
     if env_id == "ClutterFly-v0":
         from clutter_gym.training.baselines import CascadedFlyer
 
-        return CascadedFlyer.nominal("goal" if mapless else "subgoal", position_gain=gain)
+        facing = FACING_GAIN if space == "velocity" else 0.0
+        return CascadedFlyer.nominal("goal" if mapless else "subgoal", position_gain=gain, yaw_gain=facing)
     if env_id == "ClutterReach-v0":
         raise ValueError("ClutterReach-v0 has no sensor-only base controller: a residual on it needs the subgoal "
                          "(subgoal_lookahead > 0)")
     known = sorted(set(MAPLESS_ENVS + PURSUIT_ENVS))
     raise ValueError(f"a residual policy needs an env with a pursuit, one of {known}; got {env_id!r}")
+
+
+def check_residual_space(env_id: str, space: str) -> None:
+    """Raises a named ValueError unless ``space`` is one of :data:`RESIDUAL_SPACES` that ``env_id`` has."""
+    if space not in RESIDUAL_SPACES:
+        raise ValueError(f"residual_space must be one of {RESIDUAL_SPACES}, got {space!r}")
+    if space == "velocity" and env_id != "ClutterFly-v0":
+        raise ValueError(f"residual_space 'velocity' is ClutterFly-v0's (a residual on its flyer's velocity "
+                         f"command), got {env_id!r}")
 
 
 def _field(env: gym.Env, gain: float) -> Pursuit:
@@ -88,30 +102,18 @@ def residual_action(obs: dict[str, np.ndarray], action: np.ndarray, pursuit: Pur
     return np.clip(pursuit(obs) + action, -1.0, 1.0).astype(np.float32)
 
 
-def residual_map(env_id: str, gain: float, space: str = "action", env: gym.Env | None = None,
-                 mapless: bool = False) -> Callable[[dict[str, np.ndarray], np.ndarray], np.ndarray]:
-    """``(raw observation, policy action) -> env action`` of a residual policy (one or a batch). ``space``:
-    ``"action"``, the policy's action adds to the base controller's (:func:`residual_action`); ``"velocity"``
-    (ClutterFly-v0 only), it adds to the velocity the :class:`~clutter_gym.training.baselines.CascadedFlyer`
-    commands, in units of its top speed along body x, y, z, and the sum, capped at that speed, goes to the
-    flyer's inner loops, which also turn the nose towards it (``yaw_gain`` :data:`FACING_GAIN`): the policy
-    steers, the flyer flies, and the LIDAR and the camera look where the drone goes.
-
-    Raises:
-        ValueError: an unknown ``space``, ``"velocity"`` for another env, or what :func:`subgoal_pursuit` raises.
+def residual_map(pursuit: Pursuit, space: str = "action") -> Callable[[dict[str, np.ndarray], Any], np.ndarray]:
+    """``(raw observation, policy action) -> env action`` of a residual policy on ``pursuit`` (one or a batch),
+    from :func:`subgoal_pursuit` with the same ``space``: ``"action"``, the policy's action adds to the pursuit's
+    (:func:`residual_action`); ``"velocity"`` (ClutterFly-v0), it adds to the velocity the pursuit's
+    :class:`~clutter_gym.training.baselines.CascadedFlyer` commands, in units of its top speed along body x, y, z,
+    and the sum, capped at that speed, goes to the flyer's inner loops, which also turn the nose towards it
+    (``yaw_gain`` :data:`FACING_GAIN`): the policy steers, the flyer flies, and the LIDAR and the camera look where
+    the drone goes. A zero action is the pursuit's own action either way.
     """
-    if space not in RESIDUAL_SPACES:
-        raise ValueError(f"residual_space must be one of {RESIDUAL_SPACES}, got {space!r}")
     if space == "action":
-        pursuit = subgoal_pursuit(env_id, gain, env, mapless=mapless)
         return lambda obs, action: residual_action(obs, action, pursuit)
-    from clutter_gym import TRAIN_IDS
-    from clutter_gym.training.baselines import CascadedFlyer, _capped
-
-    if TRAIN_IDS.get(env_id, env_id) != "ClutterFly-v0":
-        raise ValueError(f"residual_space 'velocity' is ClutterFly-v0's (a residual on its flyer's velocity "
-                         f"command), got {env_id!r}")
-    pursuit = CascadedFlyer.nominal("goal" if mapless else "subgoal", position_gain=gain, yaw_gain=FACING_GAIN)
+    from clutter_gym.training.baselines import _capped
 
     def act(obs: dict[str, np.ndarray], action: np.ndarray) -> np.ndarray:
         offset = pursuit.max_speed * np.clip(np.asarray(action, dtype=float), -1.0, 1.0)
@@ -148,8 +150,8 @@ class SubgoalResidual(gym.Wrapper):
                              f"({' or '.join(PURSUIT_ENVS)} with subgoal_lookahead > 0)")
         super().__init__(env)
         self.gain = gain
-        self.pursuit = subgoal_pursuit(env_id, gain, env, mapless=mapless)
-        self.act = residual_map(env_id, gain, space, env, mapless=mapless)
+        self.pursuit = subgoal_pursuit(env_id, gain, env, mapless=mapless, space=space)
+        self.act = residual_map(self.pursuit, space)
         self.action_space = policy_action_space(env.action_space, space)
         self._obs: dict[str, np.ndarray] | None = None
 

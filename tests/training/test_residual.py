@@ -207,7 +207,7 @@ def test_a_velocity_residual_steers_the_flyer_it_does_not_fly_it(make_env):
     """residual_space 'velocity': the policy's (3,) action offsets the flyer's commanded velocity (in units of its
     top speed, capped there) and the flyer's inner loops fly the sum; a zero offset is the flyer alone."""
     from clutter_gym.training.baselines import _capped
-    from clutter_gym.training.residual import FACING_GAIN, residual_map
+    from clutter_gym.training.residual import FACING_GAIN
 
     env = SubgoalResidual(make_env("ClutterFly-v0", volume_size=(4.0, 4.0, 2.0), sensors=["lidar"]), 1.5, "velocity")
     assert env.action_space.shape == (3,)
@@ -221,11 +221,13 @@ def test_a_velocity_residual_steers_the_flyer_it_does_not_fly_it(make_env):
     batch = {k: np.stack([v, v]) for k, v in obs.items()}
     np.testing.assert_allclose(env.act(batch, np.stack([sideways, sideways]))[1], env.act(obs, sideways), atol=1e-7)
     with pytest.raises(ValueError, match="'velocity' is ClutterFly-v0's"):
-        residual_map("ClutterNav-v0", 1.5, "velocity", make_env("ClutterNav-v0", sensors=["lidar"]))
+        subgoal_pursuit("ClutterNav-v0", 1.5, make_env("ClutterNav-v0", sensors=["lidar"]), space="velocity")
     with pytest.raises(ValueError, match=r"residual_space must be one of \('action', 'velocity'\), got 'speed'"):
-        residual_map("ClutterFly-v0", 1.5, "speed")
-    with pytest.raises(ValueError, match="residual_space 'velocity' needs env_id ClutterFly-v0 and residual_gain > 0"):
+        subgoal_pursuit("ClutterFly-v0", 1.5, space="speed")
+    with pytest.raises(ValueError, match="residual_space 'velocity' is ClutterFly-v0's"):
         config_for("ClutterNav-v0", {"residual_space": "velocity", "residual_gain": 1.5})
+    with pytest.raises(ValueError, match="residual_space 'velocity' needs residual_gain > 0"):
+        config_for("ClutterFly-v0", {"residual_space": "velocity", "residual_gain": 0.0})
 
 
 def test_a_loaded_velocity_residual_agent_acts_on_plain_observations(tmp_path):
