@@ -8,9 +8,10 @@ import math
 import gymnasium as gym
 import numpy as np
 import pytest
+from helpers import SHELF_SEED
 
 from clutter_gym.collision.fidelity import COARSE_LEVELS, FIDELITY_LEVELS
-from clutter_gym.training.baselines import StraightLineReacher
+from clutter_gym.training.baselines import ProximityFieldReacher, StraightLineReacher
 from clutter_gym.worlds.scene import Obstacle
 from clutter_gym.worlds.tabletop import TABLE, TableSpec, point_clearance, sample_reach_scene
 
@@ -245,6 +246,79 @@ def test_straight_line_reacher_reaches_every_target_on_an_empty_table():
 def test_straight_line_reacher_refuses_joint_velocity_control():
     with pytest.raises(ValueError, match="control='ee_position'"):
         StraightLineReacher.for_env(gym.make("ClutterReach-v0"))
+
+
+def _field_obs(q, target, readings=()):
+    """An observation for the proximity field at joint positions ``q``: no link reads an obstacle, except
+    ``readings`` as (link row, distance, unit direction towards the obstacle)."""
+    obs = {"joint_position": np.asarray(q, dtype=np.float32), "target": np.asarray(target, dtype=np.float32),
+           "clearance": np.full(10, 0.3, dtype=np.float32), "clearance_direction": np.zeros((10, 3), np.float32)}
+    for row, distance, direction in readings:
+        obs["clearance"][row], obs["clearance_direction"][row] = distance, direction
+    return obs
+
+
+def _field_motion(field, q, action, point_of):
+    """How far a point of the arm moves in 1 ms of the field's joint velocities (finite differences of the FK)."""
+    from clutter_gym.robots.panda import FINGER_OPENING
+
+    rates = action.astype(float) * field.speed_scale
+    frames = [field.kinematics.forward(np.concatenate([q + dt * rates, [FINGER_OPENING] * 2])[None])
+              for dt in (0.0, 1e-3)]
+    return (point_of(frames[1]) - point_of(frames[0])) / 1e-3
+
+
+def test_proximity_field_drives_the_end_effector_straight_at_the_target_in_free_space():
+    """Damped least squares: the end effector's velocity is attraction x offset, up to the damping's share
+    lambda^2 / (sigma^2 + lambda^2) <= 3% at READY (smallest singular value of the position Jacobian ~0.3 m)."""
+    field = ProximityFieldReacher(max_joint_speed=0.5)
+    q = np.array(READY)
+    for offset in ([0.08, 0.0, 0.0], [0.0, -0.06, 0.04], [-0.05, 0.03, -0.07]):
+        action = field(_field_obs(q, READY_EE + offset))
+        assert np.abs(action).max() < 1.0  # unclipped: the joint rates are the field's own
+        velocity = _field_motion(field, q, action, lambda f: f["panda_grasptarget"][0, :3, 3])
+        wanted = field.attraction * np.array(offset)
+        assert np.dot(velocity, wanted) / (np.linalg.norm(velocity) * np.linalg.norm(wanted)) > 0.999
+        assert np.linalg.norm(velocity) == pytest.approx(np.linalg.norm(wanted), rel=0.03)
+    far = field(_field_obs(q, READY_EE + [0.0, 0.5, 0.0]))
+    velocity = _field_motion(field, q, far, lambda f: f["panda_grasptarget"][0, :3, 3])
+    assert np.linalg.norm(velocity) == pytest.approx(field.top_speed, rel=0.03)  # capped
+    batch = {k: np.stack([v, v]) for k, v in _field_obs(q, READY_EE + [0.08, 0.0, 0.0]).items()}
+    np.testing.assert_array_equal(field(batch)[1], field(_field_obs(q, READY_EE + [0.08, 0.0, 0.0])))
+
+
+def test_proximity_field_pushes_a_near_link_away_from_its_obstacle_and_ignores_a_far_one():
+    from clutter_gym.robots.panda import FINGER_OPENING
+
+    field = ProximityFieldReacher(max_joint_speed=0.5)
+    q = np.array(READY)
+    ee = field.kinematics.forward(np.concatenate([q, [FINGER_OPENING] * 2])[None])["panda_grasptarget"][0, :3, 3]
+    towards = np.array([0.0, 0.6, 0.8])
+    for row, link, beyond in ((3, "panda_link4", "panda_link5"), (7, "panda_hand", "panda_grasptarget")):
+        action = field(_field_obs(q, ee, [(row, 0.02, towards)]))  # the target where the hand is: no attraction
+        assert np.abs(action).max() > 0.05
+        motion = _field_motion(field, q, action, lambda f, a=link, b=beyond: 0.5 * (f[a][0, :3, 3] + f[b][0, :3, 3]))
+        assert np.dot(motion, -towards) > 0.5 * np.linalg.norm(motion)  # mostly straight away from the obstacle
+        unread = field(_field_obs(q, ee, [(row, field.influence, towards)]))
+        np.testing.assert_allclose(unread, 0.0, atol=1e-6)
+
+
+def test_proximity_field_touches_nothing_where_it_would_without_its_readings(make_env):
+    """On layouts where the field without repulsion (the straight joint-space line) touches the clutter, the
+    proximity readings keep the arm clear of it."""
+    env = make_env("ClutterReach-v0", observe_directions=True)
+    for seed in (SHELF_SEED, SHELF_SEED + 2):
+        touched = []
+        for field in (ProximityFieldReacher.for_env(env, repulsion=0.0), ProximityFieldReacher.for_env(env)):
+            obs, _ = env.reset(seed=seed)
+            costs = []
+            for _ in range(100):
+                obs, _, _, _, info = env.step(field(obs))
+                costs.append(info["cost"])
+            touched.append(max(costs) > 0.0)
+        assert touched == [True, False], f"layout {seed}"
+    with pytest.raises(ValueError, match="observe_directions=True"):
+        ProximityFieldReacher.for_env(make_env("ClutterReach-v0"))
 
 
 def test_target_offset_is_opt_in_and_equals_target_minus_end_effector():

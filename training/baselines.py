@@ -114,6 +114,85 @@ class StraightLineReacher:
         return np.clip(offset / self.max_ee_step, -1.0, 1.0).astype(np.float32)
 
 
+class ProximityFieldReacher:
+    """A joint-space potential field for ClutterReach that reads only what the arm itself measures (Khatib, 1986).
+
+    The end effector is drawn straight at the target at ``attraction`` (m/s per metre of offset, capped at
+    ``top_speed``), through damped least squares on the arm's own kinematic model at its measured joint
+    positions; every link that its proximity reading (the env's ``clearance`` and ``clearance_direction``, as a
+    proximity skin would give them) puts closer than ``influence`` to an obstacle is pushed away from it through
+    that link's Jacobian, by ``repulsion`` x (influence - distance) / influence. It ignores the hand's orientation
+    and stops in local minima: in front of a shelf compartment whose opening its hand, pointing down, does not
+    fit, and between two close obstacles. It needs joint-velocity control and ``observe_directions=True``.
+
+    Args:
+        max_joint_speed: the env's action scale, a fraction of each joint's URDF velocity limit.
+        attraction: end-effector speed per metre from the target, 1/s.
+        top_speed: cap on the end effector's commanded speed, m/s.
+        influence: proximity below which a link is pushed away, metres.
+        repulsion: speed of the push at contact, m/s (through the link's Jacobian transpose).
+        damping: damped-least-squares damping, metres.
+    """
+
+    #: Per proximity reading (the env's tracked links, in order): the two frames whose midpoint stands for the
+    #: link's surface, and how many arm joints move it.
+    POINTS = (*((f"panda_link{i}", f"panda_link{i + 1}", i) for i in range(1, 7)),
+              ("panda_link7", "panda_hand", 7), ("panda_hand", "panda_grasptarget", 7),
+              ("panda_grasptarget", "panda_grasptarget", 7), ("panda_grasptarget", "panda_grasptarget", 7))
+
+    def __init__(self, max_joint_speed: float, attraction: float = 2.0, top_speed: float = 0.3,
+                 influence: float = 0.08, repulsion: float = 10.0, damping: float = 0.05) -> None:
+        from clutter_gym.collision.kinematics import UrdfKinematics
+        from clutter_gym.robots.panda import SPEED_LIMIT, PandaArm
+
+        if not attraction > 0.0:
+            raise ValueError(f"attraction must be > 0 (1/s), got {attraction!r}")
+        self.kinematics = UrdfKinematics(PandaArm().urdf_path)
+        self.speed_scale = max_joint_speed * SPEED_LIMIT
+        self.attraction, self.top_speed, self.influence = attraction, top_speed, influence
+        self.repulsion, self.damping = repulsion, damping
+
+    @classmethod
+    def for_env(cls, env: gym.Env, **gains: float) -> ProximityFieldReacher:
+        """Configured from a ClutterReach env made with ``observe_directions=True`` and joint-velocity control.
+
+        Raises:
+            ValueError: the env has another control mode, or no ``clearance_direction`` observation.
+        """
+        config = getattr(env.unwrapped.robot, "config", None)
+        if getattr(config, "control", None) != "joint_velocity":
+            raise ValueError("ProximityFieldReacher needs a ClutterReach env with control='joint_velocity'")
+        if "clearance_direction" not in env.observation_space.spaces:
+            raise ValueError("ProximityFieldReacher needs a ClutterReach env made with observe_directions=True")
+        return cls(config.max_joint_speed, **gains)
+
+    def __call__(self, obs: Mapping[str, np.ndarray]) -> np.ndarray:
+        """Joint-velocity actions in [-1, 1] for one observation (7,) or a batch (n, 7)."""
+        from clutter_gym.planning.joint_space import point_jacobian
+        from clutter_gym.robots.panda import EE_LINK, FINGER_OPENING
+
+        single = np.ndim(obs["target"]) == 1
+        q = np.atleast_2d(np.asarray(obs["joint_position"], dtype=float))
+        frames = self.kinematics.forward(np.concatenate([q, np.full((len(q), 2), FINGER_OPENING)], axis=1))
+        ee = frames[EE_LINK][:, :3, 3]
+        wanted = _capped(self.attraction * (np.atleast_2d(obs["target"]) - ee), self.top_speed)
+        jac = point_jacobian(self.kinematics, frames, ee)
+        gram = jac @ jac.transpose(0, 2, 1) + self.damping**2 * np.eye(3)
+        rates = np.einsum("nji,nj->ni", jac, np.linalg.solve(gram, wanted[..., None])[..., 0])
+        distance = np.atleast_2d(obs["clearance"])
+        direction = np.asarray(obs["clearance_direction"], dtype=float).reshape(len(q), -1, 3)
+        for k, (link, beyond, moved_by) in enumerate(self.POINTS):
+            near = (distance[:, k] < self.influence) & (np.linalg.norm(direction[:, k], axis=1) > 0.5)
+            if not near.any():
+                continue
+            point = 0.5 * (frames[link][:, :3, 3] + frames[beyond][:, :3, 3])
+            strength = self.repulsion * near * (self.influence - distance[:, k]) / self.influence
+            push = -direction[:, k] * strength[:, None]
+            rates += np.einsum("nji,nj->ni", point_jacobian(self.kinematics, frames, point, moved_by), push)
+        action = np.clip(rates / self.speed_scale, -1.0, 1.0).astype(np.float32)
+        return action[0] if single else action
+
+
 class CascadedFlyer:
     """A cascaded position controller for ClutterFly's rate actions: the way a flight stack's position mode flies.
 

@@ -33,6 +33,22 @@ RESOLUTION = 0.03
 ATTEMPTS = 2
 
 
+def point_jacobian(kinematics: UrdfKinematics, frames: dict[str, np.ndarray], point: np.ndarray,
+                   moved_by: int = 7) -> np.ndarray:
+    """Position Jacobians (n, 3, 7) of world points ``point`` (n, 3) fixed to a link that the first ``moved_by``
+    arm joints move, at the configurations whose link ``frames`` (from ``kinematics.forward``) are given.
+
+    Column i is joint i's axis in world coordinates crossed with the lever from the joint to the point (a URDF
+    child link frame sits on its joint); the columns of the joints beyond ``moved_by`` are zero.
+    """
+    columns = []
+    for i, joint in enumerate(kinematics.joints[:7]):
+        f = frames[joint.child]
+        moving = np.cross(f[:, :3, :3] @ joint.axis, point - f[:, :3, 3])
+        columns.append(moving if i < moved_by else np.zeros_like(moving))
+    return np.stack(columns, axis=-1)
+
+
 class ConfigurationChecker:
     """Is a batch of arm configurations clear of a layout? One FK pass per batch, FCL per configuration.
 
@@ -74,11 +90,8 @@ class ConfigurationChecker:
         """
         frames = self.frames(q)
         ee = frames[EE_LINK][:, :3, 3]
-        columns = []
-        for joint in self.kinematics.joints[:7]:
-            f = frames[joint.child]
-            columns.append(np.cross(f[:, :3, :3] @ joint.axis, ee - f[:, :3, 3]))
-        return ee, np.stack(columns, axis=-1)
+        return ee, point_jacobian(self.kinematics, frames, ee)
+
 
     def clearance(self, q: np.ndarray) -> float:
         """Least distance (metres, negative in penetration, capped at ``margin``) from the moving links of one
