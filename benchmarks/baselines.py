@@ -5,8 +5,10 @@ layouts for every row.
 ClutterNav-v0 rows: the mapless potential field; the map-based planner reference (the same field steering for the
 ``subgoal`` waypoint of the costmap planner, an upper bound of what the map allows a simple controller).
 ClutterReach-v0 rows: scripted IK, the end effector heading straight for the target (``control="ee_position"``);
-the joint-space planner reference (RRT-Connect on the known layout, then path tracking in joint velocities); the
-pursuit of the ``subgoal`` on that path that the shipped PPO residual policy adds its actions to.
+the proximity field (sensor-only: the target, the arm's joint positions and each link's proximity reading; the
+sensor-only PPO residual's base); the joint-space planner reference (RRT-Connect on the known layout, then path
+tracking in joint velocities); the pursuit of the ``subgoal`` on that path that the shipped PPO residual policy
+adds its actions to.
 ClutterFly-v0 rows: a cascaded position controller flying straight at the goal (mapless); the same controller on
 the ``subgoal`` of the shortest path through the known layout (the map-based planner reference, and the pursuit
 the shipped PPO residual policy adds its actions to).
@@ -33,8 +35,13 @@ import gymnasium as gym
 import clutter_gym  # noqa: F401  (registers the envs)
 from benchmarks.harness import table_header
 from clutter_gym.training import load
-from clutter_gym.training.baselines import CascadedFlyer, PotentialFieldNavigator, StraightLineReacher
-from clutter_gym.training.config import EVAL_SEED, config_for
+from clutter_gym.training.baselines import (
+    CascadedFlyer,
+    PotentialFieldNavigator,
+    ProximityFieldReacher,
+    StraightLineReacher,
+)
+from clutter_gym.training.config import EVAL_SEED, config_for, read_hyperparams_file, user_settings
 from clutter_gym.training.evaluate import rollouts, summarize
 from clutter_gym.training.joint_planner import JointPlannerReacher
 from clutter_gym.training.residual import subgoal_pursuit
@@ -44,6 +51,8 @@ from clutter_gym.util.atomic import write_text_atomically
 PLANNER_LOOKAHEAD = 0.5
 #: The shipped ClutterReach settings: the subgoal pursuit row runs with their lookahead and gain.
 REACH = config_for("ClutterReach-v0")
+#: The shipped sensor-only ClutterReach settings: the proximity field row runs with their gain.
+REACH_SENSORS = config_for("ClutterReach-v0", user_settings(read_hyperparams_file("sensors"), "ClutterReach-v0"))
 #: The shipped ClutterFly settings: the planner reference runs with their lookahead.
 FLY = config_for("ClutterFly-v0")
 
@@ -62,6 +71,8 @@ TABLES: dict[str, dict[str, Any]] = {
         "knob": "n_obstacles", "levels": [3, 6, 10],
         "scripted": [
             ("straight line (scripted IK)", {"control": "ee_position"}, StraightLineReacher.for_env),
+            ("proximity field (sensor-only, scripted)", {"observe_directions": True},
+             lambda env: ProximityFieldReacher.for_env(env, attraction=REACH_SENSORS.residual_gain)),
             ("planner reference (map-based: RRT-Connect in joint space)", {}, JointPlannerReacher),
             ("subgoal pursuit (map-based: the PPO residual's base alone)",
              {"subgoal_lookahead": REACH.env_kwargs["subgoal_lookahead"]},

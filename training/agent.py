@@ -142,10 +142,11 @@ class Agent:
 
 
 def _residual(config: TrainConfig):
-    """The run's residual on its base controller; ClutterNav's is built on an env made with the run's settings (it
-    reads the LIDAR)."""
+    """The run's residual on its base controller; ClutterNav's and mapless ClutterReach's are built on an env made
+    with the run's settings (they read its LIDAR or its proximity readings)."""
     mapless = not config.env_kwargs.get("subgoal_lookahead")
-    env = gym.make(config.env_id, **config.make_kwargs()) if config.env_id == "ClutterNav-v0" else None
+    reads_env = config.env_id == "ClutterNav-v0" or mapless and config.env_id == "ClutterReach-v0"
+    env = gym.make(config.env_id, **config.make_kwargs()) if reads_env else None
     try:
         pursuit = subgoal_pursuit(config.env_id, config.residual_gain, env, mapless, config.residual_space)
     finally:

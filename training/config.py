@@ -178,6 +178,12 @@ class TrainConfig:
                                        or self.env_id in PURSUIT_ENVS and self.env_kwargs.get("subgoal_lookahead")):
             raise ValueError(f"residual_gain > 0 needs env_id in {MAPLESS_ENVS}, or in {PURSUIT_ENVS} with "
                              "env_kwargs.subgoal_lookahead > 0")
+        reach_field = self.env_id == "ClutterReach-v0" and not self.env_kwargs.get("subgoal_lookahead")
+        if self.residual_gain and reach_field and not (self.env_kwargs.get("observe_directions")
+                                                       and self.env_kwargs.get("control", "joint_velocity")
+                                                       == "joint_velocity"):
+            raise ValueError("residual_gain > 0 on ClutterReach-v0 without a subgoal (a residual on the proximity "
+                             "field) needs env_kwargs.observe_directions: true and control: joint_velocity")
         check_residual_space(self.env_id, self.residual_space)
         if self.residual_space != "action" and not self.residual_gain:
             raise ValueError(f"residual_space {self.residual_space!r} needs residual_gain > 0")

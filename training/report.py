@@ -173,6 +173,7 @@ _MAP_BASED = {
 #: The sensor-only base controller a residual policy adds its actions to, per env.
 _MAPLESS_BASE = {
     "ClutterNav-v0": "a potential field over the same LIDAR and goal",
+    "ClutterReach-v0": "a joint-space potential field over the same proximity readings and target",
     "ClutterFly-v0": "a position controller flying straight at the goal, which sees no obstacle",
 }
 
@@ -192,9 +193,12 @@ def _observation_line(config) -> str:
                 f"{lookahead} m ahead on the path a costmap planner finds over the known layout. It does not solve "
                 "the mapless task; train without `subgoal_lookahead` for that.")
     else:
-        line = ("**Sensor-only agent.** The policy reads only what the robot measures: its sensors "
-                f"({', '.join(config.env_kwargs.get('sensors', ['the env default']))}), its own velocity and the "
-                "goal's position relative to it; no map, no planner, no subgoal.")
+        sensed = ("its joint positions and velocities, each link's proximity reading and the target's position"
+                  if config.env_id == "ClutterReach-v0" else
+                  f"its sensors ({', '.join(config.env_kwargs.get('sensors', ['the env default']))}), its own "
+                  "velocity and the goal's position relative to it")
+        line = (f"**Sensor-only agent.** The policy reads only what the robot measures: {sensed}; no map, no "
+                "planner, no subgoal.")
         if config.residual_gain:
             line += (f" Its actions are residuals on {_MAPLESS_BASE[config.env_id]} "
                      f"(`residual_gain` {config.residual_gain:g})"

@@ -11,7 +11,8 @@ Training wraps each env in :class:`SubgoalResidual`; a loaded agent adds the sam
   env's LIDAR: sensor-only, no map (``gain``: its turn gain, angular command per radian of heading error);
 * ClutterReach-v0 (map-based, ``subgoal_lookahead > 0``): ``clip(gain * subgoal, -1, 1)``, every joint driven
   towards the joint-space subgoal on a path planned over the known layout, at a speed proportional to its offset
-  (``gain``: actions per radian);
+  (``gain``: actions per radian); without a subgoal, :class:`~clutter_gym.training.baselines.ProximityFieldReacher`
+  on the target, reading the arm's proximity readings: sensor-only (``gain``: its attraction, 1/s);
 * ClutterFly-v0: :class:`~clutter_gym.training.baselines.CascadedFlyer`, a flight stack's position controller
   (``gain``: its position gain, commanded m/s per metre of offset), on the subgoal (map-based, with
   ``subgoal_lookahead > 0``) or, without one, straight at the goal: sensor-only, it sees no obstacle, and the
@@ -29,7 +30,7 @@ import numpy as np
 Pursuit = Callable[[dict[str, np.ndarray]], np.ndarray]
 #: The envs with a pursuit of the subgoal (map-based), and those with a base controller on the goal (sensor-only).
 PURSUIT_ENVS = ("ClutterReach-v0", "ClutterFly-v0")
-MAPLESS_ENVS = ("ClutterNav-v0", "ClutterFly-v0")
+MAPLESS_ENVS = ("ClutterNav-v0", "ClutterReach-v0", "ClutterFly-v0")
 #: What a residual policy's action adds to (:func:`residual_map`).
 RESIDUAL_SPACES = ("action", "velocity")
 #: Yaw rate per radian between the nose and the velocity commanded, 1/s, of the velocity residual's flyer.
@@ -41,10 +42,11 @@ def subgoal_pursuit(env_id: str, gain: float, env: gym.Env | None = None, maples
     """The pursuit of ``env_id`` with ``gain`` (> 0): action(s) for one observation or a batch; ``mapless``: the
     sensor-only base on the goal instead of the subgoal (ClutterNav-v0 has only that one); ``space="velocity"``
     (ClutterFly-v0): the flyer that turns its nose towards the velocity it flies (:func:`residual_map`).
-    ClutterNav-v0's reads the LIDAR of ``env`` (an env made with the run's settings), which it then needs.
+    ClutterNav-v0's and mapless ClutterReach-v0's read the LIDAR or the proximity readings of ``env`` (an env made
+    with the run's settings), which they then need.
 
     Raises:
-        ValueError: ``env_id`` has no such pursuit, ClutterNav-v0 without an env, or a bad ``space``
+        ValueError: ``env_id`` has no such pursuit, a base that reads the env without one, or a bad ``space``
             (:func:`check_residual_space`).
     """
     from clutter_gym import TRAIN_IDS
@@ -57,14 +59,17 @@ def subgoal_pursuit(env_id: str, gain: float, env: gym.Env | None = None, maples
         return _batched(_field(env, gain))
     if env_id == "ClutterReach-v0" and not mapless:
         return lambda obs: np.clip(gain * np.asarray(obs["subgoal"], dtype=np.float32), -1.0, 1.0)
+    if env_id == "ClutterReach-v0":
+        from clutter_gym.training.baselines import ProximityFieldReacher
+
+        if env is None:
+            raise ValueError("ClutterReach-v0's proximity field needs the env, for its control mode and readings")
+        return ProximityFieldReacher.for_env(env, attraction=gain)
     if env_id == "ClutterFly-v0":
         from clutter_gym.training.baselines import CascadedFlyer
 
         facing = FACING_GAIN if space == "velocity" else 0.0
         return CascadedFlyer.nominal("goal" if mapless else "subgoal", position_gain=gain, yaw_gain=facing)
-    if env_id == "ClutterReach-v0":
-        raise ValueError("ClutterReach-v0 has no sensor-only base controller: a residual on it needs the subgoal "
-                         "(subgoal_lookahead > 0)")
     known = sorted(set(MAPLESS_ENVS + PURSUIT_ENVS))
     raise ValueError(f"a residual policy needs an env with a pursuit, one of {known}; got {env_id!r}")
 
@@ -133,8 +138,9 @@ class SubgoalResidual(gym.Wrapper):
     ClutterFly's (3,) velocity offsets with ``space="velocity"``).
 
     Args:
-        env: a ClutterNav env with a LIDAR, a ClutterReach env made with ``subgoal_lookahead > 0``, or a
-            ClutterFly env (on its subgoal when it has one, else on the goal).
+        env: a ClutterNav env with a LIDAR, a ClutterReach env (on its subgoal when made with
+            ``subgoal_lookahead > 0``, else on the target with ``observe_directions=True``), or a ClutterFly env
+            (on its subgoal when it has one, else on the goal).
         gain: the pursuit's gain (> 0; see :func:`subgoal_pursuit`).
         space: what the residual adds to (:func:`residual_map`).
     """

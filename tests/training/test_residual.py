@@ -1,5 +1,6 @@
 """The residual policy on a base controller (ClutterNav's potential field, ClutterReach's and ClutterFly's subgoal
-pursuits): the wrapper and a loaded agent add the same term."""
+pursuits, ClutterReach's proximity field and ClutterFly's flyer on the goal): the wrapper and a loaded agent add the
+same term."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ import pytest
 from helpers import SHELF_SEED
 
 from clutter_gym.training import load
-from clutter_gym.training.baselines import CascadedFlyer, PotentialFieldNavigator
+from clutter_gym.training.baselines import CascadedFlyer, PotentialFieldNavigator, ProximityFieldReacher
 from clutter_gym.training.config import config_for
 from clutter_gym.training.residual import SubgoalResidual, residual_action, subgoal_pursuit
 from clutter_gym.training.train import start, train
@@ -39,13 +40,15 @@ def test_a_zero_residual_is_the_pursuit_that_reaches_the_shelf_target(make_env):
     assert info["is_success"]
 
 
-def test_the_wrapper_needs_an_env_with_a_subgoal_pursuit(make_env):
-    with pytest.raises(ValueError, match="needs an env with a 'subgoal' observation"):
+def test_the_wrapper_needs_an_env_its_base_controller_can_read(make_env):
+    with pytest.raises(ValueError, match="needs a ClutterReach env made with observe_directions=True"):
         SubgoalResidual(make_env("ClutterReach-v0"), gain=15.0)
+    with pytest.raises(ValueError, match="needs a ClutterReach env with control='joint_velocity'"):
+        SubgoalResidual(make_env("ClutterReach-v0", control="ee_position", observe_directions=True), gain=2.0)
     with pytest.raises(ValueError, match="potential field needs 'lidar' in sensors"):
         SubgoalResidual(make_env("ClutterNav-v0", sensors=["imu"]), gain=1.5)
-    with pytest.raises(ValueError, match=r"or in \('ClutterReach-v0', 'ClutterFly-v0'\) with "
-                                         "env_kwargs.subgoal_lookahead > 0"):
+    with pytest.raises(ValueError, match="without a subgoal .* needs env_kwargs.observe_directions: true and "
+                                         "control: joint_velocity"):
         config_for("ClutterReach-v0", {"env_kwargs": {"subgoal_lookahead": 0.0}})
     with pytest.raises(ValueError, match="pursuit, one of .*got 'ClutterReachGoal-v0'"):
         subgoal_pursuit("ClutterReachGoal-v0", 1.0)
@@ -177,8 +180,8 @@ def test_a_mapless_fly_residual_is_on_the_flyer_aimed_at_the_goal(make_env):
     a, *_ = plain.step(np.clip(flyer(obs) + residual, -1.0, 1.0))
     b, *_ = env.step(residual)
     np.testing.assert_array_equal(a["lidar"], b["lidar"])
-    with pytest.raises(ValueError, match="ClutterReach-v0 has no sensor-only base"):
-        subgoal_pursuit("ClutterReach-v0", 15.0, mapless=True)
+    with pytest.raises(ValueError, match="proximity field needs the env"):
+        subgoal_pursuit("ClutterReach-v0", 2.0, mapless=True)
 
 
 def test_a_loaded_mapless_fly_residual_agent_adds_the_flyer_on_the_goal(tmp_path):
@@ -249,3 +252,33 @@ def test_a_loaded_velocity_residual_agent_acts_on_plain_observations(tmp_path):
     wrapper = SubgoalResidual(agent.make_env(), agent.config.residual_gain, "velocity")
     np.testing.assert_allclose(action, wrapper.act(obs, raw), rtol=1e-6)
     wrapper.close()
+
+
+def test_a_mapless_reach_residual_is_on_the_proximity_field_and_loads_as_trained(tmp_path, make_env):
+    """Without a subgoal the ClutterReach base is sensor-only: the proximity field on the target, gain as its
+    attraction; the wrapper and a loaded agent add the policy's action to it."""
+    from clutter_gym.training.config import read_hyperparams_file, user_settings
+
+    env = SubgoalResidual(make_env("ClutterReach-v0", observe_directions=True), gain=3.0)
+    obs, _ = env.reset(seed=SHELF_SEED)
+    field = ProximityFieldReacher.for_env(env, attraction=3.0)
+    np.testing.assert_allclose(env.pursuit(obs), field(obs), atol=0)
+    tiny = {"timesteps": 64, "n_envs": 1, "validate_every": 0, "final_eval_episodes": 0, "checkpoint_every": 64,
+            "ppo": {"n_steps": 32, "batch_size": 32, "n_epochs": 1}}
+    sensors = user_settings(read_hyperparams_file("sensors"), "ClutterReach-v0")
+    run = start(config_for("ClutterReach-v0", {**sensors, **tiny}), tmp_path / "run")
+    train(run, progress=False)
+    agent = load(run.root)
+    env = agent.make_env()
+    obs, _ = env.reset(seed=SHELF_SEED)
+    assert "subgoal" not in obs and "clearance_direction" in obs
+    field = ProximityFieldReacher.for_env(env, attraction=agent.config.residual_gain)
+    env.close()
+    action, _ = agent.predict(obs)
+    raw, _ = agent.model.predict(agent._normalizer.normalize_obs(obs), deterministic=True)
+    np.testing.assert_allclose(action, residual_action(obs, raw, field), rtol=1e-6)
+    from clutter_gym.training.report import _observation_line
+
+    line = _observation_line(agent.config)
+    assert line.startswith("**Sensor-only agent.**") and "proximity reading" in line and "lidar" not in line
+    assert "joint-space potential field" in line

@@ -167,3 +167,10 @@ def test_the_sensor_only_fly_block_reads_no_map():
     config = config_for("ClutterFly-v0", train_overrides(args))
     assert config.env_kwargs["subgoal_lookahead"] == 0.0 and config.env_kwargs["sensors"] == ["lidar"]
     assert config.residual_gain > 0 and config.residual_space == "velocity"
+
+
+def test_the_sensor_only_reach_block_reads_no_map():
+    args = build_parser().parse_args(["train", "--env", "ClutterReach-v0", "--hyperparams", "sensors"])
+    config = config_for("ClutterReach-v0", train_overrides(args))
+    assert config.env_kwargs["subgoal_lookahead"] == 0.0 and config.env_kwargs["observe_directions"]
+    assert config.residual_gain > 0 and config.train_layouts == 0  # no planning, so no layout pool to plan once
