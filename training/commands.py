@@ -308,7 +308,7 @@ def run_sweep(args: argparse.Namespace) -> int:
         result = sweep(spec, Path(args.out), workers=args.workers, ray_address=args.ray_address,
                        cpus_per_cell=args.cpus_per_cell)
     print(f"sweep: {result['cells_run']} cells run, {result['cells_skipped']} already done")
-    print(f"  {result['csv']}\n  {result['heatmap']}")
+    print(f"  {result['csv']}\n  {result['heatmap']}\n  {result['summary']}")
     return 0
 
 

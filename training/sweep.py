@@ -12,6 +12,9 @@ OUT/
   cells/<train>-seed<k>/eval-<p>.json evaluation under profile p
   sweep.csv                           one row per (train profile, seed, eval profile)
   heatmap.png                         success and collision rate, train profile x eval profile, mean over seeds
+                                      (and each seed's), the diagonal outlined
+  summary.md                          per train profile: the diagonal, clean evaluation, and what training
+                                      under noise cost on clean evaluation
 ```
 """
 
@@ -138,8 +141,10 @@ def run_sweep(spec: SweepSpec, out: Path, workers: int | None = None, ray_addres
     rows = collect_rows(spec, out)
     csv_path = write_csv(rows, out / "sweep.csv")
     heatmap = write_heatmap(rows, spec, out / "heatmap.png")
+    summary = out / "summary.md"
+    write_text_atomically(summary, summary_table(rows, spec))
     result = {"cells_run": len(todo), "cells_skipped": len(spec.cells()) - len(todo), "csv": str(csv_path),
-              "heatmap": str(heatmap), "rows": rows}
+              "heatmap": str(heatmap), "summary": str(summary), "rows": rows}
     return {**result, "nodes": nodes} if ray_address is not None else result
 
 
@@ -231,19 +236,59 @@ def write_csv(rows: list[dict[str, Any]], path: Path) -> Path:
     return path
 
 
+def per_seed(rows: list[dict[str, Any]], metric: str, train_noise: str, eval_noise: str) -> list[float]:
+    """``metric`` of each seed trained under ``train_noise`` and evaluated under ``eval_noise``, in seed order."""
+    return [r[metric] for r in sorted(rows, key=lambda r: r["seed"])
+            if r["train_noise"] == train_noise and r["eval_noise"] == eval_noise]
+
+
+def summary_table(rows: list[dict[str, Any]], spec: SweepSpec) -> str:
+    """A markdown table, one row per train profile: success / collision rate evaluated under the same profile (the
+    diagonal) and clean (``none``), and the clean success it costs against training clean, each the mean over
+    seeds with every seed's value in brackets. Without ``none`` among both profiles' lists, the diagonal only."""
+    import numpy as np
+
+    def rates(train: str, evaluated: str) -> str:
+        success, collision = (per_seed(rows, m, train, evaluated) for m in ("success_rate", "collision_rate"))
+        seeds = f" ({', '.join(f'{s:.0%} / {c:.0%}' for s, c in zip(success, collision))})" if len(success) > 1 else ""
+        return f"{np.mean(success):.0%} / {np.mean(collision):.0%}{seeds}"
+
+    clean = "none" in spec.eval_noise and "none" in spec.train_noise
+    header = ["trained under", "evaluated under the same profile"]
+    if clean:
+        header += ["evaluated clean (`none`)", "clean success lost to training under noise"]
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    for train in spec.train_noise:
+        cells = [f"`{train}`", rates(train, train) if train in spec.eval_noise else "-"]
+        if clean:
+            lost = np.subtract(per_seed(rows, "success_rate", "none", "none"),
+                               per_seed(rows, "success_rate", train, "none"))
+            spread = f" ({', '.join(f'{100 * v:+.0f}' for v in lost)})" if len(lost) > 1 else ""
+            cells += [rates(train, "none"), f"{100 * np.mean(lost):+.0f} points{spread}"]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines) + (f"\n\n{spec.env_id}, success / collision episodes, {spec.episodes} episodes per seed "
+                               f"and cell, {spec.seeds} seed(s); sweep.csv has each seed's 95% intervals.\n")
+
+
 def write_heatmap(rows: list[dict[str, Any]], spec: SweepSpec, path: Path) -> Path:
-    """Two panels (success rate, collision rate): rows = train profile, columns = eval profile, mean over seeds."""
+    """Two panels (success rate, collision rate): rows = train profile, columns = eval profile, the mean over seeds
+    (each seed's value under it), the cells trained and evaluated under the same profile outlined."""
     import numpy as np
 
     from clutter_gym.training.figures import plt, save_figure
 
     fig, axes = plt.subplots(1, 2, figsize=(4 + 1.6 * len(spec.eval_noise), 1.5 + 0.8 * len(spec.train_noise)))
     for ax, metric, cmap in zip(axes, ("success_rate", "collision_rate"), ("viridis", "magma_r")):
-        grid = np.array([[np.mean([r[metric] for r in rows if r["train_noise"] == t and r["eval_noise"] == e])
-                          for e in spec.eval_noise] for t in spec.train_noise])
-        ax.imshow(grid, vmin=0.0, vmax=1.0, cmap=cmap)
-        for (i, j), value in np.ndenumerate(grid):
-            ax.text(j, i, f"{value:.0%}", ha="center", va="center", bbox={"facecolor": "white", "alpha": 0.7, "lw": 0})
+        grid = [[per_seed(rows, metric, t, e) for e in spec.eval_noise] for t in spec.train_noise]
+        ax.imshow(np.array([[np.mean(values) for values in line] for line in grid]), vmin=0.0, vmax=1.0, cmap=cmap)
+        for i, line in enumerate(grid):
+            for j, values in enumerate(line):
+                text = f"{np.mean(values):.0%}" + ("\n" + " ".join(f"{v:.0%}" for v in values) if len(values) > 1
+                                                   else "")
+                ax.text(j, i, text, ha="center", va="center", fontsize=8,
+                        bbox={"facecolor": "white", "alpha": 0.7, "lw": 0})
+                if spec.train_noise[i] == spec.eval_noise[j]:
+                    ax.add_patch(plt.Rectangle((j - 0.5, i - 0.5), 1, 1, fill=False, edgecolor="red", lw=2))
         ax.set_xticks(range(len(spec.eval_noise)), spec.eval_noise)
         ax.set_yticks(range(len(spec.train_noise)), spec.train_noise)
         ax.set_xlabel("evaluated under")

@@ -40,6 +40,7 @@ def test_a_2x2_sweep_fills_its_csv_and_heatmap(swept):
                                                                   for e in SPEC.eval_noise}
     assert all(0.0 <= float(r["success_rate"]) <= 1.0 and r["episodes"] == "1" for r in rows)
     assert (out / "heatmap.png").stat().st_size > 5000
+    assert Path(result["summary"]).read_text().startswith("| trained under | evaluated under the same profile |")
     config = RunDir(cell_dir(out, "nominal", 0) / "run").read_config()
     assert config.noise == "nominal" and config.env_kwargs["obstacle_density"] == 0.05
     assert config.make_kwargs("harsh")["noise"] == {"profile": "harsh", "lidar": {"range_sigma": 0.03}}
@@ -133,3 +134,25 @@ def test_ray_cluster_refuses_cells_no_node_can_take_at_once(ray_cluster, tmp_pat
     assert "each cell asks Ray for 2 CPUs" in result.stderr and "largest node of the cluster" in result.stderr
     assert "Traceback" not in result.stderr
     assert time.perf_counter() - started < 120
+
+
+def test_the_summary_shows_the_diagonal_and_what_noisy_training_costs_clean():
+    """Two seeds: means over seeds, each seed's value in brackets, the clean success lost per seed."""
+    from clutter_gym.training.sweep import summary_table
+
+    spec = SweepSpec(env_id="ClutterNav-v0", train_noise=("none", "harsh"), eval_noise=("none", "harsh"), seeds=2,
+                     timesteps=64, episodes=100)
+    success = {("none", 0, "none"): 0.9, ("none", 1, "none"): 0.8, ("none", 0, "harsh"): 0.5,
+               ("none", 1, "harsh"): 0.4, ("harsh", 0, "none"): 0.8, ("harsh", 1, "none"): 0.6,
+               ("harsh", 0, "harsh"): 0.7, ("harsh", 1, "harsh"): 0.7}
+    rows = [{"train_noise": t, "seed": k, "eval_noise": e, "success_rate": v, "collision_rate": 0.1 * k}
+            for (t, k, e), v in success.items()]
+    lines = summary_table(rows, spec).splitlines()
+    assert lines[2] == ("| `none` | 85% / 5% (90% / 0%, 80% / 10%) | 85% / 5% (90% / 0%, 80% / 10%) "
+                        "| +0 points (+0, +0) |")
+    assert lines[3] == ("| `harsh` | 70% / 5% (70% / 0%, 70% / 10%) | 70% / 5% (80% / 0%, 60% / 10%) "
+                        "| +15 points (+10, +20) |")
+    clean_eval_only = SweepSpec(env_id="ClutterNav-v0", train_noise=("none", "harsh"), eval_noise=("harsh",),
+                                seeds=2, timesteps=64, episodes=100)
+    assert summary_table([r for r in rows if r["eval_noise"] == "harsh"], clean_eval_only).splitlines()[0] == \
+        "| trained under | evaluated under the same profile |"
