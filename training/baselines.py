@@ -122,15 +122,16 @@ class ProximityFieldReacher:
     positions; every link that its proximity reading (the env's ``clearance`` and ``clearance_direction``, as a
     proximity skin would give them) puts closer than ``influence`` to an obstacle is pushed away from it through
     that link's Jacobian, by ``repulsion`` x (influence - distance) / influence. It ignores the hand's orientation
-    and stops in local minima: in front of a shelf compartment whose opening its hand, pointing down, does not
-    fit, and between two close obstacles. It needs joint-velocity control and ``observe_directions=True``.
+    and stops in local minima, most often in front of a shelf compartment that its hand, pointing down, does not
+    fit into. It needs joint-velocity control and ``observe_directions=True``.
 
     Args:
         max_joint_speed: the env's action scale, a fraction of each joint's URDF velocity limit.
         attraction: end-effector speed per metre from the target, 1/s.
         top_speed: cap on the end effector's commanded speed, m/s.
         influence: proximity below which a link is pushed away, metres.
-        repulsion: speed of the push at contact, m/s (through the link's Jacobian transpose).
+        repulsion: the push's strength at contact, m/s along the obstacle's direction, mapped onto the joints
+            through the link's Jacobian transpose.
         damping: damped-least-squares damping, metres.
     """
 

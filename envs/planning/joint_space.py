@@ -92,7 +92,6 @@ class ConfigurationChecker:
         ee = frames[EE_LINK][:, :3, 3]
         return ee, point_jacobian(self.kinematics, frames, ee)
 
-
     def clearance(self, q: np.ndarray) -> float:
         """Least distance (metres, negative in penetration, capped at ``margin``) from the moving links of one
         configuration ``q`` (7,) to the layout."""
