@@ -73,13 +73,15 @@ class ClutterFlyEnv(ClutterEnv):
     | ``attitude`` | (3,) | the world's up axis in the body frame (z = cosine of the tilt) | -; body frame | [-1, 1] |
     | ``velocity`` | (6,) | linear velocity (v_x, v_y, v_z), body rates (p, q, r) | m/s, rad/s; body frame | +-20, +-6 |
     | ``rotor_speeds`` | (4,) | rotor speed / max rotor speed, rotors front right, rear right, rear left, front left | - | [0, 1] |
+    | ``thrust_ratio`` | (1,) | the flight controller's estimate of the thrust per unit mass the airframe gets over its nominal model's (motor strength / mass scale; 1 when nominal), filtered over 0.25 s; only with ``observe_thrust_ratio`` | - | [0.25, 4] |
 
     Sensor entries are present only when listed in ``sensors`` (``("imu",)`` by default; camera entries only for
     its ``camera_modes``, ``(w, h) = camera_size``). The LIDAR and the camera sit on the ``sensor_mount`` link,
     10 mm above the centre of mass, looking along body +x; rays and the camera see through the drone. The IMU reads
     +9.81 m/s^2 on z in a level hover. With a noise profile the sensor entries carry that profile's noise, update
-    rate (held between updates) and latency; ``goal``, ``attitude``, ``velocity`` and ``rotor_speeds`` are the
-    flight controller's state estimate, taken as exact.
+    rate (held between updates) and latency; ``goal``, ``attitude``, ``velocity``, ``rotor_speeds`` and
+    ``thrust_ratio`` are the flight controller's state estimate, taken as exact (``thrust_ratio`` follows from the
+    velocity it differences and the rotor speeds, ``robots/thrust_estimate.py``).
 
     ## Rewards
 
@@ -134,7 +136,7 @@ class ClutterFlyEnv(ClutterEnv):
     of ("drag", "ground_effect")); ``success_radius`` m (0, 2]; ``clearance_margin`` m [0, 1]; ``max_tilt`` rad (0, pi];
     ``terminate_on_collision``; ``contact_tolerance`` m [0, 0.05]; ``collision_fidelity``; ``collision_padding`` m
     [0, 1]; ``swept_speed`` m/s (``inf`` turns swept checks off); ``*_weight`` reward weights [0, 1e4];
-    ``subgoal_lookahead`` m [0, volume diagonal] (0: off).
+    ``subgoal_lookahead`` m [0, volume diagonal] (0: off); ``observe_thrust_ratio`` (the ``thrust_ratio`` entry).
 
     ``subgoal_lookahead > 0`` makes the env map-based, as ClutterNav's option of that name: the ``subgoal`` entry
     is a point that far ahead on the shortest path for the drone's bounding sphere through the known layout (the
@@ -189,16 +191,18 @@ class ClutterFlyEnv(ClutterEnv):
         attitude_weight: float = 0.1,
         rate_weight: float = 0.01,
         subgoal_lookahead: float = 0.0,
+        observe_thrust_ratio: bool = False,
     ) -> None:
         check_numbers(ClutterFlyEnv.__init__, locals())
         check_env_settings(render_mode, physics_hz, control_hz, solver_iterations, contact_tolerance,
                            env_id="ClutterFly-v0", min_physics_hz=MIN_PHYSICS_HZ)
-        check_flags(ceiling=ceiling, terminate_on_collision=terminate_on_collision)
+        check_flags(ceiling=ceiling, terminate_on_collision=terminate_on_collision,
+                    observe_thrust_ratio=observe_thrust_ratio)
         if not (swept_speed > 0.0):  # inf allowed: no swept checks
             raise ValueError(f"swept_speed must be > 0 m/s (inf disables swept checks), got {swept_speed!r}")
         if isinstance(aero, str) or not isinstance(aero, Sequence):
             raise ValueError(f"aero must be a tuple of names from ('drag', 'ground_effect'), got {aero!r}")
-        robot = Quadrotor(QuadrotorConfig(aero=tuple(aero)))
+        robot = Quadrotor(QuadrotorConfig(aero=tuple(aero), observe_thrust_ratio=observe_thrust_ratio))
         spec = _volume_spec(volume_size, obstacle_density, ceiling)
         # the airframe is rigid (fixed joints only), so self-collision is off and no allowed-collision matrix is
         # needed; the task reads only the robot's clearance, so no link's own is resolved

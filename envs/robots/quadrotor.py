@@ -23,6 +23,7 @@ from clutter_gym.robots.rate_loop import Mixer, RateController, RateGains, alloc
 from clutter_gym.robots.rigid_body import RigidFrames, rigid_body
 from clutter_gym.robots.rotors import RotorModel
 from clutter_gym.robots.state import RobotState
+from clutter_gym.robots.thrust_estimate import RATIO_BOUNDS, ThrustRatioEstimator
 from clutter_gym.sim import Sim
 from clutter_gym.util.checks import is_number
 from clutter_gym.util.transforms import quat_to_matrix, yaw_quat
@@ -59,6 +60,7 @@ _RANGES = {
     "drag_xy": (0.0, 1e-3, False),
     "drag_z": (0.0, 1e-3, False),
     "rotor_radius": (0.0, 0.5, True),
+    "thrust_ratio_time_constant": (0.0, 10.0, True),
 }
 
 
@@ -87,6 +89,9 @@ class QuadrotorConfig:
         rotor_radius: propeller radius for the ground effect, metres.
         aero: aerodynamic effects on, a subset of ``("drag", "ground_effect")`` (empty: none).
         start_hovering: episodes start with every rotor at the nominal hover speed (else stopped).
+        observe_thrust_ratio: add the ``thrust_ratio`` observation, the flight controller's estimate of the
+            thrust the airframe gets against its nominal model (:mod:`clutter_gym.robots.thrust_estimate`).
+        thrust_ratio_time_constant: seconds, of that estimate's filter.
     """
 
     control: str = "rates"
@@ -108,6 +113,8 @@ class QuadrotorConfig:
     rotor_radius: float = 0.0231348
     aero: tuple[str, ...] = ()
     start_hovering: bool = True
+    observe_thrust_ratio: bool = False
+    thrust_ratio_time_constant: float = 0.25
 
     def __post_init__(self) -> None:
         if self.control not in CONTROL_MODES:
@@ -128,8 +135,9 @@ class QuadrotorConfig:
         if not (isinstance(self.aero, tuple) and set(self.aero) <= set(AERO_EFFECTS)
                 and len(set(self.aero)) == len(self.aero)):
             raise ValueError(f"aero must be a tuple of distinct names from {AERO_EFFECTS}, got {self.aero!r}")
-        if not isinstance(self.start_hovering, bool):
-            raise ValueError(f"start_hovering must be True or False, got {self.start_hovering!r}")
+        for name in ("start_hovering", "observe_thrust_ratio"):
+            if not isinstance(getattr(self, name), bool):
+                raise ValueError(f"{name} must be True or False, got {getattr(self, name)!r}")
 
     def rotor_model(self) -> RotorModel:
         """The rotors these values describe."""
@@ -180,6 +188,8 @@ class Quadrotor:
             "velocity": spaces.Box(-self._velocity_bound.astype(np.float32), self._velocity_bound.astype(np.float32),
                                    dtype=np.float32),
         }
+        if c.observe_thrust_ratio:
+            self.spaces["thrust_ratio"] = spaces.Box(*RATIO_BOUNDS, shape=(1,), dtype=np.float32)
         self.rotors = c.rotor_model()
         self.model = rigid_body(self.urdf_path)
         self._frames = RigidFrames(self.model, TRACKED_LINKS)
@@ -195,6 +205,8 @@ class Quadrotor:
         self._sim: Sim | None = None
         self._body = -1
         self._controller: RateController | None = None
+        self._estimator: ThrustRatioEstimator | None = None
+        self._nominal_thrust = 0.0  # N, the model's thrust over the last tick (what the estimator compares)
         self._decay = 0.0
         self._thrust_scale = 1.0  # the episode's motor strength
         # per-tick state and commands as Python floats (before_tick's arithmetic is on floats)
@@ -256,6 +268,9 @@ class Quadrotor:
         self._decay = self.rotors.decay(dt)
         self._controller = RateController(self.model.inertia, self.config.rate_gains(), dt)
         self._gravity = sim.gravity
+        if self.config.observe_thrust_ratio:
+            self._estimator = ThrustRatioEstimator(self.model.mass, sim.gravity, dt,
+                                                   self.config.thrust_ratio_time_constant)
         links = sorted(self.link_index.values())  # -1, the base, first
         friction = [f for _, f, _ in sim.inertial_properties(self._body, links)]
         names = {index: name for name, index in self.link_index.items()}
@@ -288,6 +303,8 @@ class Quadrotor:
         self._sim.set_pose(self._body, com, q)
         self._sim.forget_contacts(self._body)
         self._controller.reset()
+        if self._estimator is not None:
+            self._estimator.reset()
         hovering = self.config.start_hovering
         speed = self.hover_speed(self._gravity) if hovering else self.config.min_rotor_speed
         self._speeds = [min(max(speed, self.config.min_rotor_speed), self.config.max_rotor_speed)] * 4
@@ -313,13 +330,17 @@ class Quadrotor:
         """
         sim, rotors, scale = self._sim, self.rotors, self._thrust_scale
         com, rot, lin, ang = sim.base_state(self._body)
+        if self._estimator is not None:  # the velocity the last tick's thrust produced
+            self._estimator.update((rot[2], rot[5], rot[8]), lin, self._nominal_thrust)
         if self._rates:
             torque = self._controller.torque(self._rate_command, _to_body(rot, ang))
             command = rotors.speed_for_thrust(self.mixer.thrusts(self._thrust_command, torque))
         else:
             command = self._speed_command
         self._speeds = speeds = rotors.step(self._speeds, command, self._decay)
-        thrusts = [f * scale for f in rotors.thrust(speeds)]
+        nominal = rotors.thrust(speeds)
+        self._nominal_thrust = sum(nominal)
+        thrusts = [f * scale for f in nominal]
         if self._ground_effect and rot[8] > 0.0:  # upright: the rotors blow towards the ground
             _, _, z = com
             ux, uy, uz = rot[6:9]  # the world's up axis in the body frame
@@ -362,15 +383,20 @@ class Quadrotor:
         * ``attitude``: the world's up axis in the body frame (x forward, y left, z up), a unit vector: (0, 0, 1)
           when level, its z the cosine of the tilt;
         * ``velocity``: body-frame linear velocity (m/s, clipped to +-``MAX_OBSERVED_SPEED``) then body rates
-          (rad/s, clipped to +-2x the largest commanded rate).
+          (rad/s, clipped to +-2x the largest commanded rate);
+        * ``thrust_ratio`` (with ``observe_thrust_ratio``): the estimated thrust per unit mass over the nominal
+          model's, (1,), within ``RATIO_BOUNDS``.
         """
         rot = state.rotation
         body = np.concatenate([rot.T @ np.asarray(state.linear_velocity), rot.T @ np.asarray(state.angular_velocity)])
-        return {
+        obs = {
             "rotor_speeds": (np.array(self._speeds) / self.config.max_rotor_speed).astype(np.float32),
             "attitude": np.clip(rot[2], -1.0, 1.0).astype(np.float32),
             "velocity": np.clip(body, -self._velocity_bound, self._velocity_bound).astype(np.float32),
         }
+        if self._estimator is not None:
+            obs["thrust_ratio"] = np.array([self._estimator.ratio], dtype=np.float32)
+        return obs
 
 
 def _to_body(rot: tuple[float, ...], v: tuple[float, float, float]) -> tuple[float, float, float]:
