@@ -148,7 +148,8 @@ def _residual(config: TrainConfig):
     reads_env = config.env_id == "ClutterNav-v0" or mapless and config.env_id == "ClutterReach-v0"
     env = gym.make(config.env_id, **config.make_kwargs()) if reads_env else None
     try:
-        pursuit = subgoal_pursuit(config.env_id, config.residual_gain, env, mapless, config.residual_space)
+        pursuit = subgoal_pursuit(config.env_id, config.residual_gain, env, mapless, config.residual_space,
+                                  config.residual_base)
     finally:
         if env is not None:
             env.close()

@@ -201,8 +201,9 @@ class CascadedFlyer:
     most ``max_speed``), the velocity error an acceleration (``velocity_gain`` x error, at most ``max_accel``), and
     that acceleration plus gravity the thrust vector: its length along body z is the collective thrust, and body
     rates ``attitude_gain`` x (body z cross the thrust direction) tilt the airframe onto it. Yaw is held, or turned
-    with ``yaw_gain``. It reads only the observation (target offset, ``velocity``, ``attitude``), as a policy
-    would, one or a batch (rows).
+    with ``yaw_gain``. It reads only the observation (target offset, ``velocity``, ``attitude``, and
+    ``thrust_ratio`` where the env gives it: its hover thrust is then the airframe's estimated one, not the
+    datasheet's), as a policy would, one or a batch (rows).
     Without obstacle sensing it flies straight at its target: with ``goal_key="goal"`` a mapless reference that
     meets every obstacle on the line; with ``"subgoal"`` (an env made with ``subgoal_lookahead > 0``) the map-based
     planner reference, and the pursuit a residual ClutterFly policy adds its actions to.
@@ -278,7 +279,10 @@ class CascadedFlyer:
         accel = _capped(self.velocity_gain * (wanted - velocity), self.max_accel)
         thrust = accel + self.gravity * up  # the specific force the rotors must give, body frame
         direction = thrust / np.maximum(np.linalg.norm(thrust, axis=-1, keepdims=True), 1e-9)
-        collective = self.hover_thrust * thrust[..., 2:3] / self.gravity
+        hover = self.hover_thrust
+        if "thrust_ratio" in obs:  # the airframe's own hover thrust, from the flight controller's estimate
+            hover = hover / np.asarray(obs["thrust_ratio"], dtype=float)
+        collective = hover * thrust[..., 2:3] / self.gravity
         yaw = np.zeros_like(up[..., 0])
         if self.yaw_gain:  # turn body x (where the LIDAR and the camera look) towards the horizontal velocity wanted
             horizontal = np.linalg.norm(wanted[..., :2], axis=-1)

@@ -18,7 +18,7 @@ from typing import Any
 
 import yaml
 
-from clutter_gym.training.residual import MAPLESS_ENVS, PURSUIT_ENVS, check_residual_space
+from clutter_gym.training.residual import MAPLESS_ENVS, PURSUIT_ENVS, check_residual_base, check_residual_space
 
 HYPERPARAMS_FILE = "ppo.yml"
 #: First evaluation seed by default: far from the seeds training starts its envs with (seed, seed + 1, ...).
@@ -129,6 +129,8 @@ class TrainConfig:
         residual_space: what a residual policy's action adds to: ``"action"``, the base controller's action;
             ``"velocity"`` (ClutterFly-v0), the velocity its flyer commands, the policy's action then being a
             (3,) velocity offset in units of the flyer's top speed (:func:`clutter_gym.training.residual.residual_map`).
+        residual_base: gains of the base controller other than its defaults, ClutterFly-v0's flyer only
+            (``{attitude_gain: 4.0}``; the names: :data:`clutter_gym.training.residual.FLYER_GAINS`).
         env_kwargs: extra ``gym.make`` keyword arguments. Its ``noise`` entry, if any, holds noise-section
             overrides (``{"lidar": {"range_sigma": 0.02}}``) applied on top of whichever profile the env is
             made under, for training and evaluation alike.
@@ -150,6 +152,7 @@ class TrainConfig:
     train_layouts: int = 0
     residual_gain: float = 0.0
     residual_space: str = "action"
+    residual_base: dict[str, float] = field(default_factory=dict)
     train_env_mix: dict[str, list[Any]] = field(default_factory=dict)
     env_kwargs: dict[str, Any] = field(default_factory=dict)
     ppo: PPOHyperparams = field(default_factory=PPOHyperparams)
@@ -187,6 +190,9 @@ class TrainConfig:
         check_residual_space(self.env_id, self.residual_space)
         if self.residual_space != "action" and not self.residual_gain:
             raise ValueError(f"residual_space {self.residual_space!r} needs residual_gain > 0")
+        check_residual_base(self.env_id, self.residual_base)
+        if self.residual_base and not self.residual_gain:
+            raise ValueError("residual_base needs residual_gain > 0 (it sets the gains of a residual's base)")
         check_env_kwargs(self.env_id, self.noise, self.env_kwargs)
         _check_mix(self.env_id, self.train_env_mix)
         if self.ppo.batch_size > self.ppo.n_steps * self.n_envs:
@@ -227,6 +233,8 @@ class TrainConfig:
         if "net_arch" in ppo:
             ppo["net_arch"] = tuple(ppo["net_arch"])
         data["env_kwargs"] = dict(data.get("env_kwargs") or {})
+        if data.get("residual_base") is None:  # an empty YAML block reads as None
+            data.pop("residual_base", None)
         return cls(**data, ppo=PPOHyperparams(**ppo))
 
 

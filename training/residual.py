@@ -27,6 +27,8 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
+from clutter_gym.util.checks import is_number
+
 Pursuit = Callable[[dict[str, np.ndarray]], np.ndarray]
 #: The envs with a pursuit of the subgoal (map-based), and those with a base controller on the goal (sensor-only).
 PURSUIT_ENVS = ("ClutterReach-v0", "ClutterFly-v0")
@@ -35,24 +37,30 @@ MAPLESS_ENVS = ("ClutterNav-v0", "ClutterReach-v0", "ClutterFly-v0")
 RESIDUAL_SPACES = ("action", "velocity")
 #: Yaw rate per radian between the nose and the velocity commanded, 1/s, of the velocity residual's flyer.
 FACING_GAIN = 2.0
+#: The gains of ClutterFly-v0's flyer a run may set (``residual_base``), each in (0, :data:`MAX_BASE_GAIN`]; its
+#: position gain is ``residual_gain``.
+FLYER_GAINS = ("velocity_gain", "max_speed", "max_accel", "attitude_gain")
+MAX_BASE_GAIN = 100.0
 
 
 def subgoal_pursuit(env_id: str, gain: float, env: gym.Env | None = None, mapless: bool = False,
-                   space: str = "action") -> Pursuit:
+                   space: str = "action", base: dict[str, float] | None = None) -> Pursuit:
     """The pursuit of ``env_id`` with ``gain`` (> 0): action(s) for one observation or a batch; ``mapless``: the
     sensor-only base on the goal instead of the subgoal (ClutterNav-v0 has only that one); ``space="velocity"``
-    (ClutterFly-v0): the flyer that turns its nose towards the velocity it flies (:func:`residual_map`).
+    (ClutterFly-v0): the flyer that turns its nose towards the velocity it flies (:func:`residual_map`); ``base``:
+    ClutterFly-v0's flyer gains other than its defaults (:func:`check_residual_base`).
     ClutterNav-v0's and mapless ClutterReach-v0's read the LIDAR or the proximity readings of ``env`` (an env made
     with the run's settings), which they then need.
 
     Raises:
-        ValueError: ``env_id`` has no such pursuit, a base that reads the env without one, or a bad ``space``
-            (:func:`check_residual_space`).
+        ValueError: ``env_id`` has no such pursuit, a base that reads the env without one, a bad ``space``
+            (:func:`check_residual_space`) or ``base`` (:func:`check_residual_base`).
     """
     from clutter_gym import TRAIN_IDS
 
     env_id = TRAIN_IDS.get(env_id, env_id)  # a *Train-v0 id is its env with the shipped settings
     check_residual_space(env_id, space)
+    check_residual_base(env_id, base or {})
     if env_id == "ClutterNav-v0":
         if env is None:
             raise ValueError("ClutterNav-v0's potential field needs the env, for its LIDAR's beam angles and range")
@@ -69,7 +77,8 @@ def subgoal_pursuit(env_id: str, gain: float, env: gym.Env | None = None, maples
         from clutter_gym.training.baselines import CascadedFlyer
 
         facing = FACING_GAIN if space == "velocity" else 0.0
-        return CascadedFlyer.nominal("goal" if mapless else "subgoal", position_gain=gain, yaw_gain=facing)
+        return CascadedFlyer.nominal("goal" if mapless else "subgoal", position_gain=gain, yaw_gain=facing,
+                                     **(base or {}))
     known = sorted(set(MAPLESS_ENVS + PURSUIT_ENVS))
     raise ValueError(f"a residual policy needs an env with a pursuit, one of {known}; got {env_id!r}")
 
@@ -81,6 +90,22 @@ def check_residual_space(env_id: str, space: str) -> None:
     if space == "velocity" and env_id != "ClutterFly-v0":
         raise ValueError(f"residual_space 'velocity' is ClutterFly-v0's (a residual on its flyer's velocity "
                          f"command), got {env_id!r}")
+
+
+def check_residual_base(env_id: str, base: dict[str, float]) -> None:
+    """Raises a named ValueError unless ``base`` sets only gains of ClutterFly-v0's flyer (:data:`FLYER_GAINS`),
+    each a number in (0, :data:`MAX_BASE_GAIN`]."""
+    if not isinstance(base, dict):
+        raise ValueError(f"residual_base must be a mapping of {FLYER_GAINS} to numbers, got {base!r}")
+    if not base:
+        return
+    if env_id != "ClutterFly-v0":
+        raise ValueError(f"residual_base sets the gains of ClutterFly-v0's flyer, got env {env_id!r}")
+    for key, value in base.items():
+        if key not in FLYER_GAINS:
+            raise ValueError(f"residual_base.{key} is not a gain of the flyer; it has {FLYER_GAINS}")
+        if not (is_number(value) and 0.0 < value <= MAX_BASE_GAIN):
+            raise ValueError(f"residual_base.{key} must be a number in (0, {MAX_BASE_GAIN}], got {value!r}")
 
 
 def _field(env: gym.Env, gain: float) -> Pursuit:
@@ -143,9 +168,10 @@ class SubgoalResidual(gym.Wrapper):
             (on its subgoal when it has one, else on the goal).
         gain: the pursuit's gain (> 0; see :func:`subgoal_pursuit`).
         space: what the residual adds to (:func:`residual_map`).
+        base: ClutterFly-v0's flyer gains other than its defaults (:func:`check_residual_base`).
     """
 
-    def __init__(self, env: gym.Env, gain: float, space: str = "action") -> None:
+    def __init__(self, env: gym.Env, gain: float, space: str = "action", base: dict[str, float] | None = None) -> None:
         from clutter_gym import TRAIN_IDS
 
         observations = env.observation_space
@@ -156,7 +182,7 @@ class SubgoalResidual(gym.Wrapper):
                              f"({' or '.join(PURSUIT_ENVS)} with subgoal_lookahead > 0)")
         super().__init__(env)
         self.gain = gain
-        self.pursuit = subgoal_pursuit(env_id, gain, env, mapless=mapless, space=space)
+        self.pursuit = subgoal_pursuit(env_id, gain, env, mapless=mapless, space=space, base=base)
         self.act = residual_map(self.pursuit, space)
         self.action_space = policy_action_space(env.action_space, space)
         self._obs: dict[str, np.ndarray] | None = None

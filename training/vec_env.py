@@ -23,17 +23,19 @@ from clutter_gym.training.worker_vec_env import WorkerVecEnv
 
 
 def make_env(env_id: str, make_kwargs: dict[str, Any], render_mode: str | None = None, layouts: int = 0,
-             residual_gain: float = 0.0, residual_space: str = "action") -> gym.Env:
+             residual_gain: float = 0.0, residual_space: str = "action",
+             residual_base: dict[str, float] | None = None) -> gym.Env:
     """One env with SB3's Monitor and the EpisodeStats wrapper (importable in a fresh worker process); with
     ``layouts`` > 0 it resets from a pool of that many layouts (:class:`LayoutPool`), with ``residual_gain`` > 0
-    it takes residual actions (in ``residual_space``) on the subgoal pursuit (:class:`SubgoalResidual`)."""
+    it takes residual actions (in ``residual_space``) on the subgoal pursuit (:class:`SubgoalResidual`, with the
+    base controller's ``residual_base`` gains)."""
     import clutter_gym  # noqa: F401  (registers the ids in worker processes)
 
     env = gym.make(env_id, render_mode=render_mode, **make_kwargs)
     if layouts:
         env = LayoutPool(env, layouts)
     if residual_gain:
-        env = SubgoalResidual(env, residual_gain, residual_space)
+        env = SubgoalResidual(env, residual_gain, residual_space, residual_base)
     return EpisodeStats(Monitor(env))
 
 
@@ -42,7 +44,8 @@ def build_vec_env(config: TrainConfig, seed: int) -> VecEnv:
     reset; with ``config.train_layouts`` each env resets from its share of that many fixed layouts, and env ``i``
     takes its share of ``config.train_env_mix``."""
     fns = [functools.partial(make_env, config.env_id, config.train_kwargs(i), layouts=config.layouts_per_env,
-                             residual_gain=config.residual_gain, residual_space=config.residual_space)
+                             residual_gain=config.residual_gain, residual_space=config.residual_space,
+                             residual_base=config.residual_base)
            for i in range(config.n_envs)]
     workers = env_workers(config)
     venv: VecEnv = DummyVecEnv(fns) if workers == 1 else WorkerVecEnv(fns, workers)

@@ -45,8 +45,10 @@ def zoo_block(config: TrainConfig) -> dict[str, Any]:
     if config.train_layouts:
         wrappers.append({"clutter_gym.training.layout_pool.LayoutPool": {"n_layouts": config.layouts_per_env}})
     if config.residual_gain:
-        wrappers.append({"clutter_gym.training.residual.SubgoalResidual": {"gain": config.residual_gain,
-                                                                           "space": config.residual_space}})
+        residual = {"gain": config.residual_gain, "space": config.residual_space}
+        if config.residual_base:
+            residual["base"] = dict(config.residual_base)
+        wrappers.append({"clutter_gym.training.residual.SubgoalResidual": residual})
     if wrappers:
         block["env_wrapper"] = wrappers
     if ppo.normalize_obs or ppo.normalize_reward:

@@ -282,3 +282,43 @@ def test_a_mapless_reach_residual_is_on_the_proximity_field_and_loads_as_trained
     line = _observation_line(agent.config)
     assert line.startswith("**Sensor-only agent.**") and "proximity reading" in line and "lidar" not in line
     assert "joint-space potential field" in line
+
+
+def test_residual_base_sets_the_flyers_gains_and_a_loaded_agent_keeps_them(tmp_path):
+    tiny = {"timesteps": 64, "n_envs": 1, "validate_every": 0, "final_eval_episodes": 0, "checkpoint_every": 64,
+            "residual_base": {"attitude_gain": 4.0, "max_speed": 0.8},
+            "env_kwargs": {"subgoal_lookahead": 0.5, "observe_thrust_ratio": True, "volume_size": [4.0, 4.0, 2.0]},
+            "ppo": {"n_steps": 32, "batch_size": 32, "n_epochs": 1}}
+    run = start(config_for("ClutterFly-v0", tiny), tmp_path / "run")
+    train(run, progress=False)
+    agent = load(run.root)
+    assert agent.config.residual_base == {"attitude_gain": 4.0, "max_speed": 0.8}
+    env = agent.make_env(noise="harsh")
+    obs, _ = env.reset(seed=1)
+    for _ in range(20):  # away from rest, where the gains show
+        obs, *_ = env.step(agent.predict(obs)[0])
+    flyer = CascadedFlyer.for_env(env, "subgoal", position_gain=agent.config.residual_gain, attitude_gain=4.0,
+                                  max_speed=0.8)
+    env.close()
+    action, _ = agent.predict(obs)
+    raw, _ = agent.model.predict(agent._normalizer.normalize_obs(obs), deterministic=True)
+    np.testing.assert_allclose(action, residual_action(obs, raw, flyer), rtol=1e-6)
+    default = CascadedFlyer.for_env(agent.make_env(), "subgoal", position_gain=agent.config.residual_gain)
+    assert not np.allclose(residual_action(obs, raw, default), action)
+
+
+@pytest.mark.parametrize("settings, message", [
+    ({"residual_gain": 1.5, "residual_base": {"attitude": 4.0}}, r"residual_base.attitude is not a gain of the flyer"),
+    ({"residual_gain": 1.5, "residual_base": {"attitude_gain": 0.0}}, r"attitude_gain must be a number in \(0, 100"),
+    ({"residual_gain": 1.5, "residual_base": {"attitude_gain": "4"}}, r"attitude_gain must be a number"),
+    ({"residual_gain": 1.5, "residual_base": [4.0]}, r"residual_base must be a mapping"),
+    ({"residual_gain": 0.0, "residual_base": {"attitude_gain": 4.0}}, r"residual_base needs residual_gain > 0"),
+])
+def test_residual_base_errors_name_the_field(settings, message):
+    with pytest.raises(ValueError, match=message):
+        config_for("ClutterFly-v0", settings)
+
+
+def test_residual_base_is_the_flyers_only():
+    with pytest.raises(ValueError, match="residual_base sets the gains of ClutterFly-v0's flyer"):
+        config_for("ClutterNav-v0", {"residual_gain": 1.5, "residual_base": {"attitude_gain": 4.0}})
