@@ -55,6 +55,8 @@ REACH = config_for("ClutterReach-v0")
 REACH_SENSORS = config_for("ClutterReach-v0", user_settings(read_hyperparams_file("sensors"), "ClutterReach-v0"))
 #: The shipped ClutterFly settings: the planner reference runs with their lookahead.
 FLY = config_for("ClutterFly-v0")
+#: The shipped robust ClutterFly settings: their base (the flyer reading its thrust estimate, with their gains).
+FLY_ROBUST = config_for("ClutterFly-v0", user_settings(read_hyperparams_file("robust"), "ClutterFly-v0"))
 
 #: Per env: the gym.make argument that sets the clutter, its default levels, and the scripted rows as
 #: (name, extra gym.make arguments, policy factory from the env).
@@ -86,6 +88,10 @@ TABLES: dict[str, dict[str, Any]] = {
             ("planner reference (map-based: the flyer on the subgoal; the PPO residual's base)",
              {"subgoal_lookahead": FLY.env_kwargs["subgoal_lookahead"]},
              lambda env: CascadedFlyer.for_env(env, "subgoal", position_gain=FLY.residual_gain)),
+            ("planner reference with its thrust estimate and a margin for delay (the robust residual's base)",
+             {key: FLY_ROBUST.env_kwargs[key] for key in ("subgoal_lookahead", "observe_thrust_ratio")},
+             lambda env: CascadedFlyer.for_env(env, "subgoal", position_gain=FLY_ROBUST.residual_gain,
+                                               **FLY_ROBUST.residual_base)),
         ],
     },
 }
