@@ -160,6 +160,9 @@ def test_the_robust_block_trains_the_fly_residual_under_harsh_with_memory():
     assert config.noise == "harsh" and config.frame_stack > 1
     assert config.residual_gain == config_for("ClutterFly-v0").residual_gain  # the shipped residual, trained harsh
     assert config.make_kwargs(noise="harsh")["noise"] == "harsh"
+    # its base reads the airframe's thrust estimate and keeps a margin for the command delay
+    assert config.env_kwargs["observe_thrust_ratio"] and config.residual_base == {"attitude_gain": 4.0}
+    assert config.residual_space == "velocity"
 
 
 def test_the_sensor_only_fly_block_reads_no_map():
