@@ -339,7 +339,8 @@ class Quadrotor:
             command = self._speed_command
         self._speeds = speeds = rotors.step(self._speeds, command, self._decay)
         nominal = rotors.thrust(speeds)
-        self._nominal_thrust = sum(nominal)
+        if self._estimator is not None:
+            self._nominal_thrust = sum(nominal)
         thrusts = [f * scale for f in nominal]
         if self._ground_effect and rot[8] > 0.0:  # upright: the rotors blow towards the ground
             _, _, z = com

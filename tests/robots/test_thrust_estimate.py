@@ -69,14 +69,20 @@ def test_time_constant_must_be_positive():
         QuadrotorConfig(observe_thrust_ratio="yes")
 
 
+def airframe(sim: Sim, mass_scale: float, motor_scale: float) -> Quadrotor:
+    """A quadrotor estimating its thrust ratio, 5 m up in ``sim``, hovering, with these dynamics."""
+    robot = Quadrotor(QuadrotorConfig(observe_thrust_ratio=True))
+    robot.load(sim)
+    robot.reset_to((0.0, 0.0, 5.0, 0.0))
+    robot.apply_dynamics(DynamicsSample(mass_scale=mass_scale, motor_scale=motor_scale))
+    return robot
+
+
 @pytest.mark.parametrize("mass_scale, motor_scale", [(1.2, 0.9), (0.85, 1.15)])
 def test_quadrotor_estimates_its_motor_strength_over_its_mass_scale_in_flight(mass_scale, motor_scale):
     sim = Sim(physics_hz=240.0)
     try:
-        robot = Quadrotor(QuadrotorConfig(observe_thrust_ratio=True))
-        robot.load(sim)
-        robot.reset_to((0.0, 0.0, 5.0, 0.0))
-        robot.apply_dynamics(DynamicsSample(mass_scale=mass_scale, motor_scale=motor_scale))
+        robot = airframe(sim, mass_scale, motor_scale)
         assert robot.observe(robot.state())["thrust_ratio"][0] == 1.0
         robot.apply_action(np.array([robot.hover_action(G)[0], 0.3, -0.2, 0.1]))  # tilting and yawing as it goes
         for _ in range(480):  # 2 s: eight time constants
@@ -120,10 +126,7 @@ def hover_error(mass_scale: float, motor_scale: float, reads_ratio: bool, second
 
     sim = Sim(physics_hz=240.0)
     try:
-        robot = Quadrotor(QuadrotorConfig(observe_thrust_ratio=True))
-        robot.load(sim)
-        robot.reset_to((0.0, 0.0, 5.0, 0.0))
-        robot.apply_dynamics(DynamicsSample(mass_scale=mass_scale, motor_scale=motor_scale))
+        robot = airframe(sim, mass_scale, motor_scale)
         flyer = CascadedFlyer.nominal("goal")
         target = np.array([0.0, 0.0, 5.0])
         for _ in range(int(seconds * 30)):  # 30 Hz control, 8 ticks a step
