@@ -2,7 +2,7 @@
 justified by its row.
 
 Choices: collision fidelity (every level, and sphere counts; Panda and diffbot), physics rate and solver iterations,
-LIDAR ray count, cylinder tessellation, camera image size, depth camera renderer, noise profile, ClutterFly-v0's
+LIDAR ray count, LIDAR ray caster, camera image size, depth camera renderer, noise profile, ClutterFly-v0's
 aerodynamics. Each section comes from the benchmark module that owns the measurement (``collision_fidelity``,
 ``physics_rate``, ``lidar_resolution``, ``cylinder_rays``, ``camera_resolution``, ``camera_renderer``,
 ``noise_cost``, ``aero_cost``), and a headline
@@ -140,15 +140,16 @@ def lidar_choice(quick: bool, seed: int) -> Choice:
 def cylinder_choice() -> Choice:
     rows = [Row(r["label"], r["scan_us"], r["max_mm"], r["default"], {"mean signed (mm)": r["mean_mm"]})
             for r in cylinder_rays.rows()]
-    d = next(r for r in rows if r.default)
-    primitive = rows[0]
+    exact = next(r for r in rows if r.default)
+    prism = next(r for r in rows if "collision shape" in r.label)
     method = ("Twenty cylinders (r = 0.2 m) around a 64-beam scan; error: the largest range error of 400 beams fanned "
-              "across one cylinder, against the exact ray-circle intersection.")
-    why = (f"{d.label}: the only model under 1 mm of error ({d.error:.2f} mm max), the contact tolerance, and "
-           f"{primitive.speed / d.speed:.1f}x faster than Bullet's cylinder primitive ({primitive.error:.2f} mm). "
-           f"Not a kwarg: the envs build every cylinder obstacle this way.")
-    return Choice("cylinders", "Cylinder tessellation (LIDAR against cylinders)", "fixed (`sim.CYLINDER_SIDES`)",
-                  "scan (us)", False, "max error (mm)", rows, method, why)
+              "across one cylinder, against the exact ray-circle intersection. pybullet casts against a cylinder's "
+              "collision shape, which the envs build as a 64-gon prism.")
+    why = (f"{exact.label}: exact to rounding ({exact.error:.1g} mm) and {prism.speed / exact.speed:.1f}x faster than "
+           f"pybullet's rays on the envs' prisms ({prism.error:.2f} mm). pybullet's rays are the fallback in a world "
+           f"holding shapes the caster does not model, and `lidar_caster=\"pybullet\"` asks for them.")
+    return Choice("cylinders", "LIDAR ray caster (against cylinders)", "`lidar_caster`", "scan (us)", False,
+                  "max error (mm)", rows, method, why)
 
 
 def camera_choice(quick: bool, seed: int) -> Choice:

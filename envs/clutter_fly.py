@@ -128,7 +128,8 @@ class ClutterFlyEnv(ClutterEnv):
     ``noise`` (profile name, override mapping or NoiseProfile); ``volume_size`` (x, y, z) m, x and y in [2, 30],
     z in [1, 5]; ``obstacle_density`` volume fraction [0, 0.25]; ``ceiling``; ``n_rays`` [1, 4096];
     ``lidar_fov`` rad (0, 2 pi]; ``lidar_range`` m; ``lidar_channels`` [1, 128] and ``lidar_vertical_fov`` rad
-    [0, pi/2]; ``camera_size`` (width, height) px; ``camera_modes`` (subset of ("rgb", "depth", "segmentation"));
+    [0, pi/2]; ``lidar_caster`` ("exact": beams cast against the true boxes, cylinders and ground, or "pybullet":
+    ``rayTestBatch``); ``camera_size`` (width, height) px; ``camera_modes`` (subset of ("rgb", "depth", "segmentation"));
     ``camera_fov`` vertical, rad; ``camera_far`` m; ``camera_renderer`` ("rays": depth and
     segmentation ray cast against the exact shapes; "tiny" or "egl" rasterise, and draw rgb too; None, the default:
     "rays" unless ``camera_modes`` holds "rgb", then "tiny"); ``physics_hz`` (a multiple of ``control_hz``, at least
@@ -165,6 +166,7 @@ class ClutterFlyEnv(ClutterEnv):
         lidar_range: float = LidarConfig.max_range,
         lidar_channels: int = 8,
         lidar_vertical_fov: float = math.radians(60.0),
+        lidar_caster: str = "exact",
         camera_size: tuple[int, int] = (64, 64),
         camera_modes: Sequence[str] = ("depth",),
         camera_fov: float = math.radians(58.0),
@@ -211,7 +213,7 @@ class ClutterFlyEnv(ClutterEnv):
                                     swept_speed=swept_speed, per_link=False)
         radius = bounding_radius(checker.model, robot.model)
         lidar = LidarConfig(n_rays=n_rays, fov=lidar_fov, max_range=lidar_range, n_channels=lidar_channels,
-                            vertical_fov=lidar_vertical_fov, link=SENSOR_LINK)
+                            vertical_fov=lidar_vertical_fov, link=SENSOR_LINK, caster=lidar_caster)
         camera = camera_config(camera_size, camera_modes, camera_fov, camera_far, camera_renderer, link=SENSOR_LINK)
         profile = resolve_noise(noise)
         sensor_objects = build_sensors(sensors, profile, lidar, ImuConfig(dt=1.0 / control_hz, link=IMU_LINK), camera)

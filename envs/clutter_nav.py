@@ -115,7 +115,8 @@ class ClutterNavEnv(ClutterEnv):
     floor fraction [0, 0.3]; ``movable_obstacles`` fraction [0, 1] of the generated obstacles that the robot can
     push (see "Movable obstacles"); ``n_rays`` [1, 4096]; ``lidar_fov`` rad (0, 2 pi]; ``lidar_range`` m;
     ``lidar_mount_height`` m above the lidar link; ``lidar_channels`` [1, 128] and ``lidar_vertical_fov`` rad
-    [0, pi/2] (a multi-channel 3D LIDAR); ``camera_size`` (width, height) px; ``camera_modes`` (subset of
+    [0, pi/2] (a multi-channel 3D LIDAR); ``lidar_caster`` ("exact": beams cast against the true boxes, cylinders
+    and ground, or "pybullet": ``rayTestBatch``); ``camera_size`` (width, height) px; ``camera_modes`` (subset of
     ("rgb", "depth", "segmentation")); ``camera_fov`` vertical, rad; ``camera_far`` m; ``camera_renderer``
     ("tiny", "egl", or "rays": depth and segmentation only, ray cast against the exact shapes); ``physics_hz`` (a
     multiple of ``control_hz``, at least :data:`MIN_PHYSICS_HZ`); ``control_hz`` (at least ``physics_hz`` / 1000);
@@ -166,6 +167,7 @@ class ClutterNavEnv(ClutterEnv):
         lidar_mount_height: float = 0.0,
         lidar_channels: int = 1,
         lidar_vertical_fov: float = 0.0,
+        lidar_caster: str = "exact",
         camera_size: tuple[int, int] = (84, 84),
         camera_modes: Sequence[str] = ("rgb", "depth"),
         camera_fov: float = math.radians(58.0),
@@ -205,7 +207,7 @@ class ClutterNavEnv(ClutterEnv):
         spec = ClutterSpec(arena_size=arena_size, obstacle_density=obstacle_density,
                            movable_fraction=movable_obstacles)
         lidar = LidarConfig(n_rays=n_rays, fov=lidar_fov, max_range=lidar_range, mount_height=lidar_mount_height,
-                            n_channels=lidar_channels, vertical_fov=lidar_vertical_fov)
+                            n_channels=lidar_channels, vertical_fov=lidar_vertical_fov, caster=lidar_caster)
         camera = camera_config(camera_size, camera_modes, camera_fov, camera_far, camera_renderer)
         profile = resolve_noise(noise)
         sensor_objects = build_sensors(sensors, profile, lidar, ImuConfig(dt=1.0 / control_hz), camera)

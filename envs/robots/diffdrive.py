@@ -15,9 +15,9 @@ from clutter_gym.robots.state import RobotState, floating_base_state
 from clutter_gym.sim import Sim
 from clutter_gym.util.transforms import quat_to_matrix, yaw_quat
 
-#: Links whose states are read every step: the IMU and every link with collision geometry. The LIDAR needs only
-#: its link's index: its rays are cast in the link's frame.
-TRACKED_LINKS = ("left_wheel", "right_wheel", "front_caster", "rear_caster", "imu_link")
+#: Links whose states are read every step: the IMU, the LIDAR (the exact ray caster casts from its frame) and every
+#: link with collision geometry.
+TRACKED_LINKS = ("left_wheel", "right_wheel", "front_caster", "rear_caster", "imu_link", "lidar_link")
 CHASSIS_CENTRE_HEIGHT = 0.025  # metres above the base frame (the wheel axle), as in the URDF
 
 

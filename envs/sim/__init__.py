@@ -2,8 +2,8 @@
 
 Every pybullet call in clutter-gym goes through :class:`Sim`. It passes its own ``physicsClientId`` to pybullet
 directly rather than going through ``pybullet_utils.BulletClient``, which adds overhead to every call
-(docs/design-notes.md#no-bulletclient). The class is in three parts: :mod:`.core` (the client, robots, the hot
-path), :mod:`.obstacles` (obstacle bodies) and :mod:`.rendering` (camera images).
+(docs/design-notes.md#no-bulletclient). The class is in parts: :mod:`.core` (the client, robots, the hot
+path), :mod:`.obstacles` (obstacle bodies), :mod:`.rays` (ray casts) and :mod:`.rendering` (camera images).
 
 pybullet prints its build banner (stderr) and URDF/shape warnings (stdout) from C, straight to the file
 descriptors; :func:`~clutter_gym.util.quiet.quiet_c_output` silences them around the calls that print, so output
@@ -15,14 +15,9 @@ from clutter_gym.util.quiet import quiet_c_output
 with quiet_c_output():
     import pybullet as pb
 
-from clutter_gym.sim.core import (  # noqa: E402  (after the quiet import)
-    MAX_RAY_BATCH,
-    RAY_INVISIBLE_GROUP,
-    LinkStates,
-    Sim,
-    pybullet_data_file,
-)
+from clutter_gym.sim.core import LinkStates, Sim, pybullet_data_file  # noqa: E402  (after the quiet import)
 from clutter_gym.sim.obstacles import CYLINDER_SIDES, MAX_BODY_BATCH  # noqa: E402
+from clutter_gym.sim.rays import MAX_RAY_BATCH, RAY_CASTERS, RAY_INVISIBLE_GROUP  # noqa: E402
 
-__all__ = ["CYLINDER_SIDES", "MAX_BODY_BATCH", "MAX_RAY_BATCH", "RAY_INVISIBLE_GROUP", "LinkStates", "Sim", "pb",
-           "pybullet_data_file"]
+__all__ = ["CYLINDER_SIDES", "MAX_BODY_BATCH", "MAX_RAY_BATCH", "RAY_CASTERS", "RAY_INVISIBLE_GROUP", "LinkStates",
+           "Sim", "pb", "pybullet_data_file"]

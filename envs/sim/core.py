@@ -1,14 +1,13 @@
 """:class:`Sim`: one pybullet physics client, its world and robots, and the batched reads of the hot path.
 
-Robot actuation (:mod:`clutter_gym.sim.actuation`), obstacle bodies (:mod:`clutter_gym.sim.obstacles`) and camera
-images (:mod:`clutter_gym.sim.rendering`) are its other parts, mixed into the class; all share the client id and the
-caches :meth:`Sim._empty_world` sets.
+Robot actuation (:mod:`clutter_gym.sim.actuation`), obstacle bodies (:mod:`clutter_gym.sim.obstacles`), ray casts
+(:mod:`clutter_gym.sim.rays`) and camera images (:mod:`clutter_gym.sim.rendering`) are its other parts, mixed into
+the class; all share the client id and the caches :meth:`Sim._empty_world` sets.
 """
 
 from __future__ import annotations
 
 import contextlib
-import operator
 import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -20,21 +19,16 @@ import pybullet as pb  # imported quietly by the package first
 from clutter_gym.sim.actuation import Actuation
 from clutter_gym.sim.obstacles import ObstacleBodies
 from clutter_gym.sim.primitives import PrimitiveTable
+from clutter_gym.sim.rays import Rays
 from clutter_gym.sim.rendering import Rendering
 from clutter_gym.util.quiet import quiet_c_output
 from clutter_gym.util.view_culling import ViewCuller
 
-#: Collision-filter group of bodies that rays do not report (the robot: a LIDAR never sees its own chassis).
-#: pybullet applies the ray mask after the narrow phase, so this is about correctness, not speed.
-RAY_INVISIBLE_GROUP = 4
-_RAY_MASK = -1 ^ RAY_INVISIBLE_GROUP
 #: pybullet frees no shape a body has used (``removeCollisionShape`` then frees nothing) and keeps about a
 #: kilobyte of every removed body; only ``resetSimulation`` gives the memory back (docs/design-notes.md#memory).
 #: Past either limit :attr:`Sim.needs_rebuild` turns true, and the env rebuilds its world on the next reset.
 MAX_SHAPES = 256
 MAX_REMOVED_BODIES = 2_000
-_HIT_FRACTION = operator.itemgetter(2)  # field 2 of a rayTestBatch result row
-MAX_RAY_BATCH = 16383  # rays one rayTestBatch call answers (16,384 silently return nothing, more raise)
 
 
 @dataclass(frozen=True, slots=True)
@@ -67,7 +61,7 @@ def pybullet_data_file(relative: str) -> Path:
     return Path(pybullet_data.getDataPath()) / relative
 
 
-class Sim(Actuation, ObstacleBodies, Rendering):
+class Sim(Actuation, ObstacleBodies, Rendering, Rays):
     """One pybullet physics client.
 
     Args:
@@ -84,7 +78,7 @@ class Sim(Actuation, ObstacleBodies, Rendering):
         culler: bounding spheres and shown colours of the static bodies made here (boxes, cylinders, markers), for
             culling them from the camera frames they cannot appear in (:meth:`camera_image`).
         primitives: the shapes and poses of the boxes, cylinders, ground and markers made here, which
-            :meth:`ray_cast_image` draws.
+            :meth:`ray_cast_image` draws and the exact ray caster casts against (:meth:`ray_hit_fractions`).
     """
 
     def __init__(
@@ -123,6 +117,10 @@ class Sim(Actuation, ObstacleBodies, Rendering):
         self._visuals: dict[int, list[tuple[int, tuple]]] = {}
         self._shapes: dict[tuple, tuple[int, int]] = {}  # (kind, sizes, rgba) -> (collision, visual) shape ids
         self._removed_bodies = 0
+        self._world_version = 0  # counts the changes that may change what a ray can hit
+        self._exact_rays_key: tuple[int, int] | None = None  # (version, pybullet's body count) last checked
+        self._exact_rays = False
+        self._ground = -1
         self.culler = ViewCuller()
         self.primitives = PrimitiveTable()
         pb.setPhysicsEngineParameter(
@@ -181,7 +179,10 @@ class Sim(Actuation, ObstacleBodies, Rendering):
             rgbaColor=(0.85, 0.85, 0.8, 1.0), physicsClientId=self._cid,
         )
         body = self._static_bodies(shape, visual, [(0.0, 0.0, 0.0)])[0]
-        self.primitives.add(body, "box", (half, half, 0.0005), (0.0, 0.0, 0.0), offset=(0.0, 0.0, -0.0005))
+        # drawn as the square; the exact ray caster meets the plane itself
+        self.primitives.add(body, "box", (half, half, 0.0005), (0.0, 0.0, 0.0), offset=(0.0, 0.0, -0.0005),
+                            solid=False)
+        self._ground = body
         return self._register(name, body)
 
     def load_urdf(
@@ -220,6 +221,7 @@ class Sim(Actuation, ObstacleBodies, Rendering):
             raise ValueError(f"pybullet could not load URDF {path}: {exc}") from exc
         self._body_ids.add(body)
         self._freed.discard(body)
+        self._world_version += 1
         return self._register(name, body)
 
     def add_marker(self, name: str, radius: float, rgba: Sequence[float]) -> int:
@@ -231,7 +233,7 @@ class Sim(Actuation, ObstacleBodies, Rendering):
             pb.GEOM_CYLINDER, radius=radius, length=0.01, rgbaColor=rgba, physicsClientId=self._cid
         )
         body = self._static_bodies(-1, vis, [(0.0, 0.0, 0.0)], float(np.hypot(radius, 0.005)), rgba)[0]
-        self.primitives.add(body, "cylinder", (radius, radius, 0.005), (0.0, 0.0, 0.0))
+        self.primitives.add(body, "cylinder", (radius, radius, 0.005), (0.0, 0.0, 0.0), solid=False)
         return self._register(name, body)
 
     def _register(self, name: str, body: int) -> int:
@@ -239,15 +241,6 @@ class Sim(Actuation, ObstacleBodies, Rendering):
             raise ValueError(f"a body named {name!r} already exists")
         self.bodies[name] = body
         return body
-
-    def hide_from_rays(self, body: int) -> None:
-        """Put every link of ``body`` in :data:`RAY_INVISIBLE_GROUP`: rays pass through it, contacts do not.
-
-        Bullet's default masks (all bits for dynamic bodies, all but the static bit for static ones) include this
-        group, so contacts with the ground and obstacles are unchanged.
-        """
-        self._filters[body] = (RAY_INVISIBLE_GROUP, -1)
-        self._apply_filter(body)
 
     def forget_contacts(self, body: int) -> None:
         """Drop Bullet's cached contact manifolds of ``body`` (call after teleporting it).
@@ -342,32 +335,6 @@ class Sim(Actuation, ObstacleBodies, Rendering):
             linear_velocity=flat[:, 6:9],
             angular_velocity=flat[:, 9:12],
         )
-
-    def ray_hit_fractions(
-        self, starts: list | np.ndarray, ends: list | np.ndarray, body: int = -1, link: int = -1
-    ) -> np.ndarray:
-        """Cast a batch of rays in one ``rayTestBatch``; returns the hit fraction per ray (1.0 = no hit).
-
-        Args:
-            starts, ends: (n, 3) metres. pybullet converts a ready nested list faster than an ndarray, but an
-                ndarray made this step is faster to pass as it is than through ``tolist()``
-                (docs/design-notes.md#ray-lists).
-            body, link: when ``body`` >= 0 the rays are given in that link's frame and pybullet moves them with it,
-                so a sensor can keep constant ray lists.
-
-        Bodies hidden with :meth:`hide_from_rays` are not hit. More than :data:`MAX_RAY_BATCH` rays go in several
-        calls.
-        """
-        if len(starts) > MAX_RAY_BATCH:
-            return np.concatenate([
-                self.ray_hit_fractions(starts[i:i + MAX_RAY_BATCH], ends[i:i + MAX_RAY_BATCH], body, link)
-                for i in range(0, len(starts), MAX_RAY_BATCH)
-            ])
-        hits = pb.rayTestBatch(
-            starts, ends, parentObjectUniqueId=body, parentLinkIndex=link, numThreads=1,
-            collisionFilterMask=_RAY_MASK, physicsClientId=self._cid,
-        )
-        return np.fromiter(map(_HIT_FRACTION, hits), dtype=float, count=len(hits))
 
     def contact_distances(self, body: int) -> list[tuple[int, float]]:
         """(other body id, signed contact distance in metres) of every contact point of ``body``."""

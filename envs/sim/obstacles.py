@@ -128,6 +128,7 @@ class ObstacleBodies:
         body = pb.createMultiBody(1.0, collision, visual, useMaximalCoordinates=True, physicsClientId=self._cid)
         pb.changeDynamics(body, -1, mass=0.0, physicsClientId=self._cid)
         self._body_ids.add(body)
+        self._world_version += 1
         self._freed.discard(body)
         self._filters[body] = (_DYNAMIC_GROUP, -1)
         if self.visuals:
@@ -207,6 +208,7 @@ class ObstacleBodies:
                     0.0, collision, visual, useMaximalCoordinates=True, batchPositions=batch, physicsClientId=self._cid
                 ))
         self._body_ids.update(bodies)
+        self._world_version += 1
         if radius is not None and self.visuals:
             colour = tuple(np.float32(rgba).tolist())  # the colour as pybullet stores it: single precision
             for body, position in zip(bodies, positions):
@@ -233,6 +235,9 @@ class ObstacleBodies:
         self.primitives.remove(body)
         self._visuals.pop(body, None)
         self._body_ids.discard(body)
+        self._world_version += 1
+        if body == self._ground:
+            self._ground = -1
         self._freed.add(body)
         self._removed_bodies += 1
 

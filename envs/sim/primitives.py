@@ -1,7 +1,8 @@
 """:class:`PrimitiveTable`: the boxes and cylinders a Sim made, where they are now and whether they are shown.
 
 What the ray-cast camera (:mod:`clutter_gym.sim.ray_casting`) draws: every obstacle body, the drawn ground and the
-markers, as exact shapes. Robots loaded from URDF files are not in it.
+markers, as exact shapes; and what the exact LIDAR caster hits: the solid ones (obstacles, shown or parked), the
+ground being its plane. Robots loaded from URDF files are not in it.
 """
 
 from __future__ import annotations
@@ -17,17 +18,23 @@ _KINDS = {"box": BOX, "cylinder": CYLINDER}
 
 class PrimitiveTable:
     """One row per tracked body: its shape (a box or an upright cylinder in the body frame, centred at an offset from
-    the body origin), its pose and whether it is shown. :meth:`move`, :meth:`show` and :meth:`remove` ignore a body
-    that is not tracked."""
+    the body origin), its pose, whether it is shown and whether rays hit it. :meth:`move`, :meth:`show` and
+    :meth:`remove` ignore a body that is not tracked."""
 
     def __init__(self) -> None:
-        self._rows: dict[int, tuple[int, np.ndarray, np.ndarray]] = {}  # body -> (kind, halves, offset)
-        self._poses: dict[int, tuple] = {}  # body -> (position, rotation) as given; converted in arrays()
+        self._rows: dict[int, tuple[int, np.ndarray, np.ndarray, bool]] = {}  # body -> (kind, halves, offset, solid)
+        self._poses: dict[int, tuple] = {}  # body -> (position, rotation) as given; converted in the arrays
         self._hidden: set[int] = set()
-        self._arrays: tuple[np.ndarray, ...] | None = None  # shown rows, rebuilt on change
+        # rows as arrays, rebuilt after a body is added or removed; the rows of moved bodies are updated when asked for
+        self._shown: tuple[tuple[np.ndarray, ...], dict[int, int]] | None = None
+        self._solid: tuple[tuple[np.ndarray, ...], dict[int, int]] | None = None
+        self._moved: set[int] = set()
+
+    def __contains__(self, body: int) -> bool:
+        return body in self._rows
 
     def add(self, body: int, kind: str, halves: Sequence[float], position: Sequence[float],
-            offset: Sequence[float] = (0.0, 0.0, 0.0)) -> None:
+            offset: Sequence[float] = (0.0, 0.0, 0.0), solid: bool = True) -> None:
         """Track a body, unrotated at ``position``.
 
         Args:
@@ -36,46 +43,81 @@ class PrimitiveTable:
             halves: a box's half extents, or a cylinder's (radius, radius, half height), metres.
             position: the body origin, world frame, metres.
             offset: the shape's centre in the body frame, metres.
+            solid: whether rays hit it (not a marker, which has no collision shape, nor the ground's drawn square).
         """
-        self._rows[body] = (_KINDS[kind], np.array(halves, dtype=float), np.array(offset, dtype=float))
-        self.move(body, position, np.eye(3))
+        self._rows[body] = (_KINDS[kind], np.array(halves, dtype=float), np.array(offset, dtype=float), solid)
+        self._poses[body] = (tuple(position), np.eye(3))
+        self._shown = self._solid = None
 
     def move(self, body: int, position: Sequence[float], rotation: np.ndarray | Sequence[float]) -> None:
         """Put a tracked body at ``position`` (metres) turned by ``rotation`` (3, 3, or its 9 values row by row),
         world frame."""
         if body in self._rows:
             self._poses[body] = (tuple(position), rotation)
-            self._arrays = None
+            self._moved.add(body)
 
     def show(self, body: int, shown: bool) -> None:
         """Draw a tracked body or not."""
-        if body in self._rows:
+        if body in self._rows and (body in self._hidden) == shown:
             (self._hidden.discard if shown else self._hidden.add)(body)
-            self._arrays = None
+            self._shown = None
 
     def remove(self, body: int) -> None:
         """Stop tracking a body."""
         self._rows.pop(body, None)
         self._poses.pop(body, None)
         self._hidden.discard(body)
-        self._arrays = None
+        self._moved.discard(body)
+        self._shown = self._solid = None
 
     def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """The shown bodies as :func:`~clutter_gym.sim.ray_casting.cast_depth` takes them: (bodies (n,), kinds (n,),
         centres (n, 3), rotations (n, 3, 3), halves (n, 3))."""
-        if self._arrays is None:
-            bodies = [b for b in self._rows if b not in self._hidden]
-            rows = [self._rows[b] for b in bodies]
-            poses = [self._poses[b] for b in bodies]
-            positions = np.array([p for p, _ in poses], dtype=float).reshape(-1, 3)
-            rotations = np.array([np.ravel(r) for _, r in poses], dtype=float).reshape(-1, 3, 3)
-            offsets = np.array([offset for _, _, offset in rows], dtype=float).reshape(-1, 3)
-            centres = positions + np.einsum("nij,nj->ni", rotations, offsets)
-            self._arrays = (
-                np.array(bodies, dtype=np.int64),
-                np.array([kind for kind, _, _ in rows], dtype=np.int64),
-                centres,
-                rotations,
-                np.array([halves for _, halves, _ in rows], dtype=float).reshape(-1, 3),
-            )
-        return self._arrays
+        self._follow_moves()
+        if self._shown is None:
+            self._shown = self._table([b for b in self._rows if b not in self._hidden])
+        return self._shown[0]
+
+    def solids(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The bodies rays hit, shown or not, as :meth:`arrays` gives them."""
+        self._follow_moves()
+        if self._solid is None:
+            self._solid = self._table([b for b, row in self._rows.items() if row[3]])
+        return self._solid[0]
+
+    def _follow_moves(self) -> None:
+        """Write the poses of the bodies moved since the last call into the built tables' rows."""
+        if not self._moved:
+            return
+        for table in (self._shown, self._solid):
+            if table is None:
+                continue
+            (_, _, centres, rotations, _), index = table
+            bodies = [b for b in self._moved if b in index]
+            if bodies:
+                rows = [index[b] for b in bodies]
+                positions, turned, offsets = self._poses_of(bodies)
+                rotations[rows] = turned
+                centres[rows] = positions + np.einsum("nij,nj->ni", turned, offsets)
+        self._moved.clear()
+
+    def _poses_of(self, bodies: list[int]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(n, 3) positions, (n, 3, 3) rotations and (n, 3) shape offsets of ``bodies``."""
+        poses = [self._poses[b] for b in bodies]
+        positions = np.array([p for p, _ in poses], dtype=float).reshape(-1, 3)
+        rotations = np.array([np.ravel(r) for _, r in poses], dtype=float).reshape(-1, 3, 3)
+        offsets = np.array([self._rows[b][2] for b in bodies], dtype=float).reshape(-1, 3)
+        return positions, rotations, offsets
+
+    def _table(self, bodies: list[int]) -> tuple[tuple[np.ndarray, ...], dict[int, int]]:
+        rows = [self._rows[b] for b in bodies]
+        positions, rotations, offsets = self._poses_of(bodies)
+        centres = positions + np.einsum("nij,nj->ni", rotations, offsets)
+        arrays = (
+            np.array(bodies, dtype=np.int64),
+            np.array([row[0] for row in rows], dtype=np.int64),
+            centres,
+            rotations,
+            np.array([row[1] for row in rows], dtype=float).reshape(-1, 3),
+        )
+        return arrays, {b: i for i, b in enumerate(bodies)}

@@ -1,10 +1,14 @@
-"""Depth images of boxes and cylinders by casting one ray per pixel centre against each shape's exact surface.
+"""Depth images and LIDAR scans of boxes and cylinders by casting rays against each shape's exact surface.
 
 A depth camera in a world of primitives needs no rasteriser: each pixel's depth is the nearest ray parameter at
 which it meets a box (slab test) or a cylinder (a quadratic for the side, two planes for the caps). A shape is
 tested only on the pixels of the rectangle its bounding box projects to, so a frame costs about the pixels times
 the shapes stacked behind each, not the triangles of every visual in the world. Cylinders come out exact, not
 tessellated.
+
+A scan (:func:`cast_rays`) tests each beam against the shapes whose bounding ball the beam passes within, and
+against the ground plane; a beam costs about the shapes near it, where ``rayTestBatch`` pays pybullet's per-call and
+per-ray overheads (docs/speed-vs-error.md, "LIDAR ray caster").
 
 Compiled with numba (cached on disk after the first call in a process).
 """
@@ -170,3 +174,75 @@ def _image_rect(eye, axes, fx, fy, cx, cy, near, centre, rot, h, width, height, 
             j0, j1 = min(j0, int(math.floor(v))), max(j1, int(math.ceil(v)))
     rect[0], rect[1], rect[2], rect[3] = max(i0, 0), min(i1, width - 1), max(j0, 0), min(j1, height - 1)
     return nearest
+
+
+@njit(cache=True, error_model="numpy")
+def cast_rays(origin, axes, starts, ends, kinds, centres, rotations, halves, ground, fractions):
+    """Fill ``fractions`` with where each segment ``start + s (end - start)``, s in [0, 1], first meets a surface.
+
+    A segment that starts inside a shape does not see that shape (as Bullet's convex ray test); the ground is the
+    plane z = 0, met from either side.
+
+    Args:
+        origin, axes: (3,) and (3, 3): the frame ``starts`` and ``ends`` are given in, world frame (its axes as
+            columns).
+        starts, ends: (m, 3) segment ends, metres.
+        kinds, centres, rotations, halves: the shapes, as :func:`cast_depth` takes them.
+        ground: whether the plane z = 0 is solid.
+        fractions: (m,) output, the smallest such s, 1.0 for a segment that meets nothing.
+    """
+    m_rays, n = starts.shape[0], kinds.shape[0]
+    world = np.empty((m_rays, 2, 3))
+    lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
+    for m in range(m_rays):
+        for end, point in ((0, starts[m]), (1, ends[m])):
+            for a in range(3):
+                value = origin[a] + axes[a, 0] * point[0] + axes[a, 1] * point[1] + axes[a, 2] * point[2]
+                world[m, end, a] = value
+                lo[a], hi[a] = min(lo[a], value), max(hi[a], value)
+    # the shapes whose bounding ball meets the scan's bounding box
+    near = np.empty(n, dtype=np.int64)
+    radius2 = np.empty(n)
+    count = 0
+    for k in range(n):
+        h, c = halves[k], centres[k]
+        r = math.sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2])  # holds a cylinder too: its halves are (r, r, h)
+        if (c[0] + r < lo[0] or c[0] - r > hi[0] or c[1] + r < lo[1] or c[1] - r > hi[1] or c[2] + r < lo[2]
+                or c[2] - r > hi[2]):
+            continue
+        near[count] = k
+        radius2[count] = r * r
+        count += 1
+    for m in range(m_rays):
+        sx, sy, sz = world[m, 0, 0], world[m, 0, 1], world[m, 0, 2]
+        dx, dy, dz = world[m, 1, 0] - sx, world[m, 1, 1] - sy, world[m, 1, 2] - sz
+        length2 = dx * dx + dy * dy + dz * dz
+        best = 1.0
+        if ground and dz != 0.0:
+            s = -sz / dz
+            if 0.0 <= s < best:
+                best = s
+        for j in range(count):
+            k = near[j]
+            c = centres[k]
+            px, py, pz = c[0] - sx, c[1] - sy, c[2] - sz
+            # the segment's point nearest the centre, within [0, best]: farther than the ball, no hit
+            s = (px * dx + py * dy + pz * dz) / length2 if length2 > 0.0 else 0.0
+            s = min(max(s, 0.0), best)
+            qx, qy, qz = px - s * dx, py - s * dy, pz - s * dz
+            if qx * qx + qy * qy + qz * qz > radius2[j]:
+                continue
+            rot, h = rotations[k], halves[k]
+            ex, ey, ez = _to_frame(rot, -px, -py, -pz)
+            ux, uy, uz = _to_frame(rot, dx, dy, dz)
+            if kinds[k] == BOX:
+                if abs(ex) <= h[0] and abs(ey) <= h[1] and abs(ez) <= h[2]:
+                    continue
+                t = _box_hit(ex, ey, ez, ux, uy, uz, h[0], h[1], h[2], 0.0)
+            else:
+                if ex * ex + ey * ey <= h[0] * h[0] and abs(ez) <= h[2]:
+                    continue
+                t = _cylinder_hit(ex, ey, ez, ux, uy, uz, h[0], h[2], 0.0)
+            if t < best:
+                best = t
+        fractions[m] = best

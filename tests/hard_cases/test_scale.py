@@ -246,8 +246,9 @@ def test_link_frame_of_a_link_whose_inertial_frame_is_turned(tmp_path, offset):
 @pytest.mark.parametrize("offset", (0.0, 1e4))
 @pytest.mark.parametrize("gap", [0.01, 0.002, 0.0, -0.0003])
 def test_millimetre_obstacles(offset, gap):
-    """FCL and pybullet's contacts against the closed forms, the LIDAR's forward beam against the rod; at 1e4 m
-    too. The closed form of each obstacle's distance to its robot shape is ``gap`` by construction."""
+    """FCL and pybullet's contacts against the closed forms, the LIDAR's forward beam against the rod (with either
+    ray caster); at 1e4 m too. The closed form of each obstacle's distance to its robot shape is ``gap`` by
+    construction."""
     world = build(offset, millimetre_scene(gap))
     try:
         world.place(0.0, 0.0, 0.0)
@@ -260,10 +261,12 @@ def test_millimetre_obstacles(offset, gap):
         assert report.min_clearance == pytest.approx(gap, abs=MM_TOL)
         if gap > 0:
             assert report.n_contacts == report.pybullet_contacts == 0
-            ranges = Lidar(LidarConfig(n_rays=720, max_range=3.5)).read_clean(world.sim, world.robot.state())
-            forward = ranges[360]  # azimuth 0 (a full circle starts at -pi): it meets a corner of the rod's prism
-            assert forward == pytest.approx(CHASSIS_RADIUS + gap + ROD - PRISM_CORNER - LIDAR_X, abs=1e-9)
-            assert (np.delete(ranges, 360) == 3.5).all()  # the rod is too thin for the next beams; nothing else
+            for caster, rod_face in (("exact", ROD), ("pybullet", PRISM_CORNER)):
+                # azimuth 0 (a full circle starts at -pi) meets the rod's circle, or a corner of pybullet's prism
+                lidar = Lidar(LidarConfig(n_rays=720, max_range=3.5, caster=caster))
+                ranges = lidar.read_clean(world.sim, world.robot.state())
+                assert ranges[360] == pytest.approx(CHASSIS_RADIUS + gap + ROD - rod_face - LIDAR_X, abs=1e-9)
+                assert (np.delete(ranges, 360) == 3.5).all()  # the rod is too thin for the next beams; nothing else
         else:  # every engine sees all three obstacles touch or overlap the robot
             assert not report.disagreement
             assert sorted((c.link, c.obstacle) for c in report.contacts) == \
