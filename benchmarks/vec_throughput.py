@@ -4,7 +4,9 @@ Target (issue 12): two workers step at least 1.8x one env alone on a 2-core mach
 steps the main job's env settings (subgoal, terminate on collision; ``--bare``: the env's defaults) with random-walk
 actions, so that episodes end and reset as often as early in training. Two free-running processes, one env each,
 show what two cores can give at most; the vector envs step in lockstep (every vector step waits for every worker).
-``WorkerVecEnv`` with two workers steps one block in this process and the other in one worker process.
+``WorkerVecEnv`` (the training tooling's) and the envs' own vector env, ``gym.make_vec``'s default for them
+(``clutter_gym.vector.BlockVectorEnv``), step one block of envs in this process and the other in one worker
+process; Gymnasium's ``AsyncVectorEnv`` gives every env a process of its own.
 Configurations run in alternating rounds (machine noise hits them alike); figures are medians over rounds. The
 last line is the training loop itself: PPO with the main job's settings (rollouts, updates, observation
 normalisation), in samples per second of wall time.
@@ -21,6 +23,7 @@ import os
 import statistics
 import time
 
+import gymnasium as gym
 import numpy as np
 import torch
 from stable_baselines3.common.vec_env import SubprocVecEnv, VecEnv
@@ -60,6 +63,21 @@ def free_running(factory, steps: int, seed: int) -> float:
     for p in processes:
         p.join()
     return sum(rates)
+
+
+def gym_vector(make, steps: int, seed: int) -> float:
+    """Samples/s of a Gymnasium vector env made by ``make()`` (its start-up and first reset untimed)."""
+    venv = make()
+    vector_steps = max(1, steps // venv.num_envs)
+    rng = np.random.default_rng(seed)
+    walks = np.stack([smooth_actions(rng, vector_steps) for _ in range(venv.num_envs)], axis=1).astype(np.float32)
+    venv.reset(seed=seed)
+    t0 = time.perf_counter()
+    for actions in walks:
+        venv.step(actions)
+    rate = vector_steps * venv.num_envs / (time.perf_counter() - t0)
+    venv.close()
+    return rate
 
 
 def vector(venv: VecEnv, steps: int, seed: int) -> float:
@@ -113,6 +131,13 @@ def main() -> None:
     for per_worker in (1, 4, 8, 16):
         configurations[f"WorkerVecEnv, 2 workers (this process + 1) x {per_worker} envs"] = functools.partial(
             lambda k: vector(WorkerVecEnv([factory] * (2 * k), workers=2), args.steps, args.seed), per_worker)
+    kwargs = {} if args.bare else config.make_kwargs()
+    configurations["Gymnasium AsyncVectorEnv, 2 envs (a process each)"] = lambda: gym_vector(
+        lambda: gym.make_vec(config.env_id, num_envs=2, vectorization_mode="async", **kwargs), args.steps, args.seed)
+    for per_worker in (1, 4, 8, 16):
+        configurations[f"gym.make_vec default (BlockVectorEnv), 2 workers x {per_worker} envs"] = functools.partial(
+            lambda k: gym_vector(lambda: gym.make_vec(config.env_id, num_envs=2 * k, workers=2, **kwargs),
+                                 args.steps, args.seed), per_worker)
     rates = alternating_rounds(configurations, args.rounds)
     base = statistics.median(rates["one env, one process"])
 

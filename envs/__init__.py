@@ -4,6 +4,8 @@ from importlib.metadata import PackageNotFoundError, version
 
 from gymnasium.envs.registration import register
 
+from clutter_gym.vector import make_block_vector_env
+
 try:
     __version__ = version("clutter-gym")
 except PackageNotFoundError:  # imported from a source tree that was never installed
@@ -20,8 +22,9 @@ _ENTRY_POINTS = {"ClutterNav-v0": "clutter_gym.clutter_nav:ClutterNavEnv",
                  "ClutterReach-v0": "clutter_gym.clutter_reach:ClutterReachEnv",
                  "ClutterFly-v0": "clutter_gym.clutter_fly:ClutterFlyEnv"}
 _EPISODE_STEPS = {"ClutterNav-v0": 400, "ClutterReach-v0": 100, "ClutterFly-v0": 600}
-for _env_id in ENV_IDS:
-    register(id=_env_id, entry_point=_ENTRY_POINTS[_env_id], max_episode_steps=_EPISODE_STEPS[_env_id])
+for _env_id in ENV_IDS:  # gym.make_vec's default for them: their envs in blocks over the cores (clutter_gym.vector)
+    register(id=_env_id, entry_point=_ENTRY_POINTS[_env_id], max_episode_steps=_EPISODE_STEPS[_env_id],
+             vector_entry_point=make_block_vector_env(_env_id))
 #: ClutterReach goal-conditioned for HER: Dict(observation, achieved_goal, desired_goal) and compute_reward.
 register(id="ClutterReachGoal-v0", entry_point="clutter_gym.goal_conditioned:make_goal_reach",
          max_episode_steps=_EPISODE_STEPS["ClutterReach-v0"])

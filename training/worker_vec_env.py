@@ -11,8 +11,7 @@ changes the speed, never the trajectories.
 
 from __future__ import annotations
 
-import multiprocessing as mp
-import traceback
+import functools
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -22,12 +21,7 @@ from gymnasium import spaces
 from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv
 from stable_baselines3.common.vec_env.base_vec_env import CloudpickleWrapper, VecEnvIndices, VecEnvObs, VecEnvStepReturn
 
-
-class WorkerError:
-    """An exception raised in a worker, sent back to be raised again in the parent with the worker's traceback."""
-
-    def __init__(self, error: BaseException) -> None:
-        self.error, self.trace = error, traceback.format_exc()
+from clutter_gym.util.workers import blocks, context, gather, serve
 
 
 def _answer(envs: DummyVecEnv, cmd: str, data: Any) -> Any:
@@ -54,36 +48,8 @@ def _answer(envs: DummyVecEnv, cmd: str, data: Any) -> Any:
     raise NotImplementedError(f"worker command {cmd!r}")
 
 
-def _worker(remote: Any, parent_remote: Any, fns: CloudpickleWrapper) -> None:
-    """Serve one ``DummyVecEnv`` over a pipe until ``close`` (or the parent goes away)."""
-    parent_remote.close()
-    envs = DummyVecEnv(fns.var)
-    while True:
-        try:
-            cmd, data = remote.recv()
-        except (EOFError, KeyboardInterrupt):
-            break
-        if cmd == "close":
-            envs.close()
-            remote.close()
-            break
-        try:
-            remote.send(_answer(envs, cmd, data))
-        except Exception as error:  # the env's own errors (a bad action, a missing attribute) reach the caller
-            remote.send(WorkerError(error))
-
-
-def _gather(remotes: Sequence[Any], local: Callable[[], Any] | None = None) -> list[Any]:
-    """``local()``'s answer (when given) and then one reply from each of ``remotes``, in that order, or the first
-    error: every remote's reply is read first, so that none is left in a pipe, whatever raised."""
-    try:
-        answers = [] if local is None else [local()]
-    finally:
-        replies = [remote.recv() for remote in remotes]
-    for reply in replies:
-        if isinstance(reply, WorkerError):
-            raise reply.error from RuntimeError(f"in an env worker process:\n{reply.trace}")
-    return answers + replies
+def _serve(remote: Any, parent_remote: Any, make: CloudpickleWrapper) -> None:
+    serve(remote, parent_remote, make.var, _answer)
 
 
 def _flat(blocks: Sequence[Sequence[Any]]) -> list[Any]:
@@ -102,18 +68,14 @@ class WorkerVecEnv(VecEnv):
     block in this process, each other block in a worker process of its own (``workers - 1`` processes)."""
 
     def __init__(self, env_fns: list[Callable[[], gym.Env]], workers: int, start_method: str | None = None) -> None:
-        if not 1 <= workers <= len(env_fns):
-            raise ValueError(f"workers must be in [1, {len(env_fns)}] (one env at least per worker), got {workers}")
-        bounds = np.linspace(0, len(env_fns), workers + 1).round().astype(int)
-        self.blocks = [(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:])]
-        if start_method is None:
-            start_method = "forkserver" if "forkserver" in mp.get_all_start_methods() else "spawn"
-        ctx = mp.get_context(start_method)
+        self.blocks = blocks(len(env_fns), workers)
+        ctx = context(start_method)
         self.remotes, self.processes = [], []
         for start, stop in self.blocks[1:]:  # started first: they build their envs while this process builds its own
             remote, work_remote = ctx.Pipe()
-            args = (work_remote, remote, CloudpickleWrapper(env_fns[start:stop]))
-            process = ctx.Process(target=_worker, args=args, daemon=True)  # daemon: never outlive a crashed parent
+            make = CloudpickleWrapper(functools.partial(DummyVecEnv, env_fns[start:stop]))
+            # daemon: never outlive a crashed parent
+            process = ctx.Process(target=_serve, args=(work_remote, remote, make), daemon=True)
             process.start()
             work_remote.close()
             self.remotes.append(remote)
@@ -128,7 +90,7 @@ class WorkerVecEnv(VecEnv):
         worker order."""
         for remote, item in zip(self.remotes, data[1:]):
             remote.send((cmd, item))
-        return _gather(self.remotes, lambda: _answer(self.local, cmd, data[0]))
+        return gather(self.remotes, lambda: _answer(self.local, cmd, data[0]))
 
     def step_async(self, actions: np.ndarray) -> None:
         for remote, (start, stop) in zip(self.remotes, self.blocks[1:]):
@@ -138,7 +100,7 @@ class WorkerVecEnv(VecEnv):
 
     def step_wait(self) -> VecEnvStepReturn:
         self.waiting = False
-        results = _gather(self.remotes, lambda: _answer(self.local, "step", self._local_actions))
+        results = gather(self.remotes, lambda: _answer(self.local, "step", self._local_actions))
         obs, rewards, dones, infos, reset_infos = zip(*results)
         self.reset_infos = _flat(reset_infos)
         return _concat(obs, self.observation_space), np.concatenate(rewards), np.concatenate(dones), _flat(infos)
@@ -178,7 +140,7 @@ class WorkerVecEnv(VecEnv):
         for w in asked:
             self.remotes[w - 1].send((cmd, make_data([i - self.blocks[w][0] for i in by_worker[w]])))
         local = (lambda: _answer(self.local, cmd, make_data(by_worker[0]))) if 0 in by_worker else None
-        replies = _gather([self.remotes[w - 1] for w in asked], local)
+        replies = gather([self.remotes[w - 1] for w in asked], local)
         answers: dict[int, Any] = {}
         for w, reply in zip(([0] if local else []) + asked, replies):
             members = by_worker[w]

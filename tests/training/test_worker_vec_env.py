@@ -74,7 +74,7 @@ def test_attributes_and_methods_reach_the_right_env():
 
 
 def test_bad_worker_counts_name_the_field():
-    with pytest.raises(ValueError, match=r"workers must be in \[1, 2\]"):
+    with pytest.raises(ValueError, match=r"workers must be an integer in \[1, 2\]"):
         WorkerVecEnv([cartpole] * 2, workers=3)
 
 
