@@ -39,6 +39,8 @@ def _answer(block: SyncVectorEnv, cmd: str, data: Any) -> Any:
         return block.call(name, *args, **kwargs)
     if cmd == "get_attr":
         return block.get_attr(data)
+    if cmd == "set_attr":
+        return block.set_attr(*data)
     if cmd == "render":
         return block.render()
     raise NotImplementedError(f"worker command {cmd!r}")
@@ -145,6 +147,9 @@ class BlockVectorEnv(VectorEnv):
 
     def reset(self, *, seed: int | Sequence[int | None] | None = None,
               options: dict[str, Any] | None = None) -> tuple[Any, dict[str, Any]]:
+        if options and "reset_mask" in options:
+            raise ValueError("options['reset_mask'] is for Gymnasium's same-step and disabled autoreset modes; this "
+                             "vector env resets an ended env itself, on the next step")
         if seed is None or isinstance(seed, (int, np.integer)):
             seeds = [None if seed is None else int(seed) + start for start, _ in self.blocks]
         else:
@@ -169,6 +174,15 @@ class BlockVectorEnv(VectorEnv):
 
     def get_attr(self, name: str) -> tuple[Any, ...]:
         return tuple(v for part in self._call_blocks("get_attr", [name] * len(self.blocks)) for v in part)
+
+    def set_attr(self, name: str, values: Any) -> None:
+        """Set attribute ``name`` of every env: to ``values[i]`` for env ``i`` given a list or tuple of
+        ``num_envs`` values, else to ``values``."""
+        if not isinstance(values, (list, tuple)):
+            values = [values] * self.num_envs
+        if len(values) != self.num_envs:
+            raise ValueError(f"values must be one value or a list of {self.num_envs}, got {len(values)}")
+        self._call_blocks("set_attr", [(name, list(values[start:stop])) for start, stop in self.blocks])
 
     def render(self) -> tuple[Any, ...] | None:
         parts = self._call_blocks("render", [None] * len(self.blocks))

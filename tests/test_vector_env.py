@@ -66,6 +66,8 @@ def test_it_is_make_vecs_default_and_one_worker_stays_in_process():
         np.testing.assert_array_equal(obs["lidar"][1], single.reset(seed=4)[0]["lidar"])
         single.close()
         assert envs.get_attr("spec")[0].id == "ClutterNav-v0"
+        envs.set_attr("marker", [1, 2])
+        assert envs.get_attr("marker") == (1, 2)
     finally:
         envs.close()
 
@@ -92,10 +94,14 @@ def test_bad_counts_name_the_field(kwargs, match):
         BlockVectorEnv("ClutterNav-v0", **kwargs)
 
 
-def test_a_wrong_number_of_seeds_is_named():
+def test_a_wrong_number_of_seeds_or_values_and_a_reset_mask_are_named():
     envs = BlockVectorEnv("ClutterNav-v0", num_envs=2, workers=1)
     try:
         with pytest.raises(ValueError, match="a list of 2 seeds"):
             envs.reset(seed=[1, 2, 3])
+        with pytest.raises(ValueError, match="a list of 2, got 3"):
+            envs.set_attr("marker", [1, 2, 3])
+        with pytest.raises(ValueError, match="reset_mask"):
+            envs.reset(options={"reset_mask": np.array([True, False])})
     finally:
         envs.close()

@@ -33,8 +33,8 @@ class LidarConfig:
         vertical_fov: spread of the channels' elevation angles in radians, [0, pi/2]; channels are evenly spaced
             and centred on the horizontal plane (a VLP-16 is 16 channels over 30 degrees).
         link: URDF link the LIDAR is mounted on.
-        caster: "exact" (the default: beams cast against the world's true boxes, cylinders and ground plane, 7-8x
-            faster than pybullet's rays; pybullet casts them anyway in a world holding anything else a ray can hit)
+        caster: "exact" (the default: beams cast against the world's true boxes, cylinders and ground plane, in about
+            a tenth of pybullet's time; pybullet casts them anyway in a world holding anything else a ray can hit)
             or "pybullet" (``rayTestBatch``, cylinders as 64-gon prisms). See :meth:`Sim.ray_hit_fractions`.
     """
 

@@ -8,7 +8,7 @@ tessellated.
 
 A scan (:func:`cast_rays`) tests each beam against the shapes whose bounding ball the beam passes within, and
 against the ground plane; a beam costs about the shapes near it, where ``rayTestBatch`` pays pybullet's per-call and
-per-ray overheads (docs/speed-vs-error.md, "LIDAR ray caster").
+per-ray overheads (docs/benchmarks.md, "The exact LIDAR caster and the envs' own vector env").
 
 Compiled with numba (cached on disk after the first call in a process).
 """
