@@ -126,7 +126,13 @@ class BlockVectorEnv(VectorEnv):
             work_remote.close()
             self.remotes.append(remote)
             self.processes.append(process)
-        self.local = _block(env_id, self.sizes[0], kwargs)
+        try:
+            self.local = _block(env_id, self.sizes[0], kwargs)
+        except BaseException:  # a bad env argument: the workers meet it too; none is left behind
+            for process in self.processes:
+                process.terminate()
+                process.join()
+            raise
         self.num_envs = int(num_envs)
         self.single_observation_space = self.local.single_observation_space
         self.single_action_space = self.local.single_action_space

@@ -4,6 +4,8 @@ over workers, and clear errors at its boundary."""
 
 from __future__ import annotations
 
+import multiprocessing
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -92,6 +94,13 @@ def test_close_stops_the_workers_and_errors_come_back_named():
 def test_bad_counts_name_the_field(kwargs, match):
     with pytest.raises(ValueError, match=match):
         BlockVectorEnv("ClutterNav-v0", **kwargs)
+
+
+def test_a_bad_env_argument_is_named_and_leaves_no_worker():
+    before = set(multiprocessing.active_children())
+    with pytest.raises(ValueError, match="n_rays"):
+        gym.make_vec("ClutterNav-v0", num_envs=2, workers=2, n_rays=0)
+    assert set(multiprocessing.active_children()) <= before
 
 
 def test_a_wrong_number_of_seeds_or_values_and_a_reset_mask_are_named():
