@@ -4,8 +4,9 @@ Every robot shape lies inside a ball about its origin (``LinkShape.radius``), an
 cylinder (upright, unless a movable one has been tipped over). The signed distance from the ball's centre to the
 obstacle (negative inside: minus the depth to the nearest face), less the ball's radius, is a lower bound on the
 shape's signed distance to the obstacle: on the separated side because the shape is inside the ball, and in
-overlap because any motion that separates the ball separates the shape. One numpy pass per step gives all of
-them, so FCL is asked only about pairs whose bound can still beat the best exact answer.
+overlap because any motion that separates the ball separates the shape. One compiled pass per step
+(:func:`~clutter_gym.collision.kernels.box_cylinder_distance`) gives all of them, so FCL is asked only about pairs
+whose bound can still beat the best exact answer.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from clutter_gym.collision.kernels import box_cylinder_distance
 from clutter_gym.worlds.scene import Obstacle
 
 
@@ -78,17 +80,6 @@ class ObstacleBounds:
         to_local, half, split, radius = self._to_local, self._half, self._split, self._radius
         if columns is not None:
             split = int(np.searchsorted(columns, self._split))
-            to_local = to_local.reshape(4, 3, n)[:, :, columns].reshape(4, -1)
-            half, radius, n = half[:, columns], self._radius[columns[split:] - self._split], len(columns)
-        homogeneous = np.ones((len(points), 4))
-        homogeneous[:, :3] = points
-        local = (homogeneous @ to_local).reshape(len(points), 3, n)
-        q = np.abs(local)
-        q -= half
-        if split < n:  # the radial distance of a cylinder (its y is out of play through its half extent)
-            q[:, 0, split:] = np.hypot(local[:, 0, split:], local[:, 1, split:]) - radius
-        out = np.maximum(q, 0.0)
-        out *= out
-        outside = np.sqrt(out[:, 0] + out[:, 1] + out[:, 2])
-        inside = np.minimum(q.max(axis=1), 0.0)
-        return outside + inside
+            to_local = np.ascontiguousarray(to_local.reshape(4, 3, n)[:, :, columns].reshape(4, -1))
+            half, radius = np.ascontiguousarray(half[:, columns]), self._radius[columns[split:] - self._split]
+        return box_cylinder_distance(np.ascontiguousarray(points, dtype=float), to_local, half, split, radius)

@@ -2,7 +2,7 @@
 
 The obstacles' FCL objects are placed, and their arrays for bounds (:mod:`bounds`) rebuilt, on reset only. Each step
 moves the robot's FCL objects to the link poses the robot read in one batched call, bounds every (shape,
-obstacle) pair from below in one numpy pass, then:
+obstacle) pair from below in one compiled pass, then:
 
 1. each moving shape asks FCL about its obstacles in order of their bounds, until no bound can beat the best
    exact distance: every link's clearance (capped at ``clearance_range``), its witness points and the closest
@@ -31,6 +31,7 @@ import numpy as np
 
 from clutter_gym.collision.bounds import ObstacleBounds
 from clutter_gym.collision.distance import signed_distance
+from clutter_gym.collision.kernels import shape_travel
 from clutter_gym.collision.obstacles import ObstacleObjects
 from clutter_gym.collision.report import CollisionReport, Contact
 from clutter_gym.collision.robot_model import RobotCollisionModel
@@ -385,11 +386,8 @@ class CollisionChecker:
         if previous is None or not self._obstacles or not np.isfinite(self.swept_speed):
             return 0
         moving = self._moving
-        step = now[0] - previous[0]
         # rotation adds at most angle * radius to the travel of any point of the shape
-        cos_angle = (np.einsum("nij,nij->n", now[1], previous[1]) - 1.0) / 2.0
-        angle = np.arccos(np.minimum(np.maximum(cos_angle, -1.0), 1.0))
-        travel = (np.sqrt(np.einsum("ni,ni->n", step, step)) + angle * self._radii)[moving]
+        travel = shape_travel(now[0], now[1], previous[0], previous[1], self._radii, moving)
         rows = np.flatnonzero(travel > self.swept_speed * self.dt)
         if rows.size == 0:
             return 0
