@@ -126,13 +126,15 @@ def lidar_choice(quick: bool, seed: int) -> Choice:
             for r in measured]
     d = next(r for r in rows if r.default)
     half = rows[rows.index(d) - 1]
-    method = (f"The scripted navigator's poses in seeded layouts; speed: one clean scan (`rayTestBatch`); error: the "
-              f"nearest return less a {lidar_resolution.REFERENCE_RAYS}-ray scan's, i.e. how much closer the nearest "
-              f"obstacle is than the scan says.")
+    method = (f"The scripted navigator's poses in seeded layouts; speed: one clean scan (the default exact caster); "
+              f"error: the nearest return less a {lidar_resolution.REFERENCE_RAYS}-ray scan's, i.e. how much closer "
+              f"the nearest obstacle is than the scan says.")
+    per_ray, fixed = np.polyfit([r["rays"] for r in measured], [r["scan_us"] for r in measured], 1)
     why = (f"{d.label}: p95 error {d.extra['p95 (mm)']:.0f} mm, {d.extra['p95 (mm)'] / NAV_MARGIN_MM:.0%} of the "
            f"{NAV_MARGIN_MM / 1000} m clearance margin ClutterNav-v0's reward acts on, at {d.speed:.0f} us per "
-           f"scan; {half.label} halve the scan but miss by {half.extra['p95 (mm)']:.0f} mm (p95). Scan cost grows "
-           f"linearly with the rays.")
+           f"scan; {half.label} take {half.speed / d.speed:.0%} of its time but miss by "
+           f"{half.extra['p95 (mm)']:.0f} mm (p95). A scan costs about {fixed:.0f} us plus {per_ray:.2f} us a ray "
+           f"(least squares over the rows).")
     return Choice("lidar-rays", "LIDAR ray count", "`n_rays`", "scan (us)", False, "mean error (mm)", rows, method,
                   why)
 
@@ -201,9 +203,10 @@ def noise_choice(quick: bool, seed: int) -> Choice:
               "and dynamics randomisation); error: the mean absolute difference between the profile's LIDAR "
               "observation and the clean one on the same trajectory (the profile's sensor noise only). Here the "
               "error is the point: it is the gap to real sensors a profile models.")
+    noisy = [rates[name] / rates["none"] for name in PROFILE_NAMES if name != "none"]
     why = (f"`none` is the default: the clean reference every profile is compared against. Noise is cheap: the noise "
-           f"code itself is at most {worst:.0%} of a step, and profiles with slower sensors step faster, so choose "
-           f"the profile by the robot you will deploy on, not by speed.")
+           f"code itself is at most {worst:.0%} of a step, and the noisy profiles step at {min(noisy):.0%}-"
+           f"{max(noisy):.0%} of `none`'s rate, so choose the profile by the robot you will deploy on, not by speed.")
     return Choice("noise", "Noise profile", "`noise`", "steps/s", True, "LIDAR deviation (mm)", rows, method, why)
 
 
