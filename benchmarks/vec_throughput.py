@@ -65,28 +65,17 @@ def free_running(factory, steps: int, seed: int) -> float:
     return sum(rates)
 
 
-def gym_vector(make, steps: int, seed: int) -> float:
-    """Samples/s of a Gymnasium vector env made by ``make()`` (its start-up and first reset untimed)."""
-    venv = make()
+def vector(venv: VecEnv | gym.vector.VectorEnv, steps: int, seed: int) -> float:
+    """Samples/s of ``venv`` (SB3's or Gymnasium's) over about ``steps`` samples (the vector's start-up and first
+    reset untimed)."""
     vector_steps = max(1, steps // venv.num_envs)
     rng = np.random.default_rng(seed)
     walks = np.stack([smooth_actions(rng, vector_steps) for _ in range(venv.num_envs)], axis=1).astype(np.float32)
-    venv.reset(seed=seed)
-    t0 = time.perf_counter()
-    for actions in walks:
-        venv.step(actions)
-    rate = vector_steps * venv.num_envs / (time.perf_counter() - t0)
-    venv.close()
-    return rate
-
-
-def vector(venv: VecEnv, steps: int, seed: int) -> float:
-    """Samples/s of ``venv`` over about ``steps`` samples (the vector's start-up and first reset untimed)."""
-    vector_steps = max(1, steps // venv.num_envs)
-    rng = np.random.default_rng(seed)
-    walks = np.stack([smooth_actions(rng, vector_steps) for _ in range(venv.num_envs)], axis=1)
-    venv.seed(seed)
-    venv.reset()
+    if isinstance(venv, VecEnv):
+        venv.seed(seed)
+        venv.reset()
+    else:
+        venv.reset(seed=seed)
     t0 = time.perf_counter()
     for actions in walks:
         venv.step(actions)
@@ -132,12 +121,12 @@ def main() -> None:
         configurations[f"WorkerVecEnv, 2 workers (this process + 1) x {per_worker} envs"] = functools.partial(
             lambda k: vector(WorkerVecEnv([factory] * (2 * k), workers=2), args.steps, args.seed), per_worker)
     kwargs = {} if args.bare else config.make_kwargs()
-    configurations["Gymnasium AsyncVectorEnv, 2 envs (a process each)"] = lambda: gym_vector(
-        lambda: gym.make_vec(config.env_id, num_envs=2, vectorization_mode="async", **kwargs), args.steps, args.seed)
+    configurations["Gymnasium AsyncVectorEnv, 2 envs (a process each)"] = lambda: vector(
+        gym.make_vec(config.env_id, num_envs=2, vectorization_mode="async", **kwargs), args.steps, args.seed)
     for per_worker in (1, 4, 8, 16):
         configurations[f"gym.make_vec default (BlockVectorEnv), 2 workers x {per_worker} envs"] = functools.partial(
-            lambda k: gym_vector(lambda: gym.make_vec(config.env_id, num_envs=2 * k, workers=2, **kwargs),
-                                 args.steps, args.seed), per_worker)
+            lambda k: vector(gym.make_vec(config.env_id, num_envs=2 * k, workers=2, **kwargs), args.steps, args.seed),
+            per_worker)
     rates = alternating_rounds(configurations, args.rounds)
     base = statistics.median(rates["one env, one process"])
 

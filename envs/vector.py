@@ -20,7 +20,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium.vector import AutoresetMode, SyncVectorEnv, VectorEnv
 
-from clutter_gym.util.workers import blocks, gather, serve
+from clutter_gym.util.workers import blocks, gather, serve, stop_workers
 
 
 def _block(env_id: str, count: int, kwargs: dict[str, Any]) -> SyncVectorEnv:
@@ -197,12 +197,7 @@ class BlockVectorEnv(VectorEnv):
     def close_extras(self, **kwargs: Any) -> None:
         if self.closed:
             return
-        for remote in self.remotes:
-            remote.send(("close", None))
-        for process in self.processes:
-            process.join()
-        for remote in self.remotes:
-            remote.close()
+        stop_workers(self.remotes, self.processes)
         self.local.close()
         self.closed = True
 

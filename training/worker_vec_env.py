@@ -21,7 +21,7 @@ from gymnasium import spaces
 from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv
 from stable_baselines3.common.vec_env.base_vec_env import CloudpickleWrapper, VecEnvIndices, VecEnvObs, VecEnvStepReturn
 
-from clutter_gym.util.workers import blocks, context, gather, serve
+from clutter_gym.util.workers import blocks, context, gather, serve, stop_workers
 
 
 def _answer(envs: DummyVecEnv, cmd: str, data: Any) -> Any:
@@ -120,12 +120,7 @@ class WorkerVecEnv(VecEnv):
         if self.waiting:
             for remote in self.remotes:
                 remote.recv()
-        for remote in self.remotes:
-            remote.send(("close", None))
-        for process in self.processes:
-            process.join()
-        for remote in self.remotes:
-            remote.close()
+        stop_workers(self.remotes, self.processes)
         self.local.close()
         self.closed = True
 

@@ -73,3 +73,13 @@ def gather(remotes: Sequence[Any], local: Callable[[], Any] | None = None) -> li
         if isinstance(reply, WorkerError):
             raise reply.error from RuntimeError(f"in an env worker process:\n{reply.trace}")
     return answers + replies
+
+
+def stop_workers(remotes: Sequence[Any], processes: Sequence[Any]) -> None:
+    """Tell every worker to close its block, wait for the processes to end and close the pipes."""
+    for remote in remotes:
+        remote.send(("close", None))
+    for process in processes:
+        process.join()
+    for remote in remotes:
+        remote.close()
