@@ -28,6 +28,7 @@ import math
 from dataclasses import dataclass
 from functools import cached_property
 
+import numba
 import numpy as np
 from scipy import ndimage
 
@@ -192,45 +193,40 @@ def scene_clearance(scene: Scene, spec: ClutterSpec, cap: float) -> np.ndarray:
 def clearance_field(obstacles: tuple[Obstacle, ...], spec: ClutterSpec, cap: float) -> np.ndarray:
     """Distance from every cell centre to the nearest obstacle or wall, capped at ``cap`` metres.
 
-    An obstacle only matters within ``cap`` of its enclosing circle, so obstacles are evaluated on windows
-    around them: compact ones and long ones (wall segments) in two groups, each group at once on equal-sized
-    windows with one numpy expression, then merged into the field by minimum.
+    An obstacle only matters within ``cap`` of its enclosing circle, so each one is evaluated on the window of
+    cells that reach covers. The distance is that of a rounded rectangle: a box for rounding 0, a disc for a square
+    of half-side r rounded by r, so boxes and cylinders share one expression.
     """
     field = np.minimum(spec.wall_clearance, cap)
-    compact = tuple(o for o in obstacles if o.radius <= 0.5)
-    long = tuple(o for o in obstacles if o.radius > 0.5)
-    for group in (compact, long):
-        if group:
-            _merge_windows(field, group, spec, cap)
+    if obstacles:
+        yaw = np.array([o.yaw for o in obstacles])
+        _lower_to_obstacles(
+            field, spec.cell_centres, 0.5 * spec.arena_size, float(cap),
+            np.array([o.position for o in obstacles], dtype=float), np.array([o.radius for o in obstacles]),
+            np.array([(0.5 * o.size[0], 0.5 * o.size[1]) for o in obstacles]),
+            np.array([o.radius if o.shape == "cylinder" else 0.0 for o in obstacles]), np.cos(yaw), np.sin(yaw))
     return field
 
 
-def _merge_windows(field: np.ndarray, obstacles: tuple[Obstacle, ...], spec: ClutterSpec, cap: float) -> None:
-    """Lower ``field`` to each obstacle's signed distance on a window around it.
-
-    The distance is that of a rounded rectangle: a box for rounding 0, a disc for a square of half-side r
-    rounded by r, so boxes and cylinders share one expression.
-    """
-    c = spec.cell_centres
-    n, res, half = len(c), spec.arena_size / len(c), 0.5 * spec.arena_size
-    centre = np.array([o.position for o in obstacles], dtype=float)
-    radius = np.array([o.radius for o in obstacles])
-    half_ext = np.array([(0.5 * o.size[0], 0.5 * o.size[1]) for o in obstacles])
-    rounding = np.array([o.radius if o.shape == "cylinder" else 0.0 for o in obstacles])
-    yaw = np.array([o.yaw for o in obstacles])
-    cos_y, sin_y = np.cos(yaw)[:, None, None], np.sin(yaw)[:, None, None]
-    width = min(int(math.ceil(2 * (radius.max() + cap) / res)) + 2, n)
-    lo = np.clip(np.floor((centre - radius[:, None] - cap + half) / res).astype(int), 0, n - width)
-    offsets = np.arange(width)
-    dx = c[lo[:, 0, None] + offsets][:, :, None] - centre[:, 0, None, None]
-    dy = c[lo[:, 1, None] + offsets][:, None, :] - centre[:, 1, None, None]
-    qx = np.abs(cos_y * dx + sin_y * dy) - (half_ext[:, 0] - rounding)[:, None, None]
-    qy = np.abs(-sin_y * dx + cos_y * dy) - (half_ext[:, 1] - rounding)[:, None, None]
-    d = (np.hypot(np.maximum(qx, 0.0), np.maximum(qy, 0.0)) + np.minimum(np.maximum(qx, qy), 0.0)
-         - rounding[:, None, None])
-    for k in range(len(obstacles)):
-        window = field[lo[k, 0]:lo[k, 0] + width, lo[k, 1]:lo[k, 1] + width]
-        np.minimum(window, d[k], out=window)
+@numba.njit(cache=True)
+def _lower_to_obstacles(field, c, half, cap, centre, radius, half_ext, rounding, cos_y, sin_y):  # pragma: no cover
+    """Lower ``field`` (n, n) to each obstacle's signed distance on the window around it (compiled)."""
+    n = c.size
+    res = 2.0 * half / n
+    for k in range(centre.shape[0]):
+        width = min(int(math.ceil(2.0 * (radius[k] + cap) / res)) + 2, n)
+        lo_x = min(max(int(math.floor((centre[k, 0] - radius[k] - cap + half) / res)), 0), n - width)
+        lo_y = min(max(int(math.floor((centre[k, 1] - radius[k] - cap + half) / res)), 0), n - width)
+        a_x, a_y = half_ext[k, 0] - rounding[k], half_ext[k, 1] - rounding[k]
+        for i in range(lo_x, lo_x + width):
+            dx = c[i] - centre[k, 0]
+            for j in range(lo_y, lo_y + width):
+                dy = c[j] - centre[k, 1]
+                qx = abs(cos_y[k] * dx + sin_y[k] * dy) - a_x
+                qy = abs(-sin_y[k] * dx + cos_y[k] * dy) - a_y
+                d = math.hypot(max(qx, 0.0), max(qy, 0.0)) + min(max(qx, qy), 0.0) - rounding[k]
+                if d < field[i, j]:
+                    field[i, j] = d
 
 
 def _cell(point: np.ndarray, spec: ClutterSpec) -> int:

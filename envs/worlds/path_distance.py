@@ -17,14 +17,12 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Iterator
-from dataclasses import dataclass
 
 import numpy as np
 from scipy import ndimage
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import dijkstra
 
 from clutter_gym.worlds.clutter import ClutterSpec, scene_clearance
+from clutter_gym.worlds.grid_search import search_grid
 from clutter_gym.worlds.scene import Scene
 
 # Forward moves (di, dj) of the 16-neighbourhood (the other eight are their mirror images), each with
@@ -59,17 +57,16 @@ class PathDistance:
         self._origin, self._top = float(self._centres[0]), float(len(self._centres) - 1)  # first centre, last index
         reach = self._res if plan_margin is None else max(self._res, plan_margin)
         clearance = scene_clearance(scene, spec, cap=robot_radius + reach)
-        free = clearance > robot_radius
         goal_cell = self._nearest_cell(scene.goal)
-        free[goal_cell] = True
-        distance, _ = _dijkstra_from(goal_cell, free, self._res)
+        distance, _ = _dijkstra_from(goal_cell, clearance, robot_radius, self._res)
         self.values, self._nearest_reachable = _fill_unreachable(distance, self._res)
         self._goal_cell = goal_cell[0] * len(self._centres) + goal_cell[1]
         self._goal = scene.goal
         self._next: np.ndarray | None = None
         if plan_margin is not None:
             shortfall = np.clip((robot_radius + plan_margin - clearance) / max(plan_margin, 1e-9), 0.0, 1.0)
-            _, self._next = _dijkstra_from(goal_cell, free, self._res, 1.0 + INFLATION_COST * shortfall**2)
+            _, self._next = _dijkstra_from(goal_cell, clearance, robot_radius, self._res,
+                                           1.0 + INFLATION_COST * shortfall**2)
 
     def _nearest_cell(self, point: tuple[float, float]) -> tuple[int, int]:
         n = len(self._centres)
@@ -127,72 +124,34 @@ class PathDistance:
         yield (float(self._goal[0]), float(self._goal[1]))
 
 
-def _dijkstra_from(source: tuple[int, int], free: np.ndarray, res: float,
+def _dijkstra_from(source: tuple[int, int], clearance: np.ndarray, radius: float, res: float,
                    cost: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """(n, n) shortest 16-connected path length through ``free`` cells from ``source`` (inf where unreachable),
-    and (n * n,) each cell's next cell on its path to ``source`` (negative where there is none).
+    """(n, n) shortest 16-connected path length from ``source`` through cells of clearance above ``radius`` (the
+    source counts as one; inf where unreachable), and (n * n,) each cell's next cell on its path to ``source``
+    (negative where there is none).
 
     ``cost`` (n, n), if given, weighs each metre of a move by the mean cost of the cells it joins."""
-    n = free.shape[0]
-    stencil = _stencil(n)
-    padded = np.zeros((n + 4, n + 4), dtype=bool)
-    padded[2:-2, 2:-2] = free
-
-    def shifted(di: int, dj: int) -> np.ndarray:  # shifted(di, dj)[i, j] = free[i + di, j + dj], False outside
-        return padded[2 + di:2 + di + n, 2 + dj:2 + dj + n]
-
-    ok = np.empty((len(stencil.moves), n, n), dtype=bool)  # ok[k, i, j]: move k from cell (i, j) stays free
-    for k, (move, through) in enumerate(stencil.moves):
-        np.logical_and(free, shifted(*move), out=ok[k])
-        for cell in through:
-            np.logical_and(ok[k], shifted(*cell), out=ok[k])
-    edges = np.flatnonzero(ok.reshape(len(stencil.moves), -1).T)  # row by row, each row in the order of moves
-    indptr = np.zeros(n * n + 1, dtype=np.int32)
-    np.cumsum(ok.sum(axis=0, dtype=np.int32), out=indptr[1:])
-    targets = stencil.targets[edges]
-    weights = (res * stencil.lengths)[edges % len(stencil.moves)]
-    if cost is not None:
-        flat = cost.ravel()
-        weights *= 0.5 * (flat[edges // len(stencil.moves)] + flat[targets])
-    graph = csr_matrix((weights, targets, indptr), shape=(n * n, n * n))
-    distance, predecessors = dijkstra(graph, indices=source[0] * n + source[1], return_predecessors=True)
-    return distance.reshape(n, n), predecessors
-
-
-@dataclass(frozen=True)
-class _Stencil:
-    """The 16 directed moves on an n x n grid, in the order each row of the search graph lists its edges.
-
-    A row lists the moves to higher cell indices before those to lower ones, each group by ascending index: the
-    order in which scipy's undirected search scans the edges of a graph that stores each undirected edge once, so
-    that ties between equally short paths (and with them the planned path) resolve as in that search.
-
-    Attributes:
-        moves: ((di, dj), cells the move's segment passes through, relative to its start) per move.
-        lengths: (16,) move lengths in cells.
-        targets: (n * n * 16,) int32 flat index of each move's target cell, row by row (wrapped where outside).
-    """
-
-    moves: tuple[tuple[tuple[int, int], tuple[tuple[int, int], ...]], ...]
-    lengths: np.ndarray
-    targets: np.ndarray
+    n = clearance.shape[0]
+    moves, lengths, through = _stencil(res)
+    clear = clearance.copy()
+    clear[source] = np.inf
+    distance, after = search_grid(clear, np.full(len(moves), radius), moves, lengths,
+                                  np.array([source[0] * n + source[1]]), np.zeros(1), through, cost)
+    return distance.reshape(n, n), after
 
 
 @functools.cache
-def _stencil(n: int) -> _Stencil:
-    backward = tuple(((-di, -dj), tuple((ti - di, tj - dj) for ti, tj in through)) for (di, dj), through in _MOVES)
-
-    def offset(move: tuple[tuple[int, int], tuple]) -> int:
-        return move[0][0] * n + move[0][1]
-
-    moves = (*sorted(_MOVES, key=offset), *sorted(backward, key=offset))
-    cells = np.arange(n * n)
-    offsets = np.array([offset(m) for m in moves])
-    return _Stencil(
-        moves=moves,
-        lengths=np.array([math.hypot(*move) for move, _ in moves]),
-        targets=((cells[:, None] + offsets) % (n * n)).astype(np.int32).ravel(),
-    )
+def _stencil(res: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The 16 moves both ways (cells), their lengths (metres) and the cells each one crosses (steps from its
+    start, the start itself filling the rows of moves that cross fewer than two)."""
+    forward = [(move, through) for move, through in _MOVES]
+    backward = [((-di, -dj), tuple((ti - di, tj - dj) for ti, tj in through)) for (di, dj), through in _MOVES]
+    both = forward + backward
+    crossed = np.zeros((len(both), 2, 2), dtype=np.int64)
+    for k, (_, through) in enumerate(both):
+        for c, cell in enumerate(through):
+            crossed[k, c] = cell
+    return (np.array([move for move, _ in both]), res * np.array([math.hypot(*move) for move, _ in both]), crossed)
 
 
 def _fill_unreachable(distance: np.ndarray, res: float) -> tuple[np.ndarray, np.ndarray]:

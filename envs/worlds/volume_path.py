@@ -80,7 +80,8 @@ class VolumePathDistance:
         self._clear = scene_clearance(scene, spec, robot_radius + 2.0 * float(self._h.max()))
         self._clear_flat = self._clear.ravel()
         links, link_lengths = self._goal_links()
-        self._distance_flat, self._next = search_grid(self._clear, self._r, *_moves(tuple(self._h_list)), links,
+        moves, lengths = _moves(tuple(self._h_list))
+        self._distance_flat, self._next = search_grid(self._clear, self._r + 0.5 * lengths, moves, lengths, links,
                                                       link_lengths)  # _next: each cell's next cell towards the goal
         self._distance = self._distance_flat.reshape(self._clear.shape)
 

@@ -43,7 +43,7 @@ def test_the_grid_search_finds_the_distances_of_the_explicit_graph(density, seed
     clear = scene_clearance(scene, spec, R + 2.0 * float(spec.cell_size.max()))
     moves, lengths = _moves(tuple(spec.cell_size.tolist()))
     sources, source_lengths = field._goal_links()
-    distance, before = search_grid(clear, R, moves, lengths, sources, source_lengths)
+    distance, before = search_grid(clear, R + 0.5 * lengths, moves, lengths, sources, source_lengths)
     expected = explicit_search(clear, R, moves, lengths, sources, source_lengths)
 
     reached = np.isfinite(expected)
@@ -72,7 +72,7 @@ def test_a_cell_walled_off_from_the_source_is_unreached():
     # move of length L needs 0.1 + L / 2 at both ends), so the planes x = 2 to 4 split the grid in two
     clear = np.broadcast_to(0.2 * np.abs(np.arange(7) - 3.0)[:, None, None], (7, 7, 7)).copy()
     moves, lengths = _moves((0.2, 0.2, 0.2))
-    distance, before = search_grid(clear, 0.1, moves, lengths, np.array([0]), np.array([0.05]))
+    distance, before = search_grid(clear, 0.1 + 0.5 * lengths, moves, lengths, np.array([0]), np.array([0.05]))
     half = distance.reshape(clear.shape)
     assert np.isfinite(half[:2]).all() and np.isinf(half[2:]).all()
     assert (before.reshape(clear.shape)[2:] == UNREACHED).all()

@@ -1,0 +1,26 @@
+"""``python -m benchmarks.versus_commit``, the route for timing a change against the commit before it in one
+process, run for a few blocks against HEAD: no timing is asserted, only that it builds the commit's package, makes
+both envs and reports."""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def test_it_builds_the_commit_and_reports_both_figures_and_the_trajectory_check():
+    result = subprocess.run(
+        [sys.executable, "-m", "benchmarks.versus_commit", "--commit", "HEAD", "--rounds", "2", "--steps", "20",
+         "--resets", "3", "--trajectory-steps", "40"],
+        capture_output=True, text=True, timeout=600, cwd=ROOT)
+    assert result.returncode == 0, result.stderr[-3000:]
+    # the working tree may differ from HEAD while a change is being made, so either verdict is fine
+    assert re.search(r"seeded trajectories (identical \(40 steps\)|differ from step \d+)", result.stdout), result.stdout
+    rows = {line.split("|")[1].strip(): line for line in result.stdout.splitlines() if line.startswith("| ")}
+    for figure, unit in (("step", "µs"), ("reset", "ms")):
+        assert re.fullmatch(rf"\| {figure} \| [\d.]+ {unit} \| [\d.]+ {unit} \| [\d.]+× \([\d.]+–[\d.]+\) \|",
+                            rows[figure]), rows
