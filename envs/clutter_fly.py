@@ -12,8 +12,9 @@ from clutter_gym.collision import RobotCollisionModel
 from clutter_gym.core import ClutterEnv, collision_checker
 from clutter_gym.make_checks import check_env_settings, check_flags, check_numbers
 from clutter_gym.noise.profiles import NoiseProfile, resolve_noise
-from clutter_gym.robots import Quadrotor, QuadrotorConfig
+from clutter_gym.robots import QuadrotorConfig
 from clutter_gym.robots.quadrotor import TRACKED_LINKS
+from clutter_gym.robots.registry import resolve_robot
 from clutter_gym.robots.rigid_body import RigidBody
 from clutter_gym.sensors import ImuConfig, LidarConfig, build_sensors, camera_config
 from clutter_gym.tasks import FlyRewardWeights, FlyTask
@@ -124,6 +125,7 @@ class ClutterFlyEnv(ClutterEnv):
 
     ## Arguments
 
+    ``robot`` (a registered multirotor: ``"quadrotor"``; docs/robots.md);
     ``render_mode`` (None, "rgb_array", "human"); ``sensors`` (subset of ("imu", "lidar", "camera"));
     ``noise`` (profile name, override mapping or NoiseProfile); ``volume_size`` (x, y, z) m, x and y in [2, 30],
     z in [1, 5]; ``obstacle_density`` volume fraction [0, 0.25]; ``ceiling``; ``n_rays`` [1, 4096];
@@ -194,6 +196,7 @@ class ClutterFlyEnv(ClutterEnv):
         rate_weight: float = 0.01,
         subgoal_lookahead: float = 0.0,
         observe_thrust_ratio: bool = False,
+        robot: str = "quadrotor",
     ) -> None:
         check_numbers(ClutterFlyEnv.__init__, locals())
         check_env_settings(render_mode, physics_hz, control_hz, solver_iterations, contact_tolerance,
@@ -204,7 +207,8 @@ class ClutterFlyEnv(ClutterEnv):
             raise ValueError(f"swept_speed must be > 0 m/s (inf disables swept checks), got {swept_speed!r}")
         if isinstance(aero, str) or not isinstance(aero, Sequence):
             raise ValueError(f"aero must be a tuple of names from ('drag', 'ground_effect'), got {aero!r}")
-        robot = Quadrotor(QuadrotorConfig(aero=tuple(aero), observe_thrust_ratio=observe_thrust_ratio))
+        flyer = resolve_robot(robot, "multirotor", "ClutterFly-v0")
+        robot = flyer(QuadrotorConfig(aero=tuple(aero), observe_thrust_ratio=observe_thrust_ratio))
         spec = _volume_spec(volume_size, obstacle_density, ceiling)
         # the airframe is rigid (fixed joints only), so self-collision is off and no allowed-collision matrix is
         # needed; the task reads only the robot's clearance, so no link's own is resolved

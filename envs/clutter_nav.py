@@ -13,8 +13,9 @@ from clutter_gym.core import ClutterEnv, collision_checker
 from clutter_gym.make_checks import check_env_settings, check_flags, check_numbers
 from clutter_gym.noise.profiles import NoiseProfile, resolve_noise
 from clutter_gym.robots import DiffDriveConfig, DiffDriveRobot
-from clutter_gym.robots.diffdrive import TRACKED_LINKS
+from clutter_gym.robots.registry import resolve_robot
 from clutter_gym.robots.safety import SafetyConfig, SafetyFilter
+from clutter_gym.robots.wheeled import WheeledBase
 from clutter_gym.sensors import ImuConfig, LidarConfig, build_sensors, camera_config
 from clutter_gym.tasks import NavigateTask, NavRewardWeights
 from clutter_gym.worlds import ClutterArena, ClutterSpec
@@ -124,8 +125,9 @@ class ClutterNavEnv(ClutterEnv):
     ``clearance_margin`` m; ``terminate_on_collision``; ``contact_tolerance`` m;
     ``*_weight`` reward weights; ``subgoal_lookahead`` m (0: off); ``safety_horizon`` s [0, 2] (0: off),
     ``safety_margin`` m [0, 0.5] and ``safety_recovery`` s [0, 10] (0: never) (need a 2D ``lidar`` in
-    ``sensors``); ``reverse`` (False: forward driving only, see "Action space"); ``observe_bearing`` (the goal
-    entry ends with the bearing angle / pi, which jumps where the goal is straight behind: from sin and cos
+    ``sensors``); ``reverse`` (False: forward driving only, see "Action space"); ``robot`` (a registered wheeled
+    base, ``"diffbot"`` or ``"husky"``, a spec mapping or a YAML spec file: docs/robots.md); ``observe_bearing``
+    (the goal entry ends with the bearing angle / pi, which jumps where the goal is straight behind: from sin and cos
     alone, a continuous policy's turn passes through zero there, and a deterministic one can stop for good).
 
     ``subgoal_lookahead > 0`` makes the env map-based: the ``subgoal`` entry comes from a path planned on the
@@ -197,13 +199,17 @@ class ClutterNavEnv(ClutterEnv):
         safety_recovery: float = 0.0,
         reverse: bool = True,
         observe_bearing: bool = False,
+        robot: str | Mapping[str, Any] = "diffbot",
     ) -> None:
         check_numbers(ClutterNavEnv.__init__, locals())
         check_env_settings(render_mode, physics_hz, control_hz, solver_iterations, contact_tolerance,
                            env_id="ClutterNav-v0", min_physics_hz=MIN_PHYSICS_HZ)
         check_flags(terminate_on_collision=terminate_on_collision, reverse=reverse, observe_bearing=observe_bearing)
         self.forward_only = not reverse  # the linear action maps onto stand..full speed (see _command)
-        robot = DiffDriveRobot(DiffDriveConfig(max_linear_speed=max_linear_speed, max_angular_speed=max_angular_speed))
+        base = resolve_robot(robot, "diff_drive", "ClutterNav-v0")
+        _check_sensor_links(sensors, base)
+        robot = DiffDriveRobot(DiffDriveConfig(max_linear_speed=max_linear_speed, max_angular_speed=max_angular_speed),
+                               base)
         spec = ClutterSpec(arena_size=arena_size, obstacle_density=obstacle_density,
                            movable_fraction=movable_obstacles)
         lidar = LidarConfig(n_rays=n_rays, fov=lidar_fov, max_range=lidar_range, mount_height=lidar_mount_height,
@@ -224,7 +230,7 @@ class ClutterNavEnv(ClutterEnv):
             observe_bearing=observe_bearing,
         )
         # the whole arena is in range: every step reports the distance to the nearest obstacle
-        checker = collision_checker(robot, TRACKED_LINKS, collision_fidelity, collision_padding, contact_tolerance,
+        checker = collision_checker(robot, base.tracked_links, collision_fidelity, collision_padding, contact_tolerance,
                                     math.sqrt(2.0) * arena_size, control_hz)
         safety = _safety_filter(SafetyConfig(safety_horizon, safety_margin, safety_recovery), sensors, lidar, robot,
                                 control_hz)
@@ -249,6 +255,15 @@ class ClutterNavEnv(ClutterEnv):
         return np.array([0.5 * (action[0] + 1.0), action[1]])
 
 
+def _check_sensor_links(sensors: Sequence[str], base: WheeledBase) -> None:
+    """Refuse sensors whose link the robot's URDF lacks, naming them and the links it has."""
+    links = UrdfKinematics(base.urdf).links
+    missing = [f"{name}_link" for name in sensors if f"{name}_link" not in links]
+    if missing:
+        raise ValueError(f"robot {base.name!r} has no {missing} for sensors {list(sensors)}; mount them in its spec "
+                         f"(mounts) or drop those sensors (its links: {links})")
+
+
 def _safety_filter(config: SafetyConfig, sensors: Sequence[str], lidar: LidarConfig,
                    robot: DiffDriveRobot, control_hz: float) -> SafetyFilter | None:
     """The collision monitor over the LIDAR's returns, in the base frame (None when its horizon is 0)."""
@@ -257,7 +272,8 @@ def _safety_filter(config: SafetyConfig, sensors: Sequence[str], lidar: LidarCon
     if "lidar" not in sensors or lidar.n_channels != 1:
         raise ValueError(f"safety_horizon > 0 needs a 2D LIDAR: 'lidar' in sensors and lidar_channels 1, got "
                          f"sensors {list(sensors)} and lidar_channels {lidar.n_channels}")
-    mount = UrdfKinematics(robot.urdf_path).forward(np.zeros((1, 2)))[lidar.link][0]
+    kinematics = UrdfKinematics(robot.urdf_path)
+    mount = kinematics.forward(np.zeros((1, len(kinematics.joints))))[lidar.link][0]
     yaw = math.atan2(mount[1, 0], mount[0, 0])
     c = robot.config
     return SafetyFilter(config, c.footprint_radius, c.max_linear_speed, c.max_angular_speed,

@@ -10,7 +10,8 @@ from clutter_gym.core import ClutterEnv, collision_checker
 from clutter_gym.make_checks import check_env_settings, check_flags, check_numbers
 from clutter_gym.noise.profiles import NoiseProfile, resolve_noise
 from clutter_gym.planning.joint_space import ArmPlanner
-from clutter_gym.robots.panda import EE_ROW, LOWER, READY, TRACKED_LINKS, UPPER, PandaArm, PandaConfig
+from clutter_gym.robots.panda import EE_ROW, LOWER, READY, TRACKED_LINKS, UPPER, PandaConfig
+from clutter_gym.robots.registry import resolve_robot
 from clutter_gym.tasks import ReachRewardWeights, ReachTask
 from clutter_gym.worlds import TableSpec, TabletopArena
 
@@ -90,6 +91,7 @@ class ClutterReachEnv(ClutterEnv):
 
     ## Arguments
 
+    ``robot`` (a registered arm: ``"panda"``; docs/robots.md);
     ``render_mode``; ``control`` ("joint_velocity", "ee_position"); ``max_joint_speed`` (0, 1];
     ``max_ee_step`` m; ``collision_fidelity`` (one of ``FIDELITY_LEVELS``: docs/collision.md);
     ``collision_padding`` m; ``self_collision``; ``n_obstacles`` [0, 20]; ``movable_obstacles`` fraction [0, 1]
@@ -147,6 +149,7 @@ class ClutterReachEnv(ClutterEnv):
         tunneling_weight: float = 1.0,
         control_weight: float = 0.005,
         subgoal_lookahead: float = 0.0,
+        robot: str = "panda",
     ) -> None:
         check_numbers(ClutterReachEnv.__init__, locals())
         check_env_settings(render_mode, physics_hz, control_hz, solver_iterations, contact_tolerance,
@@ -157,7 +160,8 @@ class ClutterReachEnv(ClutterEnv):
             raise ValueError(f"clearance_range must be in [0.01, 2] metres, got {clearance_range!r}")
         if not (swept_speed > 0.0):  # inf allowed: no swept checks
             raise ValueError(f"swept_speed must be > 0 m/s (inf disables swept checks), got {swept_speed!r}")
-        robot = PandaArm(PandaConfig(control, max_joint_speed, max_ee_step), control_dt=1.0 / control_hz)
+        arm = resolve_robot(robot, "arm", "ClutterReach-v0")
+        robot = arm(PandaConfig(control, max_joint_speed, max_ee_step), control_dt=1.0 / control_hz)
         checker = collision_checker(robot, TRACKED_LINKS, collision_fidelity, collision_padding, contact_tolerance,
                                     clearance_range, control_hz, self_collision=self_collision,
                                     swept_speed=swept_speed, fixed_links=(robot.base_link,))

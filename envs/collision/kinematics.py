@@ -44,9 +44,9 @@ class UrdfKinematics:
 
     def __init__(self, urdf: str | Path) -> None:
         root = parse_urdf(Path(urdf))
-        joints = [_joint(j, Path(urdf).name) for j in root.iter("joint")]
+        joints = [_joint(j, Path(urdf).name) for j in root.findall("joint")]
         children = {j.child for j in joints}
-        names = [link.attrib["name"] for link in root.iter("link")]
+        names = [link.attrib["name"] for link in root.findall("link")]
         roots = [n for n in names if n not in children]
         if len(roots) != 1:
             raise ValueError(f"{urdf}: expected one root link, found {roots}")

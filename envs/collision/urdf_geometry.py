@@ -189,7 +189,7 @@ def load_collision_elements(urdf: str | Path) -> list[CollisionElement]:
     urdf = Path(urdf)
     root = parse_urdf(urdf)
     elements = []
-    for link in root.iter("link"):
+    for link in root.findall("link"):
         name = link.attrib.get("name")
         for i, col in enumerate(link.findall("collision")):
             elements.append(_element(col, name, urdf, f"{urdf.name} link {name!r} collision {i}"))

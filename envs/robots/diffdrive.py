@@ -1,24 +1,24 @@
-"""Differential-drive base (assets/robots/diffbot.urdf): two driven wheels, two frictionless casters."""
+"""A velocity-commanded wheeled base: the differential drive of assets/robots/diffbot.urdf (two driven wheels, two
+frictionless casters) by default, or any base a :class:`~clutter_gym.robots.wheeled.WheeledBase` describes."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 from gymnasium import spaces
 
-from clutter_gym.assets import asset_path
 from clutter_gym.noise.dynamics import DynamicsSample
 from clutter_gym.robots.dynamics import scale_link_dynamics
 from clutter_gym.robots.state import RobotState, floating_base_state
+from clutter_gym.robots.wheeled import WheeledBase, diffbot
 from clutter_gym.sim import Sim
 from clutter_gym.util.transforms import quat_to_matrix, yaw_quat
 
-#: Links whose states are read every step: the IMU, the LIDAR (the exact ray caster casts from its frame) and every
-#: link with collision geometry.
-TRACKED_LINKS = ("left_wheel", "right_wheel", "front_caster", "rear_caster", "imu_link", "lidar_link")
-CHASSIS_CENTRE_HEIGHT = 0.025  # metres above the base frame (the wheel axle), as in the URDF
+#: The diffbot's links whose states are read every step: the IMU, the LIDAR (the exact ray caster casts from its frame)
+#: and every link with collision geometry.
+TRACKED_LINKS = diffbot().tracked_links
 
 
 @dataclass(frozen=True)
@@ -32,6 +32,8 @@ class DiffDriveConfig:
         wheel_radius: metres; must match the URDF.
         wheel_separation: distance between the wheel contact centres, metres; must match the URDF.
         footprint_radius: radius of the circle that encloses the robot seen from above, metres.
+
+    The last four are the diffbot's; a robot on another base takes them from its :class:`WheeledBase`.
     """
 
     max_linear_speed: float = 0.5
@@ -60,12 +62,13 @@ class DiffDriveRobot:
     still robot creep (docs/design-notes.md#standing-still).
     """
 
-    name = "diffbot"
-    base_link = "base_link"
-    urdf = "robots/diffbot.urdf"
-
-    def __init__(self, config: DiffDriveConfig | None = None) -> None:
-        self.config = config or DiffDriveConfig()
+    def __init__(self, config: DiffDriveConfig | None = None, base: WheeledBase | None = None) -> None:
+        self.base = base or diffbot()
+        b = self.base
+        self.name, self.base_link = b.name, b.base_link
+        self.config = replace(config or DiffDriveConfig(), wheel_radius=b.wheel_radius,
+                              wheel_separation=b.wheel_separation, footprint_radius=b.footprint_radius,
+                              max_wheel_torque=b.max_wheel_torque)
         self.action_space = spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
         c = self.config
         self.velocity_bound = np.array([2.0 * c.max_linear_speed, 2.0 * c.max_angular_speed], dtype=np.float32)
@@ -77,7 +80,7 @@ class DiffDriveRobot:
 
     @property
     def urdf_path(self) -> Path:
-        return asset_path(self.urdf)
+        return self.base.urdf
 
     @property
     def body(self) -> int:
@@ -85,12 +88,12 @@ class DiffDriveRobot:
 
     @property
     def wheel_joints(self) -> list[int]:
-        """pybullet joint indices of the (left, right) wheels."""
+        """pybullet joint indices of the wheels, the left ones first."""
         return list(self._wheels)
 
     @property
     def tracked_links(self) -> list[int]:
-        """pybullet link indices read every step, in the order of ``TRACKED_LINKS``."""
+        """pybullet link indices read every step, in the order of the base's ``tracked_links``."""
         return list(self._tracked)
 
     def load(self, sim: Sim) -> int:
@@ -100,13 +103,15 @@ class DiffDriveRobot:
         self._hold = None
         sim.hide_from_rays(self._body)
         joints = sim.joint_indices(self._body)
-        self._wheels = [joints["left_wheel_joint"], joints["right_wheel_joint"]]
+        b = self.base
+        self._wheels = [joints[name] for name in (*b.left_wheels, *b.right_wheels)]
+        self._n_left = len(b.left_wheels)
         self.link_index = sim.link_indices(self._body)
-        self.link_names = TRACKED_LINKS
-        self._tracked = tuple(self.link_index[name] for name in TRACKED_LINKS)
+        self.link_names = b.tracked_links
+        self._tracked = tuple(self.link_index[name] for name in b.tracked_links)
         self._com_offset = sim.base_inertial_offset(self._body)
-        c = self.config
-        self._torques = [c.max_wheel_torque, c.max_wheel_torque]
+        self._torques = [self.config.max_wheel_torque] * len(self._wheels)
+        self._still = [0.0] * len(self._wheels)
         links = [-1, *sorted(self.link_index.values())]
         self._nominal = dict(zip(links, sim.inertial_properties(self._body, links)))
         self._dynamics = DynamicsSample()
@@ -118,7 +123,7 @@ class DiffDriveRobot:
         if sample == self._dynamics:
             return
         scale_link_dynamics(self._sim, self._body, self._nominal, sample)
-        self._torques = [self.config.max_wheel_torque * sample.motor_scale] * 2
+        self._torques = [self.config.max_wheel_torque * sample.motor_scale] * len(self._wheels)
         self._dynamics = sample
 
     def reset_to(self, start: tuple[float, float, float]) -> None:
@@ -128,12 +133,12 @@ class DiffDriveRobot:
     def reset_pose(self, x: float, y: float, yaw: float) -> None:
         """Place the robot at rest on the floor at (x, y) with heading ``yaw`` (rad), wheels stopped."""
         q = yaw_quat(yaw)
-        com = np.array([x, y, self.config.wheel_radius]) + quat_to_matrix(np.array(q)) @ self._com_offset
+        com = np.array([x, y, self.base.base_height]) + quat_to_matrix(np.array(q)) @ self._com_offset
         self._sim.set_pose(self._body, com, q)
         self._sim.forget_contacts(self._body)  # the same seed must not warm-start from the last episode
         self._sim.reset_joints(self._body, self._wheels)
         self._release()
-        self._sim.set_joint_velocities(self._body, self._wheels, [0.0, 0.0], self._torques)
+        self._sim.set_joint_velocities(self._body, self._wheels, self._still, self._torques)
 
     def _release(self) -> None:
         """End a standstill hold (if any): the wheels go back to velocity control with re-anchored friction."""
@@ -150,13 +155,15 @@ class DiffDriveRobot:
             if self._hold is None:
                 self._hold = self._sim.joint_states(self._body, self._wheels)[0].tolist()
                 self._sim.set_friction_anchors(self._body, self._wheels, True)
-            self._sim.set_joint_positions(self._body, self._wheels, self._hold, [0.0, 0.0], self._torques)
+            self._sim.set_joint_positions(self._body, self._wheels, self._hold, self._still, self._torques)
             return
         self._release()
         half = 0.5 * c.wheel_separation
         left = (v - w * half) / c.wheel_radius
         right = (v + w * half) / c.wheel_radius
-        self._sim.set_joint_velocities(self._body, self._wheels, [left, right], self._torques)
+        n = self._n_left
+        self._sim.set_joint_velocities(self._body, self._wheels, [left] * n + [right] * (len(self._wheels) - n),
+                                       self._torques)
 
     def state(self) -> RobotState:
         """Ground-truth state from batched pybullet reads."""
@@ -165,7 +172,7 @@ class DiffDriveRobot:
 
     def render_focus(self, state: RobotState) -> tuple[np.ndarray, float]:
         """The chassis centre (world frame, metres) and its footprint radius: what the ``rgb_array`` view rings."""
-        return state.position + state.rotation[:, 2] * CHASSIS_CENTRE_HEIGHT, self.config.footprint_radius
+        return state.position + state.rotation[:, 2] * self.base.focus_height, self.config.footprint_radius
 
     def observe(self, state: RobotState) -> dict[str, np.ndarray]:
         """``velocity``: (forward speed m/s, yaw rate rad/s) in the base frame, clipped to twice the commanded

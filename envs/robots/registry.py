@@ -1,0 +1,116 @@
+"""Robots by name: each env takes ``robot=`` a registered name, a spec mapping, or the path of a YAML spec file.
+
+A robot has a kind, and a task takes the kinds it can drive: ClutterNav-v0 a wheeled base (``diff_drive``),
+ClutterReach-v0 a fixed-base arm (``arm``), ClutterFly-v0 a multirotor (``multirotor``). Registering a robot of a
+known kind takes a name and a spec (or a function that makes the robot's model); a user's robot of a known kind
+needs no Python at all: ``robot={"kind": "diff_drive", "urdf": ..., ...}`` or ``robot="my_robot.yaml"``.
+Specs of the kinds ``arm`` and ``multirotor`` are not read yet: those envs take their registered robot only.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import pybullet_data
+import yaml
+
+from clutter_gym.robots.panda import PandaArm
+from clutter_gym.robots.quadrotor import Quadrotor
+from clutter_gym.robots.wheeled import diffbot, wheeled_base_from_spec
+
+#: What each kind is, in words, for error messages.
+KINDS = {"diff_drive": "wheeled base", "arm": "fixed-base arm", "multirotor": "multirotor"}
+#: The kinds whose robots a spec (a mapping or a YAML file) can describe, and the reader of each.
+SPEC_READERS: dict[str, Callable[[Mapping[str, Any], str, Path | None], Any]] = {"diff_drive": wheeled_base_from_spec}
+
+
+@dataclass(frozen=True)
+class RobotEntry:
+    """A registered robot: its ``kind`` and ``make()``, which gives what the kind's env builds the robot from."""
+
+    kind: str
+    make: Callable[[], Any]
+
+
+_ROBOTS: dict[str, RobotEntry] = {}
+
+
+def register_robot(name: str, kind: str, make: Callable[[], Any] | Mapping[str, Any]) -> None:
+    """Register ``name`` as a robot of ``kind``: ``make`` is a spec mapping (kinds in :data:`SPEC_READERS`), or a
+    function that returns the kind's model.
+
+    Raises:
+        ValueError: the name is taken, or the kind unknown.
+    """
+    if kind not in KINDS:
+        raise ValueError(f"robot kind must be one of {list(KINDS)}, got {kind!r}")
+    if name in _ROBOTS:
+        raise ValueError(f"a robot named {name!r} is already registered (a {KINDS[_ROBOTS[name].kind]})")
+    if isinstance(make, Mapping):
+        spec = dict(make)
+        make = lambda: SPEC_READERS[kind](spec, f"robot {name!r}", None)  # noqa: E731  (read on first use)
+    _ROBOTS[name] = RobotEntry(kind, make)
+
+
+def registered(kind: str | None = None) -> list[str]:
+    """The registered robot names (of ``kind``), in registration order."""
+    return [name for name, entry in _ROBOTS.items() if kind is None or entry.kind == kind]
+
+
+def resolve_robot(robot: str | Path | Mapping[str, Any], kind: str, env_id: str) -> Any:
+    """What ``robot`` (a registered name, a spec mapping, or a YAML spec file's path) describes, as the model of
+    ``kind`` the env ``env_id`` builds its robot from.
+
+    Raises:
+        ValueError: an unknown name, a robot of another kind, or a bad spec; the message lists the registered robots
+            the env takes.
+    """
+    takes = f"{env_id} takes a {KINDS[kind]}: robot= one of {registered(kind)}"
+    if kind in SPEC_READERS:
+        takes += f", or a spec with kind {kind!r}"
+    where = "robot"
+    folder = None
+    if isinstance(robot, (str, Path)) and Path(robot).suffix in (".yaml", ".yml"):
+        path = Path(robot).expanduser()
+        if not path.is_file():
+            raise ValueError(f"robot spec file {str(path)!r} not found; {takes}")
+        try:
+            robot = yaml.safe_load(path.read_text())
+        except yaml.YAMLError as error:
+            raise ValueError(f"robot spec file {path} is not valid YAML: {error}") from None
+        where, folder = f"robot spec {path}", path.parent
+        if not isinstance(robot, Mapping):
+            raise ValueError(f"{where}: expected a mapping of keys, got {type(robot).__name__}")
+    if isinstance(robot, Mapping):
+        spec_kind = robot.get("kind")
+        if spec_kind != kind:
+            raise ValueError(f"{where}: kind {spec_kind!r} does not fit; {takes}")
+        if kind not in SPEC_READERS:
+            raise ValueError(f"{where}: specs of kind {kind!r} are not read yet (only {list(SPEC_READERS)}); {takes}")
+        return SPEC_READERS[kind](robot, where, folder)
+    if not isinstance(robot, str) or robot not in _ROBOTS:
+        raise ValueError(f"unknown robot {robot!r}; {takes}")
+    entry = _ROBOTS[robot]
+    if entry.kind != kind:
+        raise ValueError(f"robot {robot!r} is a {KINDS[entry.kind]}; {takes}")
+    return entry.make()
+
+
+register_robot("diffbot", "diff_drive", diffbot)
+register_robot("panda", "arm", lambda: PandaArm)  # the arm and the flyer: their classes, made with the env's config
+register_robot("quadrotor", "multirotor", lambda: Quadrotor)
+# Clearpath Husky A200 from pybullet_data: a 50 kg skid-steer base, 0.99 x 0.67 m. The LIDAR sits 0.2 m over the
+# top plate's front, the IMU and the camera where a user would bolt them; the motors' limit is about what the
+# real base's 1 m/s and 2 rad/s need.
+register_robot("husky", "diff_drive", {
+    "urdf": str(Path(pybullet_data.getDataPath()) / "husky" / "husky.urdf"),
+    "name": "husky",
+    "left_wheels": ["front_left_wheel", "rear_left_wheel"],
+    "right_wheels": ["front_right_wheel", "rear_right_wheel"],
+    "max_wheel_torque": 20.0,
+    "mounts": {"lidar_link": {"parent": "base_link", "xyz": [0.25, 0.0, 0.45]},
+               "camera_link": {"parent": "base_link", "xyz": [0.45, 0.0, 0.35]}},
+})

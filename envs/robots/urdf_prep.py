@@ -1,0 +1,126 @@
+"""A robot's URDF made ready for an env: sensor links added where the robot's spec mounts them, xacro leftovers
+resolved, and links without mass given a token one, written once into the user cache.
+
+URDFs from other projects rarely carry the links an env's sensors sit on (ClutterNav's LIDAR casts from
+``lidar_link``), some keep unexpanded ``$(optenv NAME default)`` substitutions from xacro (pybullet_data's Husky
+does), and pybullet gives every link without an ``<inertial>`` 1 kg (six phantom kilograms on the Husky). The
+prepared copy fixes exactly those three things and nothing else: it adds a massless fixed link per sensor mount,
+takes each ``optenv``'s default (never the environment: a URDF must not change with a shell variable), and gives
+mass-less links 1 g. The meshes it names by relative paths are copied beside it, so its text, and with it the
+cache key of everything derived from it (the allowed-collision matrix), is the same on every machine.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import re
+import shutil
+import xml.etree.ElementTree as ET
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+from clutter_gym.collision.urdf_geometry import parse_urdf
+from clutter_gym.util.atomic import atomic_path, write_text_atomically
+
+#: kg of a link the URDF gives no mass (pybullet's default would be 1 kg)
+TOKEN_MASS = 1e-3
+_OPTENV = re.compile(r"\$\(optenv\s+\S+\s*([^)]*)\)")
+
+
+@dataclass(frozen=True)
+class Mount:
+    """A sensor link to add: ``name`` on ``parent`` at ``xyz`` (metres) and ``rpy`` (radians) in its frame."""
+
+    name: str
+    parent: str
+    xyz: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    rpy: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+
+def user_cache_dir(what: str) -> Path:
+    """``$XDG_CACHE_HOME/clutter-gym/<what>`` (default ``~/.cache/clutter-gym/<what>``)."""
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "clutter-gym" / what
+
+
+def prepared_urdf(source: str | Path, name: str, mounts: tuple[Mount, ...] = ()) -> Path:
+    """The prepared copy of ``source`` (see the module docstring), made on first use.
+
+    Raises:
+        ValueError: the URDF cannot be parsed, a mount names a parent link the URDF does not have or a link it
+            already has, or a mesh it names is missing (each message names the URDF and what it offers).
+    """
+    source = Path(source)
+    root = parse_urdf(source)
+    links = [link.get("name") for link in root.findall("link")]
+    for mount in mounts:
+        if mount.parent not in links:
+            raise ValueError(f"{source}: no link {mount.parent!r} to mount {mount.name!r} on; its links: {links}")
+        if mount.name in links:
+            raise ValueError(f"{source}: already has a link {mount.name!r}; mount the sensor on it instead")
+    text = _prepared_text(root, mounts)
+    meshes = sorted({m.get("filename") for m in root.iter("mesh") if _relative(m.get("filename", ""))})
+    digest = hashlib.sha256(text.encode())
+    for mesh in meshes:
+        path = source.parent / mesh
+        if not path.is_file():
+            raise ValueError(f"{source}: mesh {mesh!r} not found at {path}")
+        digest.update(mesh.encode() + path.read_bytes())
+    folder = user_cache_dir("robots") / f"{name}-{digest.hexdigest()[:16]}"
+    target = folder / f"{name}.urdf"
+    if not target.is_file():
+        for mesh in meshes:  # each file whole or not at all: another process may be loading the same copy
+            with atomic_path(folder / mesh) as tmp:
+                shutil.copyfile(source.parent / mesh, tmp)
+        write_text_atomically(target, text)  # last: the URDF's presence says its meshes are there
+    return target
+
+
+def _relative(filename: str) -> bool:
+    return bool(filename) and "://" not in filename and not Path(filename).is_absolute()
+
+
+def _prepared_text(root: ET.Element, mounts: tuple[Mount, ...]) -> str:
+    for element in root.iter():
+        for key, value in element.attrib.items():
+            if "$(" in value:
+                element.set(key, _OPTENV.sub(lambda match: match.group(1).strip(), value))
+    for mount in mounts:
+        ET.SubElement(root, "link", name=mount.name)
+        joint = ET.SubElement(root, "joint", name=f"{mount.name}_joint", type="fixed")
+        ET.SubElement(joint, "parent", link=mount.parent)
+        ET.SubElement(joint, "child", link=mount.name)
+        ET.SubElement(joint, "origin", xyz=" ".join(map(repr, mount.xyz)), rpy=" ".join(map(repr, mount.rpy)))
+    for link in root.findall("link"):
+        if link.find("inertial") is None:
+            inertial = ET.SubElement(link, "inertial")
+            ET.SubElement(inertial, "mass", value=f"{TOKEN_MASS}")
+            ET.SubElement(inertial, "inertia", ixx="1e-7", iyy="1e-7", izz="1e-7", ixy="0", ixz="0", iyz="0")
+    return ET.tostring(root, encoding="unicode")
+
+
+def mounts_from(mapping: Mapping[str, object], where: str) -> tuple[Mount, ...]:
+    """Mounts from a spec's ``mounts`` mapping: ``{sensor link: {"parent": link, "xyz": [...], "rpy": [...]}}``."""
+    out = []
+    for link, entry in mapping.items():
+        if not isinstance(entry, Mapping) or "parent" not in entry:
+            raise ValueError(f"{where}: mounts.{link} must be a mapping with a 'parent' link, got {entry!r}")
+        unknown = set(entry) - {"parent", "xyz", "rpy"}
+        if unknown:
+            raise ValueError(f"{where}: mounts.{link} has unknown keys {sorted(unknown)}; allowed: parent, xyz, rpy")
+        xyz = _triple(entry.get("xyz", (0, 0, 0)), f"{where}: mounts.{link}.xyz")
+        out.append(Mount(str(link), str(entry["parent"]), xyz, _triple(entry.get("rpy", (0, 0, 0)),
+                                                                       f"{where}: mounts.{link}.rpy")))
+    return tuple(out)
+
+
+def _triple(value: object, where: str) -> tuple[float, float, float]:
+    try:
+        numbers = tuple(float(v) for v in value)  # type: ignore[union-attr]
+    except (TypeError, ValueError):
+        numbers = ()
+    if len(numbers) != 3 or not all(abs(v) < 1e3 for v in numbers):
+        raise ValueError(f"{where} must be 3 finite numbers (metres or radians, below 1000), got {value!r}")
+    return numbers  # type: ignore[return-value]
