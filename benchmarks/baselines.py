@@ -134,6 +134,7 @@ def main() -> None:
                              "ClutterReach)")
     parser.add_argument("--profiles", nargs="+", default=["none", "nominal", "harsh"])
     parser.add_argument("--out", default=None, help="folder for baselines.md and .json (default out/baselines/ENV)")
+    parser.add_argument("--robot", default=None, help="a registered robot (or spec file) for the scripted rows")
     parser.add_argument("--no-scripted", action="store_true",
                         help="only the --run rows (to add a row to a table: every row runs the same layouts)")
     args = parser.parse_args()
@@ -142,7 +143,9 @@ def main() -> None:
     levels = [kind(level) for level in args.levels] if args.levels else table["levels"]
     rows: list[tuple[str, str, Any]] = [
         (name, "-", lambda c, p, extra=extra, make=make: scripted_cell(args.env, extra, make, c, p, args.episodes))
-        for name, extra, make in ([] if args.no_scripted else table["scripted"])
+        for name, extra, make in ([] if args.no_scripted else [
+            (name, {**extra, **({"robot": args.robot} if args.robot else {})}, make)
+            for name, extra, make in table["scripted"]])
     ]
     for spec in args.run:
         name, _, run_dir = spec.partition("=")
@@ -162,8 +165,9 @@ def main() -> None:
             print(f"{name} | {knob} {level} | {profile}: {texts[-1]} ({time.perf_counter() - t0:.0f} s)",
                   flush=True)
         lines.append(f"| {name} | {trained} | " + " | ".join(texts) + " |")
-    note = (f"\n{args.env}. Success / collision episodes, {args.episodes} episodes per cell (seeds {EVAL_SEED}..), "
-            "95% Wilson intervals in brackets. A collision episode is one with any contact.\n")
+    robot = f" with robot {args.robot!r} (scripted rows)" if args.robot else ""
+    note = (f"\n{args.env}{robot}. Success / collision episodes, {args.episodes} episodes per cell "
+            f"(seeds {EVAL_SEED}..), 95% Wilson intervals in brackets. A collision episode is one with any contact.\n")
     out = Path(args.out or f"out/baselines/{args.env}")
     write_text_atomically(out / "baselines.md", "\n".join(lines) + "\n" + note)
     write_text_atomically(out / "baselines.json", json.dumps(results, indent=2))

@@ -22,12 +22,12 @@ import subprocess
 import sys
 import tempfile
 import time
-import tomllib
 import warnings
 from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
+import tomllib
 
 import clutter_gym  # noqa: F401  (registers the envs)
 from benchmarks.harness import alternating_rounds, run_block, table_header

@@ -207,7 +207,6 @@ class ClutterNavEnv(ClutterEnv):
         check_flags(terminate_on_collision=terminate_on_collision, reverse=reverse, observe_bearing=observe_bearing)
         self.forward_only = not reverse  # the linear action maps onto stand..full speed (see _command)
         base = resolve_robot(robot, "diff_drive", "ClutterNav-v0")
-        _check_sensor_links(sensors, base)
         robot = DiffDriveRobot(DiffDriveConfig(max_linear_speed=max_linear_speed, max_angular_speed=max_angular_speed),
                                base)
         spec = ClutterSpec(arena_size=arena_size, obstacle_density=obstacle_density,
@@ -217,6 +216,7 @@ class ClutterNavEnv(ClutterEnv):
         camera = camera_config(camera_size, camera_modes, camera_fov, camera_far, camera_renderer)
         profile = resolve_noise(noise)
         sensor_objects = build_sensors(sensors, profile, lidar, ImuConfig(dt=1.0 / control_hz), camera)
+        _check_sensor_links(sensors, base)
         task = NavigateTask(
             NavRewardWeights(progress_weight, success_weight, contact_weight, clearance_weight, control_weight,
                              time_weight, reverse_weight),

@@ -8,6 +8,11 @@ from collections.abc import Mapping
 import gymnasium as gym
 import numpy as np
 
+from clutter_gym.robots.wheeled import diffbot
+
+#: metres: the footprint of the base the potential field's influence distance was tuned on
+DIFFBOT_FOOTPRINT = diffbot().footprint_radius
+
 
 class PotentialFieldNavigator:
     """Goal attraction plus LIDAR repulsion (Khatib-style potential field) for ClutterNav.
@@ -64,7 +69,10 @@ class PotentialFieldNavigator:
         forward_only = bool(getattr(env.unwrapped, "forward_only", False))
         if lidar is None:
             return cls(None, 1.0, goal_key=goal_key, forward_only=forward_only)
-        return cls(lidar.config.angles, lidar.config.max_range, goal_key=goal_key, forward_only=forward_only)
+        # obstacles repel from the same gap beyond the footprint as for the diffbot the field was tuned on
+        influence = 0.5 + (env.unwrapped.robot.config.footprint_radius - DIFFBOT_FOOTPRINT)
+        return cls(lidar.config.angles, lidar.config.max_range, influence=influence, goal_key=goal_key,
+                   forward_only=forward_only)
 
     def __call__(self, obs: Mapping[str, np.ndarray]) -> np.ndarray:
         sin_b, cos_b = (float(v) for v in obs[self.goal_key][1:3])

@@ -102,15 +102,15 @@ def resolve_robot(robot: str | Path | Mapping[str, Any], kind: str, env_id: str)
 register_robot("diffbot", "diff_drive", diffbot)
 register_robot("panda", "arm", lambda: PandaArm)  # the arm and the flyer: their classes, made with the env's config
 register_robot("quadrotor", "multirotor", lambda: Quadrotor)
-# Clearpath Husky A200 from pybullet_data: a 50 kg skid-steer base, 0.99 x 0.67 m. The LIDAR sits 0.2 m over the
-# top plate's front, the IMU and the camera where a user would bolt them; the motors' limit is about what the
-# real base's 1 m/s and 2 rad/s need.
+# Clearpath Husky A200 from pybullet_data: a 44 kg skid-steer base, 1.0 x 0.69 m. The LIDAR sits at the front
+# bumper's edge, 0.35 m above the floor (below the generated clutter's 0.5 m tops, which a scan from the top
+# plate would pass over), the camera above it; the URDF has its own IMU link.
 register_robot("husky", "diff_drive", {
     "urdf": str(Path(pybullet_data.getDataPath()) / "husky" / "husky.urdf"),
     "name": "husky",
     "left_wheels": ["front_left_wheel", "rear_left_wheel"],
     "right_wheels": ["front_right_wheel", "rear_right_wheel"],
     "max_wheel_torque": 20.0,
-    "mounts": {"lidar_link": {"parent": "base_link", "xyz": [0.25, 0.0, 0.45]},
-               "camera_link": {"parent": "base_link", "xyz": [0.45, 0.0, 0.35]}},
+    "mounts": {"lidar_link": {"parent": "base_link", "xyz": [0.5, 0.0, 0.2]},
+               "camera_link": {"parent": "base_link", "xyz": [0.5, 0.0, 0.3]}},
 })

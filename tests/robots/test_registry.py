@@ -12,7 +12,7 @@ import pybullet_data
 import pytest
 
 from clutter_gym.assets import asset_path
-from clutter_gym.robots.registry import registered, resolve_robot
+from clutter_gym.robots.registry import registered
 from clutter_gym.robots.urdf_prep import TOKEN_MASS, Mount, prepared_urdf
 from clutter_gym.robots.wheeled import diffbot, wheeled_base_from_spec
 from clutter_gym.util.quiet import quiet_c_output
@@ -222,3 +222,16 @@ def test_fcl_and_pybullet_agree_on_the_huskys_clearance(fidelity):
     env.close()
     assert len(gaps) > 100
     assert np.max(np.abs(gaps)) < 1e-3
+
+
+def test_the_huskys_lidar_reads_a_box_ahead_at_its_true_range():
+    """Mounted at the front bumper (0.5 m ahead of the base, 0.345 m up), below the clutter's 0.5 m tops: a box face
+    2.0 m ahead of the base reads 1.5 m on the forward beam (a scan from the top plate would pass over it)."""
+    env = gym.make("ClutterNav-v0", robot="husky")
+    box = {"shape": "box", "size": [0.2, 1.0, 0.5], "position": [2.1, 0.0]}
+    _, info = env.reset(seed=0, options={"scene": {"obstacles": [box], "start": [0.0, 0.0, 0.0], "goal": [-2.0, 0.0]}})
+    lidar = env.unwrapped.sensors[0]
+    forward = int(np.argmin(np.abs(lidar.config.angles)))
+    assert lidar.config.angles[forward] == 0.0
+    assert info["lidar_ranges"][forward] == pytest.approx(1.5, abs=1e-6)
+    env.close()
