@@ -37,7 +37,7 @@ import numpy as np
 
 import clutter_gym  # noqa: F401  (registers the envs)
 from benchmarks.harness import alternating_rounds, table_header
-from clutter_gym.clutter_fly import GRAVITY
+from clutter_gym.sim import GRAVITY
 from clutter_gym.training.baselines import CascadedFlyer
 
 SETTINGS: tuple[tuple[str, ...], ...] = ((), ("drag",), ("ground_effect",), ("drag", "ground_effect"))

@@ -17,6 +17,7 @@ from clutter_gym.robots.quadrotor import TRACKED_LINKS
 from clutter_gym.robots.registry import resolve_robot
 from clutter_gym.robots.rigid_body import RigidBody
 from clutter_gym.sensors import ImuConfig, LidarConfig, build_sensors, camera_config
+from clutter_gym.sim import GRAVITY
 from clutter_gym.tasks import FlyRewardWeights, FlyTask
 from clutter_gym.util.checks import is_number
 from clutter_gym.worlds import VolumeArena, VolumeSpec
@@ -29,8 +30,6 @@ OPENING_SIZE, OPENING_SHARE = (0.8, 1.6), (0.4, 0.8)
 #: Hz, the lowest physics rate: the body-rate loop runs once per tick behind the motors' lag, and below it the loop
 #: overshoots and no longer brings the airframe back level (docs/envs.md, "Physics rate").
 MIN_PHYSICS_HZ = 60.0
-#: m/s^2, the Sim's gravity: the hover action the control term is measured from.
-GRAVITY = 9.81
 #: metres: clearance is resolved this far (or to ``clearance_margin``, if larger); farther reads this. The reward
 #: needs only the margin, and resolving the whole volume asked FCL about every shape and obstacle pair each step
 #: (docs/quadrotor.md, "Throughput").

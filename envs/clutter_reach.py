@@ -10,7 +10,7 @@ from clutter_gym.core import ClutterEnv, collision_checker
 from clutter_gym.make_checks import check_env_settings, check_flags, check_numbers
 from clutter_gym.noise.profiles import NoiseProfile, resolve_noise
 from clutter_gym.planning.joint_space import ArmPlanner
-from clutter_gym.robots.panda import EE_ROW, LOWER, READY, TRACKED_LINKS, UPPER, PandaConfig
+from clutter_gym.robots.arm import ArmConfig
 from clutter_gym.robots.registry import resolve_robot
 from clutter_gym.tasks import ReachRewardWeights, ReachTask
 from clutter_gym.worlds import TableSpec, TabletopArena
@@ -161,14 +161,15 @@ class ClutterReachEnv(ClutterEnv):
         if not (swept_speed > 0.0):  # inf allowed: no swept checks
             raise ValueError(f"swept_speed must be > 0 m/s (inf disables swept checks), got {swept_speed!r}")
         arm = resolve_robot(robot, "arm", "ClutterReach-v0")
-        robot = arm(PandaConfig(control, max_joint_speed, max_ee_step), control_dt=1.0 / control_hz)
-        checker = collision_checker(robot, TRACKED_LINKS, collision_fidelity, collision_padding, contact_tolerance,
-                                    clearance_range, control_hz, self_collision=self_collision,
-                                    swept_speed=swept_speed, fixed_links=(robot.base_link,))
+        robot = arm(ArmConfig(control, max_joint_speed, max_ee_step), control_dt=1.0 / control_hz)
+        model = robot.model
+        checker = collision_checker(robot, model.tracked_links, collision_fidelity, collision_padding,
+                                    contact_tolerance, clearance_range, control_hz, self_collision=self_collision,
+                                    swept_speed=swept_speed, fixed_links=(robot.base_link, *model.fixed_links))
         task = ReachTask(
             ReachRewardWeights(progress_weight, success_weight, contact_weight, self_contact_weight, clearance_weight,
                                tunneling_weight, control_weight),
-            ee_row=EE_ROW,
+            ee_row=model.ee_row,
             links=checker.links,
             success_radius=success_radius,
             clearance_margin=clearance_margin,
@@ -177,14 +178,14 @@ class ClutterReachEnv(ClutterEnv):
             observe_directions=observe_directions,
             observe_offset=observe_target_offset,
             subgoal_lookahead=subgoal_lookahead,
-            make_planner=lambda: ArmPlanner(SUBGOAL_MARGIN + collision_padding, collision_fidelity),
+            make_planner=lambda: ArmPlanner(SUBGOAL_MARGIN + collision_padding, collision_fidelity, model),
         )
         super().__init__(
             physics_hz=physics_hz,
             solver_iterations=solver_iterations,
             robot=robot,
             arena=TabletopArena(TableSpec(n_obstacles=n_obstacles, shelf=bool(shelf), movable_fraction=movable_obstacles),
-                                READY, LOWER, UPPER),
+                                model.ready, model.lower, model.upper, model.shoulder, model.reach),
             sensors=(),
             checker=checker,
             task=task,

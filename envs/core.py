@@ -216,15 +216,7 @@ class ClutterEnv(gym.Env):
             cost=outcome.cost,
             **{f"cost_{cause}": value for cause, value in outcome.costs.items()},
             is_success=outcome.is_success,
-            min_clearance=report.min_clearance,
-            closest_pair=report.closest,
-            witness_points=report.witness,
-            n_contacts=report.n_contacts,
-            max_penetration=max((c.depth for c in report.contacts), default=0.0),
-            self_collision=report.self_collision,
-            tunneling=report.tunneling,
-            pybullet_contacts=report.pybullet_contacts,
-            contact_disagreement=report.disagreement,
+            **report.as_info(),
         )
         if self.safety:
             info["safety_scale"] = speed_scale

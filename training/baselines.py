@@ -171,6 +171,9 @@ class ProximityFieldReacher:
         config = getattr(env.unwrapped.robot, "config", None)
         if getattr(config, "control", None) != "joint_velocity":
             raise ValueError("ProximityFieldReacher needs a ClutterReach env with control='joint_velocity'")
+        if env.unwrapped.robot.name != "panda":
+            raise ValueError(f"ProximityFieldReacher pushes on the Panda's links; the env drives "
+                             f"{env.unwrapped.robot.name!r} (JointPlannerReacher plans for any arm)")
         if "clearance_direction" not in env.observation_space.spaces:
             raise ValueError("ProximityFieldReacher needs a ClutterReach env made with observe_directions=True")
         return cls(config.max_joint_speed, **gains)
@@ -260,8 +263,8 @@ class CascadedFlyer:
     @classmethod
     def nominal(cls, goal_key: str = "subgoal", **gains: float) -> CascadedFlyer:
         """Configured for ClutterFly's quadrotor as every ClutterFly env builds it (no env needed)."""
-        from clutter_gym.clutter_fly import GRAVITY
         from clutter_gym.robots import Quadrotor
+        from clutter_gym.sim import GRAVITY
 
         return cls._for_robot(Quadrotor(), GRAVITY, goal_key, **gains)
 

@@ -39,7 +39,7 @@ class JointPlannerReacher:
         if getattr(config, "control", None) != "joint_velocity":
             raise ValueError("JointPlannerReacher needs a ClutterReach env made with control='joint_velocity'")
         self.env = base
-        self.planner = ArmPlanner(margin, fidelity)
+        self.planner = ArmPlanner(margin, fidelity, base.robot.model)
         self.rng = np.random.default_rng(seed)
         self.speed = base.robot.speed * base.robot.control_dt  # rad per step at an action of 1
         self._scene = None
@@ -59,7 +59,7 @@ class JointPlannerReacher:
         if self.env.scene is not self._scene:
             self._new_episode()
         if self.reference is None:
-            return np.zeros(7, dtype=np.float32)
+            return np.zeros(self.planner.n_joints, dtype=np.float32)
         self._k = min(self._k + 1, len(self.reference) - 1)
         q = np.asarray(obs["joint_position"], dtype=float)
         return np.clip((self.reference[self._k] - q) / self.speed, -1.0, 1.0).astype(np.float32)

@@ -58,6 +58,20 @@ class CollisionReport:
     def n_contacts(self) -> int:
         return len(self.contacts)
 
+    def as_info(self) -> dict[str, object]:
+        """The report's entries of a step's ``info`` (docs/envs.md lists them)."""
+        return {
+            "min_clearance": self.min_clearance,
+            "closest_pair": self.closest,
+            "witness_points": self.witness,
+            "n_contacts": self.n_contacts,
+            "max_penetration": max((c.depth for c in self.contacts), default=0.0),
+            "self_collision": self.self_collision,
+            "tunneling": self.tunneling,
+            "pybullet_contacts": self.pybullet_contacts,
+            "contact_disagreement": self.disagreement,
+        }
+
     @property
     def in_contact(self) -> bool:
         return bool(self.contacts)

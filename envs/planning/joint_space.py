@@ -18,7 +18,8 @@ import numpy as np
 
 from clutter_gym.collision import CollisionChecker, RobotCollisionModel
 from clutter_gym.collision.kinematics import UrdfKinematics
-from clutter_gym.robots.panda import EE_LINK, FINGER_OPENING, LOWER, TRACKED_LINKS, UPPER, PandaArm
+from clutter_gym.robots.arm_model import ArmModel
+from clutter_gym.robots.panda import panda_model
 from clutter_gym.worlds.scene import Obstacle
 from clutter_gym.worlds.tabletop import TABLE
 
@@ -34,15 +35,16 @@ ATTEMPTS = 2
 
 
 def point_jacobian(kinematics: UrdfKinematics, frames: dict[str, np.ndarray], point: np.ndarray,
-                   moved_by: int = 7) -> np.ndarray:
-    """Position Jacobians (n, 3, 7) of world points ``point`` (n, 3) fixed to a link that the first ``moved_by``
-    arm joints move, at the configurations whose link ``frames`` (from ``kinematics.forward``) are given.
+                   moved_by: int = 7, n_joints: int = 7) -> np.ndarray:
+    """Position Jacobians (n, 3, n_joints) of world points ``point`` (n, 3) fixed to a link that the first
+    ``moved_by`` arm joints move, at the configurations whose link ``frames`` (from ``kinematics.forward``) are
+    given; the arm's joints are the URDF's first ``n_joints`` moving ones.
 
     Column i is joint i's axis in world coordinates crossed with the lever from the joint to the point (a URDF
     child link frame sits on its joint); the columns of the joints beyond ``moved_by`` are zero.
     """
     columns = []
-    for i, joint in enumerate(kinematics.joints[:7]):
+    for i, joint in enumerate(kinematics.joints[:n_joints]):
         f = frames[joint.child]
         moving = np.cross(f[:, :3, :3] @ joint.axis, point - f[:, :3, 3])
         columns.append(moving if i < moved_by else np.zeros_like(moving))
@@ -55,15 +57,17 @@ class ConfigurationChecker:
     Args:
         fidelity: the collision fidelity of the robot's shapes (a ``collision_fidelity`` level).
         margin: least distance from every moving link to every obstacle, metres.
+        arm: the arm (the Panda by default).
     """
 
-    def __init__(self, fidelity: str = "convex", margin: float = 0.02) -> None:
-        arm = PandaArm()
-        self.kinematics = UrdfKinematics(arm.urdf_path)
-        names = (arm.base_link, *TRACKED_LINKS)
-        self.model = RobotCollisionModel.from_urdf(arm.urdf_path, fidelity, names)
+    def __init__(self, fidelity: str = "convex", margin: float = 0.02, arm: ArmModel | None = None) -> None:
+        self.arm = arm = arm or panda_model()
+        self.lower, self.upper, self.n_joints = arm.lower, arm.upper, len(arm.arm_joints)
+        self.kinematics = UrdfKinematics(arm.urdf)
+        names = (arm.base_link, *arm.tracked_links)
+        self.model = RobotCollisionModel.from_urdf(arm.urdf, fidelity, names)
         self.checker = CollisionChecker(self.model, base_link=arm.base_link, clearance_range=margin,
-                                        fixed_links=(arm.base_link,))
+                                        fixed_links=(arm.base_link, *arm.fixed_links))
         self._names = names
         self.margin = margin
         self.checks = 0  # configurations checked since construction (the planner's work)
@@ -73,33 +77,33 @@ class ConfigurationChecker:
         self.checker.set_scene((*obstacles, TABLE), [])
 
     def frames(self, q: np.ndarray) -> dict[str, np.ndarray]:
-        """Link frames (n, 4, 4) of arm configurations ``q`` (n, 7), fingers half open."""
+        """Link frames (n, 4, 4) of arm configurations ``q`` (n, n_joints), fingers (if any) at their opening."""
         q = np.atleast_2d(q)
-        fingers = np.full((len(q), 2), FINGER_OPENING)
+        fingers = np.full((len(q), len(self.arm.finger_joints)), self.arm.finger_opening)
         return self.kinematics.forward(np.concatenate([q, fingers], axis=1))
 
     def ee_positions(self, q: np.ndarray) -> np.ndarray:
-        """End-effector positions (n, 3) of configurations ``q`` (n, 7)."""
-        return self.frames(q)[EE_LINK][:, :3, 3]
+        """End-effector positions (n, 3) of configurations ``q`` (n, n_joints)."""
+        return self.frames(q)[self.arm.ee_link][:, :3, 3]
 
     def ee_jacobian(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """End-effector positions (n, 3) and their position Jacobians (n, 3, 7) at configurations ``q`` (n, 7).
+        """End-effector positions (n, 3) and their position Jacobians (n, 3, n_joints) at configurations ``q``.
 
         Column i is the arm's joint i axis in world coordinates crossed with the lever from the joint to the end
         effector (a URDF child link frame sits on its joint), from the same one FK pass.
         """
         frames = self.frames(q)
-        ee = frames[EE_LINK][:, :3, 3]
-        return ee, point_jacobian(self.kinematics, frames, ee)
+        ee = frames[self.arm.ee_link][:, :3, 3]
+        return ee, point_jacobian(self.kinematics, frames, ee, self.n_joints, self.n_joints)
 
     def clearance(self, q: np.ndarray) -> float:
         """Least distance (metres, negative in penetration, capped at ``margin``) from the moving links of one
-        configuration ``q`` (7,) to the layout."""
+        configuration ``q`` (n_joints,) to the layout."""
         f = self._stacked_frames(np.asarray(q)[None])[0]
         return self._clearance(f)
 
     def free(self, q: np.ndarray, stop_at_first: bool = True) -> np.ndarray:
-        """Per configuration of ``q`` (n, 7): clear of the layout by ``margin`` and free of self-collision.
+        """Per configuration of ``q`` (n, n_joints): clear of the layout by ``margin`` and free of self-collision.
 
         With ``stop_at_first`` the configurations after the first blocked one are reported blocked unchecked
         (an edge is only as good as its worst point).
@@ -125,13 +129,13 @@ class ConfigurationChecker:
 
 def inverse_kinematics(checker: ConfigurationChecker, target: np.ndarray, seeds: np.ndarray,
                        iterations: int = 20, damping: float = 0.05, tolerance: float = 0.005) -> np.ndarray:
-    """Position-only IK from every seed (n, 7) at once towards ``target`` (3,) or one target per seed (n, 3);
-    returns the configurations that converged within ``tolerance`` (m, 7).
+    """Position-only IK from every seed (n, n_joints) at once towards ``target`` (3,) or one target per seed (n, 3);
+    returns the configurations that converged within ``tolerance`` (m, n_joints).
 
     Damped least squares on the analytic Jacobian of the end-effector position, clamped to the joint
     limits after every update; the orientation is free (success in ClutterReach is a position).
     """
-    q = np.clip(np.asarray(seeds, dtype=float), LOWER, UPPER)
+    q = np.clip(np.asarray(seeds, dtype=float), checker.lower, checker.upper)
     for _ in range(iterations):
         q = _dls_step(checker, q, target, damping)
     error = np.linalg.norm(checker.ee_positions(q) - target, axis=-1)
@@ -139,12 +143,12 @@ def inverse_kinematics(checker: ConfigurationChecker, target: np.ndarray, seeds:
 
 
 def _dls_step(checker: ConfigurationChecker, q: np.ndarray, target: np.ndarray, damping: float = 0.05) -> np.ndarray:
-    """One damped-least-squares update of configurations ``q`` (n, 7) towards end-effector ``target``."""
+    """One damped-least-squares update of configurations ``q`` (n, n_joints) towards end-effector ``target``."""
     p, jac = checker.ee_jacobian(q)
     error = target - p
     jjt = jac @ jac.transpose(0, 2, 1) + damping**2 * np.eye(3)
     step = (jac.transpose(0, 2, 1) @ np.linalg.solve(jjt, error[..., None]))[..., 0]
-    return np.clip(q + np.clip(step, -0.3, 0.3), LOWER, UPPER)
+    return np.clip(q + np.clip(step, -0.3, 0.3), checker.lower, checker.upper)
 
 
 def _steer(a: np.ndarray, b: np.ndarray, step: float) -> np.ndarray:
@@ -184,7 +188,8 @@ class _Tree:
 def rrt_connect(checker: ConfigurationChecker, start: np.ndarray, goals: np.ndarray, rng: np.random.Generator,
                 approaches: Sequence[tuple[np.ndarray, int]] = (), step: float = 0.3, resolution: float = RESOLUTION,
                 max_nodes: int = 500) -> np.ndarray | None:
-    """A collision-free path (k, 7) from ``start`` to one of ``goals`` (m, 7), or None within ``max_nodes``.
+    """A collision-free path (k, n_joints) from ``start`` to one of ``goals`` (m, n_joints), or None within
+    ``max_nodes``.
 
     ``approaches`` are (configuration, goal index) pairs already joined to their goal by a free straight edge
     (the arm backed out of a shelf, or lifted above the clutter): the goal tree starts with them, so the search
@@ -204,7 +209,7 @@ def rrt_connect(checker: ConfigurationChecker, start: np.ndarray, goals: np.ndar
     while sum(len(t.q) for t in trees) < max_nodes:
         grow, other = trees
         sample = goals[rng.integers(len(goals))] if grow is start_tree and rng.uniform() < 0.2 else \
-            rng.uniform(LOWER, UPPER)
+            rng.uniform(checker.lower, checker.upper)
         near = grow.nearest(sample)
         new = _steer(grow.q[near], sample, step)
         if _edge_free(checker, grow.q[near], new, resolution):
@@ -237,21 +242,21 @@ def shortcut(checker: ConfigurationChecker, path: np.ndarray, rng: np.random.Gen
 
 
 class ArmPlanner:
-    """Plans collision-free joint-space paths for the Panda on one layout at a time.
+    """Plans collision-free joint-space paths for an arm on one layout at a time.
 
     Args:
         margin: planning clearance, metres.
         fidelity: the collision fidelity the planner checks at.
+        arm: the arm (the Panda by default).
     """
 
-    n_joints = len(LOWER)
-
-    def __init__(self, margin: float = 0.02, fidelity: str = "convex") -> None:
-        self.checker = ConfigurationChecker(fidelity, margin)
+    def __init__(self, margin: float = 0.02, fidelity: str = "convex", arm: ArmModel | None = None) -> None:
+        self.checker = ConfigurationChecker(fidelity, margin, arm)
+        self.n_joints = self.checker.n_joints
 
     def plan(self, obstacles: Sequence[Obstacle], start: np.ndarray, target: np.ndarray,
              rng: np.random.Generator) -> np.ndarray | None:
-        """A shortcut path (k, 7) from ``start`` to a clear configuration whose end effector is within
+        """A shortcut path (k, n_joints) from ``start`` to a clear configuration whose end effector is within
         ``GOAL_BALL`` of ``target`` on the layout ``obstacles`` (the table is always there), or None; every random
         choice is drawn from ``rng``."""
         self.checker.set_obstacles(obstacles)
@@ -290,9 +295,10 @@ class ArmPlanner:
         ``start`` first, a few at a time, until there are enough."""
         found: list[np.ndarray] = []
         for r in range(rounds):
-            seeds = rng.uniform(LOWER, UPPER, (per_round, 7))
+            n = self.n_joints
+            seeds = rng.uniform(self.checker.lower, self.checker.upper, (per_round, n))
             if r == 0:
-                seeds[: per_round // 4] = start + rng.normal(0.0, 0.3, (per_round // 4, 7))
+                seeds[: per_round // 4] = start + rng.normal(0.0, 0.3, (per_round // 4, n))
             offsets = rng.normal(size=(per_round, 3))
             offsets *= GOAL_BALL * rng.uniform(size=(per_round, 1)) ** (1 / 3) / np.linalg.norm(
                 offsets, axis=1, keepdims=True)
@@ -304,7 +310,7 @@ class ArmPlanner:
                 found.extend(chunk[self.checker.free(chunk, stop_at_first=False)])
                 if len(found) >= enough:
                     return np.array(found[:enough])
-        return np.array(found).reshape(-1, 7)
+        return np.array(found).reshape(-1, self.n_joints)
 
 
 def time_parameterise(path: np.ndarray, speed: np.ndarray) -> np.ndarray:
@@ -320,7 +326,7 @@ class JointPath:
     """A joint-space path walked by arc length: how far along it a configuration is, and the point ahead.
 
     Args:
-        path: (k, 7) configurations, k >= 1.
+        path: (k, n_joints) configurations, k >= 1.
     """
 
     def __init__(self, path: np.ndarray) -> None:

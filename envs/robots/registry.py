@@ -4,11 +4,12 @@ A robot has a kind, and a task takes the kinds it can drive: ClutterNav-v0 a whe
 ClutterReach-v0 a fixed-base arm (``arm``), ClutterFly-v0 a multirotor (``multirotor``). Registering a robot of a
 known kind takes a name and a spec (or a function that makes the robot's model); a user's robot of a known kind
 needs no Python at all: ``robot={"kind": "diff_drive", "urdf": ..., ...}`` or ``robot="my_robot.yaml"``.
-Specs of the kinds ``arm`` and ``multirotor`` are not read yet: those envs take their registered robot only.
+Specs of the kind ``multirotor`` are not read yet: ClutterFly-v0 takes its registered quadrotor only.
 """
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -17,6 +18,8 @@ from typing import Any
 import pybullet_data
 import yaml
 
+from clutter_gym.robots.arm import Arm
+from clutter_gym.robots.arm_model import arm_from_spec
 from clutter_gym.robots.panda import PandaArm
 from clutter_gym.robots.quadrotor import Quadrotor
 from clutter_gym.robots.wheeled import diffbot, wheeled_base_from_spec
@@ -24,7 +27,10 @@ from clutter_gym.robots.wheeled import diffbot, wheeled_base_from_spec
 #: What each kind is, in words, for error messages.
 KINDS = {"diff_drive": "wheeled base", "arm": "fixed-base arm", "multirotor": "multirotor"}
 #: The kinds whose robots a spec (a mapping or a YAML file) can describe, and the reader of each.
-SPEC_READERS: dict[str, Callable[[Mapping[str, Any], str, Path | None], Any]] = {"diff_drive": wheeled_base_from_spec}
+SPEC_READERS: dict[str, Callable[[Mapping[str, Any], str, Path | None], Any]] = {
+    "diff_drive": wheeled_base_from_spec,
+    "arm": lambda spec, where, folder: functools.partial(Arm, arm_from_spec(spec, where, folder)),
+}
 
 
 @dataclass(frozen=True)
@@ -99,6 +105,11 @@ def resolve_robot(robot: str | Path | Mapping[str, Any], kind: str, env_id: str)
     return entry.make()
 
 
+#: Ready poses of the registered arms, rad: joint 1 at zero and the tool point 0.35 m out and 0.45 m up, pointing down
+#: (solved on the arm's kinematics, rounded).
+READY_IIWA = [0.0, -0.05, 0.0, -2.0, 0.0, 1.19, 0.0]
+READY_XARM6 = [0.0, -0.41, -1.22, 0.0, 1.63, 0.0]
+
 register_robot("diffbot", "diff_drive", diffbot)
 register_robot("panda", "arm", lambda: PandaArm)  # the arm and the flyer: their classes, made with the env's config
 register_robot("quadrotor", "multirotor", lambda: Quadrotor)
@@ -113,4 +124,27 @@ register_robot("husky", "diff_drive", {
     "max_wheel_torque": 20.0,
     "mounts": {"lidar_link": {"parent": "base_link", "xyz": [0.5, 0.0, 0.2]},
                "camera_link": {"parent": "base_link", "xyz": [0.5, 0.0, 0.3]}},
+})
+# The KUKA LBR iiwa 7 R800 from pybullet_data, with a tool point 0.1 m out from its flange. Its URDF claims 10 rad/s
+# and 300 N m on every joint; the limits here are the robot's datasheet values.
+register_robot("kuka_iiwa", "arm", {
+    "urdf": str(Path(pybullet_data.getDataPath()) / "kuka_iiwa" / "model.urdf"),
+    "name": "kuka_iiwa",
+    "arm_joints": [f"lbr_iiwa_joint_{i}" for i in range(1, 8)],
+    "ee_link": "tool_point",
+    "ee_mount": {"parent": "lbr_iiwa_link_7", "xyz": [0.0, 0.0, 0.1]},
+    "ready": READY_IIWA,
+    "speed_limits": [1.71, 1.71, 1.75, 2.27, 2.44, 3.14, 3.14],
+    "effort_limits": [176.0, 176.0, 110.0, 110.0, 110.0, 40.0, 40.0],
+    "reach": 0.8,
+})
+# The UFactory xArm6 from pybullet_data, with a tool point 0.1 m out from its flange; its URDF's limits are kept.
+register_robot("xarm6", "arm", {
+    "urdf": str(Path(pybullet_data.getDataPath()) / "xarm" / "xarm6_robot.urdf"),
+    "name": "xarm6",
+    "arm_joints": [f"joint{i}" for i in range(1, 7)],
+    "ee_link": "tool_point",
+    "ee_mount": {"parent": "link6", "xyz": [0.0, 0.0, 0.1]},
+    "ready": READY_XARM6,
+    "reach": 0.7,
 })

@@ -6,8 +6,9 @@ URDFs from other projects rarely carry the links an env's sensors sit on (Clutte
 does), and pybullet gives every link without an ``<inertial>`` 1 kg (six phantom kilograms on the Husky). The
 prepared copy fixes exactly those three things and nothing else: it adds a massless fixed link per sensor mount,
 takes each ``optenv``'s default (never the environment: a URDF must not change with a shell variable), and gives
-mass-less links 1 g. The meshes it names by relative paths are copied beside it, so its text, and with it the
-cache key of everything derived from it (the allowed-collision matrix), is the same on every machine.
+mass-less links 1 g. The meshes it names (by relative, ``package://`` or ``file://`` paths) are copied beside it
+and named by paths relative to it, so its text, and with it the cache key of everything derived from it (the
+allowed-collision matrix), is the same on every machine.
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
-from clutter_gym.collision.urdf_geometry import parse_urdf
+from clutter_gym.collision.urdf_geometry import parse_urdf, resolve_mesh
 from clutter_gym.util.atomic import atomic_path, write_text_atomically
 
 #: kg of a link the URDF gives no mass (pybullet's default would be 1 kg)
@@ -60,26 +61,42 @@ def prepared_urdf(source: str | Path, name: str, mounts: tuple[Mount, ...] = ())
             raise ValueError(f"{source}: no link {mount.parent!r} to mount {mount.name!r} on; its links: {links}")
         if mount.name in links:
             raise ValueError(f"{source}: already has a link {mount.name!r}; mount the sensor on it instead")
+    copies = _mesh_copies(root, source)  # before the text: the copy names its meshes by their new paths
     text = _prepared_text(root, mounts)
-    meshes = sorted({m.get("filename") for m in root.iter("mesh") if _relative(m.get("filename", ""))})
     digest = hashlib.sha256(text.encode())
-    for mesh in meshes:
-        path = source.parent / mesh
-        if not path.is_file():
-            raise ValueError(f"{source}: mesh {mesh!r} not found at {path}")
-        digest.update(mesh.encode() + path.read_bytes())
+    for relative, path in sorted(copies.items()):
+        digest.update(relative.encode() + path.read_bytes())
     folder = user_cache_dir("robots") / f"{name}-{digest.hexdigest()[:16]}"
     target = folder / f"{name}.urdf"
     if not target.is_file():
-        for mesh in meshes:  # each file whole or not at all: another process may be loading the same copy
-            with atomic_path(folder / mesh) as tmp:
-                shutil.copyfile(source.parent / mesh, tmp)
+        for relative, path in copies.items():  # each file whole or not at all: another process may load this copy
+            with atomic_path(folder / relative) as tmp:
+                shutil.copyfile(path, tmp)
         write_text_atomically(target, text)  # last: the URDF's presence says its meshes are there
     return target
 
 
-def _relative(filename: str) -> bool:
-    return bool(filename) and "://" not in filename and not Path(filename).is_absolute()
+def _mesh_copies(root: ET.Element, source: Path) -> dict[str, Path]:
+    """Name every ``<mesh filename>`` (relative, ``package://`` or ``file://``) by a path relative to the copy: its
+    path under the URDF's folder, or ``meshes/`` for a file outside it; returns {that path: the file it copies}.
+
+    Raises:
+        ValueError: a mesh file is missing (the message says where it looked).
+    """
+    copies: dict[str, Path] = {}
+    for element in root.iter("mesh"):
+        filename = element.get("filename", "")
+        try:
+            path = resolve_mesh(filename, source)
+        except ValueError as error:
+            raise ValueError(f"{source}: {error}") from None
+        try:
+            relative = path.relative_to(source.parent.resolve()).as_posix()
+        except ValueError:  # outside the URDF's folder: keep its name, made unique by its folder's
+            relative = f"meshes/{hashlib.sha256(str(path.parent).encode()).hexdigest()[:8]}/{path.name}"
+        copies[relative] = path
+        element.set("filename", relative)
+    return copies
 
 
 def _prepared_text(root: ET.Element, mounts: tuple[Mount, ...]) -> str:

@@ -18,7 +18,7 @@ from gymnasium import spaces
 
 from clutter_gym.noise.imu import ACCEL_RANGE, GYRO_RANGE, ImuEpisode, ImuNoise, apply_imu_noise, start_imu_episode
 from clutter_gym.robots.state import RobotState
-from clutter_gym.sim import Sim
+from clutter_gym.sim import GRAVITY, Sim
 
 
 @dataclass(frozen=True)
@@ -32,7 +32,7 @@ class ImuConfig:
     """
 
     dt: float
-    gravity: float = 9.81
+    gravity: float = GRAVITY
     accel_range: float = ACCEL_RANGE
     gyro_range: float = GYRO_RANGE
     link: str = "imu_link"

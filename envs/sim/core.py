@@ -27,6 +27,8 @@ from clutter_gym.util.view_culling import ViewCuller
 #: pybullet frees no shape a body has used (``removeCollisionShape`` then frees nothing) and keeps about a
 #: kilobyte of every removed body; only ``resetSimulation`` gives the memory back (docs/design-notes.md#memory).
 #: Past either limit :attr:`Sim.needs_rebuild` turns true, and the env rebuilds its world on the next reset.
+#: m/s^2, the standard gravity the world, the IMU's model of it and the flyer's hover thrust all take
+GRAVITY = 9.81
 MAX_SHAPES = 256
 MAX_REMOVED_BODIES = 2_000
 
@@ -85,7 +87,7 @@ class Sim(Actuation, ObstacleBodies, Rendering, Rays):
         self,
         physics_hz: float = 120.0,
         solver_iterations: int = 10,
-        gravity: float = 9.81,
+        gravity: float = GRAVITY,
         gui: bool = False,
         visuals: bool = True,
     ) -> None:

@@ -105,8 +105,10 @@ def point_clearance(point: np.ndarray, obstacles: Sequence[Obstacle]) -> float:
     return min((o.distance3d(point) for o in obstacles), default=math.inf)
 
 
-def sample_reach_scene(rng: np.random.Generator, spec: TableSpec, ready: Sequence[float]) -> ReachScene:
-    """A seeded layout: shelf, clutter clear of the start pose's arm, start pose and target."""
+def sample_reach_scene(rng: np.random.Generator, spec: TableSpec, ready: Sequence[float],
+                       shoulder: Sequence[float] = SHOULDER, reach: float = REACH_RADIUS) -> ReachScene:
+    """A seeded layout: shelf, clutter clear of the start pose's arm, start pose and a target within ``reach``
+    metres of ``shoulder`` (the Panda's by default)."""
     obstacles: list[Obstacle] = []
     footprints: list[tuple[np.ndarray, float]] = []  # (centre, radius) of every placed footprint
     arm = np.array([[0.0, 0.0], [0.45, 0.0]])
@@ -135,34 +137,37 @@ def sample_reach_scene(rng: np.random.Generator, spec: TableSpec, ready: Sequenc
             radius = float(rng.choice([0.03, 0.045, 0.06]))
             height = float(rng.choice([0.1, 0.2, 0.3]))
             candidate = Obstacle("cylinder", (2 * radius, 2 * radius, height), (float(xy[0]), float(xy[1])))
-        reach = candidate.radius
-        if polyline_distances(xy[None], arm)[0] < reach + ARM_KEEP_OUT:
+        extent = candidate.radius
+        if polyline_distances(xy[None], arm)[0] < extent + ARM_KEEP_OUT:
             continue
-        if any(np.linalg.norm(xy - c) < reach + rc + 0.02 for c, rc in footprints):
+        if any(np.linalg.norm(xy - c) < extent + rc + 0.02 for c, rc in footprints):
             continue
         obstacles.append(candidate)
-        footprints.append((xy, reach))
-    start = tuple(float(v) for v in np.asarray(ready) + rng.uniform(-spec.start_noise, spec.start_noise, size=7))
-    target = _sample_target(rng, spec, tuple(obstacles), shelf_compartments)
+        footprints.append((xy, extent))
+    start = tuple(float(v) for v in np.asarray(ready) + rng.uniform(-spec.start_noise, spec.start_noise,
+                                                                    size=len(ready)))
+    target = _sample_target(rng, spec, tuple(obstacles), shelf_compartments, np.asarray(shoulder), reach)
     clutter = range(5 if spec.shelf else 0, len(obstacles))  # the shelf is furniture: it stays put
     return ReachScene(with_masses(obstacles, clutter, spec.movable_fraction, spec.movable_density), start, target)
 
 
 def _sample_target(rng: np.random.Generator, spec: TableSpec, obstacles: tuple[Obstacle, ...],
-                   compartments: list[tuple[np.ndarray, float]]) -> tuple[float, float, float]:
+                   compartments: list[tuple[np.ndarray, float]], shoulder: np.ndarray,
+                   reach: float) -> tuple[float, float, float]:
     if compartments and rng.uniform() < spec.shelf_target_probability:
         centre, _ = compartments[int(rng.integers(len(compartments)))]
         return tuple(float(v) for v in centre)
     for _ in range(1000):
         p = np.array([rng.uniform(0.15, 0.75), rng.uniform(-0.6, 0.6), rng.uniform(0.05, 0.55)])
-        if np.linalg.norm(p - SHOULDER) > REACH_RADIUS or np.hypot(p[0], p[1]) < 0.3:
+        if np.linalg.norm(p - shoulder) > reach or np.hypot(p[0], p[1]) < 0.3:
             continue
         if point_clearance(p, obstacles) >= spec.target_clearance:
             return tuple(float(v) for v in p)
     raise RuntimeError("no free target point found in 1000 draws; lower n_obstacles")
 
 
-def parse_reach_scene(spec: Any, n_joints: int, lower: np.ndarray, upper: np.ndarray) -> ReachScene:
+def parse_reach_scene(spec: Any, n_joints: int, lower: np.ndarray, upper: np.ndarray,
+                      shoulder: Sequence[float] = SHOULDER, reach: float = REACH_RADIUS) -> ReachScene:
     """Validate a user scene (``reset(options={"scene": ...})``): obstacles, start joint positions, target.
 
     Raises:
@@ -173,9 +178,9 @@ def parse_reach_scene(spec: Any, n_joints: int, lower: np.ndarray, upper: np.nda
         raise ValueError("scene.target is required (x, y, z in metres)")
     obstacles = parse_obstacles(spec.get("obstacles", []), 2 * TABLE_LIMIT)
     target = parse_numbers(spec["target"], 3, "scene.target", "x, y, z in metres")
-    if np.linalg.norm(np.array(target) - SHOULDER) > REACH_RADIUS + 0.1:
-        raise ValueError(f"scene.target {target} is beyond the arm's reach: at most {REACH_RADIUS + 0.1} m from "
-                         f"the shoulder {SHOULDER.tolist()}")
+    if np.linalg.norm(np.array(target) - np.asarray(shoulder)) > reach + 0.1:
+        raise ValueError(f"scene.target {target} is beyond the arm's reach: at most {reach + 0.1:g} m from "
+                         f"the shoulder {np.asarray(shoulder).tolist()}")
     start = (parse_numbers(spec.get("start", ()), n_joints, "scene.start", "joint positions in rad")
              if "start" in spec else None)
     if start is not None:
@@ -193,12 +198,15 @@ class TabletopArena:
         ready: the arm's ready joint positions (start poses are drawn around it; a user scene without a start
             gets it exactly).
         lower, upper: joint limits, for validating user start poses.
+        shoulder, reach: targets are drawn (and user targets accepted) within ``reach`` metres of ``shoulder``.
     """
 
-    def __init__(self, spec: TableSpec, ready: Sequence[float], lower: np.ndarray, upper: np.ndarray) -> None:
+    def __init__(self, spec: TableSpec, ready: Sequence[float], lower: np.ndarray, upper: np.ndarray,
+                 shoulder: Sequence[float] = SHOULDER, reach: float = REACH_RADIUS) -> None:
         self.spec = spec
         self.ready = tuple(ready)
         self._lower, self._upper = lower, upper
+        self._shoulder, self._reach = tuple(float(v) for v in shoulder), float(reach)
         self._pool: ObstaclePool | None = None
 
     def load(self, sim: Sim) -> None:
@@ -216,12 +224,13 @@ class TabletopArena:
             ValueError: unknown option keys or a malformed scene (the message names the field).
         """
         return scene_from_options(
-            options, parse=self._parse, sample=lambda: sample_reach_scene(rng, self.spec, self.ready)
+            options, parse=self._parse,
+            sample=lambda: sample_reach_scene(rng, self.spec, self.ready, self._shoulder, self._reach)
         )
 
     def _parse(self, spec: Any) -> ReachScene:
         """A user scene; one without a start begins at the ready pose."""
-        scene = parse_reach_scene(spec, len(self.ready), self._lower, self._upper)
+        scene = parse_reach_scene(spec, len(self.ready), self._lower, self._upper, self._shoulder, self._reach)
         return scene if scene.start is not None else ReachScene(scene.obstacles, self.ready, scene.target)
 
     def place(self, scene: ReachScene) -> tuple[tuple[Obstacle, ...], list[int]]:

@@ -34,15 +34,15 @@ def _cache(tmp_path, monkeypatch):
 
 def test_each_env_takes_its_kind_and_names_the_robots_it_takes():
     assert registered("diff_drive") == ["diffbot", "husky"]
-    assert registered("arm") == ["panda"] and registered("multirotor") == ["quadrotor"]
+    assert registered("arm") == ["panda", "kuka_iiwa", "xarm6"] and registered("multirotor") == ["quadrotor"]
     with pytest.raises(ValueError, match=r"'panda' is a fixed-base arm; ClutterNav-v0 takes a wheeled base: robot= "
                                          r"one of \['diffbot', 'husky'\], or a spec with kind 'diff_drive'"):
         gym.make("ClutterNav-v0", robot="panda")
     with pytest.raises(ValueError, match=r"unknown robot 'nope'; ClutterFly-v0 takes a multirotor: robot= one of "
                                          r"\['quadrotor'\]$"):
         gym.make("ClutterFly-v0", robot="nope")
-    with pytest.raises(ValueError, match="specs of kind 'arm' are not read yet"):
-        gym.make("ClutterReach-v0", robot={"kind": "arm", "urdf": "arm.urdf"})
+    with pytest.raises(ValueError, match="specs of kind 'multirotor' are not read yet"):
+        gym.make("ClutterFly-v0", robot={"kind": "multirotor", "urdf": "drone.urdf"})
     with pytest.raises(ValueError, match="kind 'arm' does not fit; ClutterNav-v0 takes a wheeled base"):
         gym.make("ClutterNav-v0", robot={"kind": "arm", "urdf": "arm.urdf"})
 
