@@ -17,9 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from clutter_gym.collision.kinematics import UrdfKinematics
-from clutter_gym.collision.urdf_geometry import load_collision_elements
-from clutter_gym.robots.urdf_prep import Mount, prepared_urdf
+from clutter_gym.robots.spec_reading import check_keys, joint_names, load_spec_urdf, mount, number, numbers
 
 #: The keys of an ``arm`` spec (besides ``kind``); the first four are required.
 SPEC_KEYS = ("urdf", "arm_joints", "ee_link", "ready", "name", "ee_mount", "speed_limits", "effort_limits",
@@ -78,40 +76,13 @@ def arm_from_spec(spec: Mapping[str, object], where: str, folder: Path | None = 
         ValueError: a key is missing, unknown or out of range, or names a joint or link the URDF does not have; the
             message names the key, the URDF and what it offers.
     """
-    unknown = sorted(set(spec) - set(SPEC_KEYS) - {"kind"})
-    if unknown:
-        raise ValueError(f"{where}: unknown keys {unknown}; an arm spec takes {list(SPEC_KEYS)}")
-    for key in SPEC_KEYS[:4]:
-        if key not in spec:
-            raise ValueError(f"{where}: missing {key!r} (an arm spec needs {list(SPEC_KEYS[:4])})")
-    source = Path(str(spec["urdf"])).expanduser()
-    if not source.is_absolute() and folder is not None:
-        source = folder / source
-    if not source.is_file():
-        raise ValueError(f"{where}: urdf {str(source)!r} is not a file")
-    name = str(spec.get("name", source.stem))
+    check_keys(spec, SPEC_KEYS, 4, "arm", where)
     ee_link = str(spec["ee_link"])
-    mounts = ()
-    if spec.get("ee_mount") is not None:
-        mount = spec["ee_mount"]
-        if not isinstance(mount, Mapping) or "parent" not in mount:
-            raise ValueError(f"{where}: ee_mount must be a mapping with a 'parent' link and an 'xyz', got {mount!r}")
-        mounts = (Mount(ee_link, str(mount["parent"]), _floats(mount.get("xyz", (0, 0, 0)), 3, f"{where}: ee_mount.xyz",
-                                                                  -2.0, 2.0)),)
-    try:
-        urdf = prepared_urdf(source, name, mounts)
-        kinematics = UrdfKinematics(urdf)
-        elements = load_collision_elements(urdf)
-    except ValueError as error:
-        raise ValueError(f"{where}: the URDF was refused: {error}") from None
+    mounts = () if spec.get("ee_mount") is None else (mount(ee_link, spec["ee_mount"], f"{where}: ee_mount"),)
+    urdf = load_spec_urdf(spec, where, folder, mounts)
+    kinematics, elements, source = urdf.kinematics, urdf.elements, urdf.source
+    joints = joint_names(spec, "arm_joints", urdf, where, 3, 9)
     moving = {j.name: j for j in kinematics.joints}
-    joints = spec["arm_joints"]
-    if isinstance(joints, str) or not isinstance(joints, (list, tuple)) or not 3 <= len(joints) <= 9:
-        raise ValueError(f"{where}: arm_joints must be a list of 3 to 9 joint names, got {joints!r}")
-    missing = [j for j in joints if j not in moving]
-    if missing:
-        raise ValueError(f"{where}: arm_joints names {missing}, not moving joints of {source}; its moving joints: "
-                         f"{list(moving)}")
     others = [j for j in moving if j not in joints]
     if others:
         raise ValueError(f"{where}: {source} has moving joints {others} besides arm_joints; an arm spec drives every "
@@ -122,13 +93,13 @@ def arm_from_spec(spec: Mapping[str, object], where: str, folder: Path | None = 
     n = len(joints)
     lower = np.array([moving[j].lower for j in joints])
     upper = np.array([moving[j].upper for j in joints])
-    ready = np.array(_floats(spec["ready"], n, f"{where}: ready", -2 * math.pi, 2 * math.pi))
+    ready = np.array(numbers(spec["ready"], n, f"{where}: ready", -2 * math.pi, 2 * math.pi))
     if np.any(ready < lower) or np.any(ready > upper):
         raise ValueError(f"{where}: ready {ready.tolist()} is outside the joint limits {lower.tolist()} .. "
                          f"{upper.tolist()}")
-    limits = _urdf_limits(urdf, joints)
-    speed = np.array(_floats(spec.get("speed_limits", limits[0]), n, f"{where}: speed_limits", 0.01, 20.0))
-    effort = np.array(_floats(spec.get("effort_limits", limits[1]), n, f"{where}: effort_limits", 0.01, 5000.0))
+    limits = _urdf_limits(urdf.urdf, joints)
+    speed = np.array(numbers(spec.get("speed_limits", limits[0]), n, f"{where}: speed_limits", 0.01, 20.0))
+    effort = np.array(numbers(spec.get("effort_limits", limits[1]), n, f"{where}: effort_limits", 0.01, 5000.0))
     geometric = [e.link for e in elements if e.link != kinematics.root]
     tracked = tuple(dict.fromkeys([link for link in kinematics.links if link in geometric] + [ee_link]))
     moved = {j.child for j in kinematics.joints}
@@ -142,8 +113,8 @@ def arm_from_spec(spec: Mapping[str, object], where: str, folder: Path | None = 
 
     frames = kinematics.forward(np.zeros((1, n)))
     shoulder = frames[moving[joints[1]].child][0, :3, 3]
-    reach = _floats([spec.get("reach", 0.8)], 1, f"{where}: reach", 0.2, 2.0)[0]
-    return ArmModel(name=name, urdf=urdf, base_link=kinematics.root, arm_joints=tuple(joints), finger_joints=(),
+    reach = number(spec, "reach", where, 0.8, 0.2, 2.0)
+    return ArmModel(name=urdf.name, urdf=urdf.urdf, base_link=kinematics.root, arm_joints=joints, finger_joints=(),
                     finger_opening=0.0, ee_link=ee_link, tracked_links=tracked, ready=tuple(float(v) for v in ready),
                     lower=lower, upper=upper, speed_limit=speed, effort_limit=effort,
                     shoulder=np.array([0.0, 0.0, float(shoulder[2])]), reach=reach,
@@ -159,13 +130,3 @@ def _urdf_limits(urdf: Path, joints: Sequence[str]) -> tuple[list[float], list[f
             found[joint.get("name")] = (float(limit.get("velocity", "nan")), float(limit.get("effort", "nan")))
     pairs = [found.get(j, (math.nan, math.nan)) for j in joints]
     return [p[0] for p in pairs], [p[1] for p in pairs]
-
-
-def _floats(value: object, n: int, where: str, low: float, high: float) -> list[float]:
-    try:
-        numbers = [float(v) for v in value]  # type: ignore[union-attr]
-    except (TypeError, ValueError):
-        numbers = []
-    if len(numbers) != n or not all(math.isfinite(v) and low <= v <= high for v in numbers):
-        raise ValueError(f"{where} must be {n} numbers in [{low:g}, {high:g}], got {value!r}")
-    return numbers

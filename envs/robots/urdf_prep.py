@@ -18,7 +18,6 @@ import os
 import re
 import shutil
 import xml.etree.ElementTree as ET
-from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -116,28 +115,3 @@ def _prepared_text(root: ET.Element, mounts: tuple[Mount, ...]) -> str:
             ET.SubElement(inertial, "mass", value=f"{TOKEN_MASS}")
             ET.SubElement(inertial, "inertia", ixx="1e-7", iyy="1e-7", izz="1e-7", ixy="0", ixz="0", iyz="0")
     return ET.tostring(root, encoding="unicode")
-
-
-def mounts_from(mapping: Mapping[str, object], where: str) -> tuple[Mount, ...]:
-    """Mounts from a spec's ``mounts`` mapping: ``{sensor link: {"parent": link, "xyz": [...], "rpy": [...]}}``."""
-    out = []
-    for link, entry in mapping.items():
-        if not isinstance(entry, Mapping) or "parent" not in entry:
-            raise ValueError(f"{where}: mounts.{link} must be a mapping with a 'parent' link, got {entry!r}")
-        unknown = set(entry) - {"parent", "xyz", "rpy"}
-        if unknown:
-            raise ValueError(f"{where}: mounts.{link} has unknown keys {sorted(unknown)}; allowed: parent, xyz, rpy")
-        xyz = _triple(entry.get("xyz", (0, 0, 0)), f"{where}: mounts.{link}.xyz")
-        out.append(Mount(str(link), str(entry["parent"]), xyz, _triple(entry.get("rpy", (0, 0, 0)),
-                                                                       f"{where}: mounts.{link}.rpy")))
-    return tuple(out)
-
-
-def _triple(value: object, where: str) -> tuple[float, float, float]:
-    try:
-        numbers = tuple(float(v) for v in value)  # type: ignore[union-attr]
-    except (TypeError, ValueError):
-        numbers = ()
-    if len(numbers) != 3 or not all(abs(v) < 1e3 for v in numbers):
-        raise ValueError(f"{where} must be 3 finite numbers (metres or radians, below 1000), got {value!r}")
-    return numbers  # type: ignore[return-value]

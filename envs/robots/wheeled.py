@@ -20,9 +20,8 @@ from pathlib import Path
 import numpy as np
 
 from clutter_gym.assets import asset_path
-from clutter_gym.collision.kinematics import UrdfKinematics
-from clutter_gym.collision.urdf_geometry import CollisionElement, load_collision_elements
-from clutter_gym.robots.urdf_prep import mounts_from, prepared_urdf
+from clutter_gym.collision.urdf_geometry import CollisionElement
+from clutter_gym.robots.spec_reading import check_keys, joint_names, load_spec_urdf, mount, number
 from clutter_gym.util.transforms import quat_to_matrix
 
 #: The links the sensors sit on.
@@ -82,36 +81,15 @@ def wheeled_base_from_spec(spec: Mapping[str, object], where: str, folder: Path 
         ValueError: a key is missing, unknown or out of range, or names a joint or link the URDF does not have; the
             message names the key, the URDF and what the URDF offers.
     """
-    unknown = sorted(set(spec) - set(SPEC_KEYS) - {"kind"})
-    if unknown:
-        raise ValueError(f"{where}: unknown keys {unknown}; a diff_drive spec takes {list(SPEC_KEYS)}")
-    for key in SPEC_KEYS[:3]:
-        if key not in spec:
-            raise ValueError(f"{where}: missing {key!r} (a diff_drive spec needs {list(SPEC_KEYS[:3])})")
-    source = Path(str(spec["urdf"])).expanduser()
-    if not source.is_absolute() and folder is not None:
-        source = folder / source
-    if not source.is_file():
-        raise ValueError(f"{where}: urdf {str(source)!r} is not a file")
-    name = str(spec.get("name", source.stem))
-    mounts = mounts_from(spec.get("mounts") or {}, where)
-    try:
-        urdf = prepared_urdf(source, name, mounts)
-        kinematics = UrdfKinematics(urdf)
-        elements = load_collision_elements(urdf)
-    except ValueError as error:
-        raise ValueError(f"{where}: the URDF was refused: {error}") from None
+    check_keys(spec, SPEC_KEYS, 3, "diff_drive", where)
+    mounts = spec.get("mounts") or {}
+    if not isinstance(mounts, Mapping):
+        raise ValueError(f"{where}: mounts must be a mapping of link names to mounts, got {mounts!r}")
+    urdf = load_spec_urdf(spec, where, folder, tuple(mount(str(k), v, f"{where}: mounts.{k}")
+                                                     for k, v in mounts.items()))
+    kinematics, elements, source = urdf.kinematics, urdf.elements, urdf.source
+    sides = {side: joint_names(spec, side, urdf, where) for side in ("left_wheels", "right_wheels")}
     moving = [j.name for j in kinematics.joints]
-    sides = {}
-    for side in ("left_wheels", "right_wheels"):
-        joints = spec[side]
-        if isinstance(joints, str) or not isinstance(joints, (list, tuple)) or not joints:
-            raise ValueError(f"{where}: {side} must be a list of joint names, got {joints!r}")
-        missing = [j for j in joints if j not in moving]
-        if missing:
-            raise ValueError(f"{where}: {side} names {missing}, not moving joints of {source}; its moving joints: "
-                             f"{moving}")
-        sides[side] = tuple(str(j) for j in joints)
     links = set(kinematics.links)
     absent = [link for link in SENSOR_LINKS if link not in links]
     if "lidar_link" in absent or "imu_link" in absent:
@@ -120,34 +98,23 @@ def wheeled_base_from_spec(spec: Mapping[str, object], where: str, folder: Path 
     child = {j.name: j.child for j in kinematics.joints}
     wheel_links = [child[j] for j in (*sides["left_wheels"], *sides["right_wheels"])]
     frames = kinematics.forward(np.zeros((1, len(moving))))
-    radius = _number(spec, "wheel_radius", where, _wheel_radius(elements, wheel_links, where), 0.005, 2.0)
+    radius = number(spec, "wheel_radius", where, _wheel_radius(elements, wheel_links), 0.005, 2.0)
     lateral = [frames[link][0, 1, 3] for link in wheel_links]
     left, right = lateral[:len(sides["left_wheels"])], lateral[len(sides["left_wheels"]):]
-    track = _number(spec, "wheel_separation", where, float(np.mean(left) - np.mean(right)), 0.01, 5.0)
+    track = number(spec, "wheel_separation", where, float(np.mean(left) - np.mean(right)), 0.01, 5.0)
     axle = float(np.mean([frames[link][0, 2, 3] for link in wheel_links]))
     geometric = sorted({e.link for e in elements} - {kinematics.root}, key=kinematics.links.index)
-    footprint = _number(spec, "footprint_radius", where, _footprint(elements, frames), 0.01, 5.0)
+    footprint = number(spec, "footprint_radius", where, _footprint(elements, frames), 0.01, 5.0)
     return WheeledBase(
-        name=name, urdf=urdf, base_link=kinematics.root, left_wheels=sides["left_wheels"],
+        name=urdf.name, urdf=urdf.urdf, base_link=kinematics.root, left_wheels=sides["left_wheels"],
         right_wheels=sides["right_wheels"], wheel_radius=radius, wheel_separation=track, footprint_radius=footprint,
         base_height=radius - axle, focus_height=axle,
         tracked_links=(*geometric, *(link for link in SENSOR_LINKS if link in links and link not in geometric)),
-        max_wheel_torque=_number(spec, "max_wheel_torque", where, 10.0, 0.01, 500.0),
+        max_wheel_torque=number(spec, "max_wheel_torque", where, 10.0, 0.01, 500.0),
     )
 
 
-def _number(spec: Mapping[str, object], key: str, where: str, default: float, low: float, high: float) -> float:
-    value = spec.get(key, default)
-    try:
-        number = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        number = math.nan
-    if not (math.isfinite(number) and low <= number <= high):
-        raise ValueError(f"{where}: {key} must be a number in [{low}, {high}], got {value!r}")
-    return number
-
-
-def _wheel_radius(elements: list[CollisionElement], wheel_links: list[str], where: str) -> float:
+def _wheel_radius(elements: list[CollisionElement], wheel_links: list[str]) -> float:
     cylinders = [e.size[0] for e in elements if e.link in wheel_links and e.kind == "cylinder"]
     return max(cylinders) if cylinders else math.nan  # nan: _number then asks for wheel_radius in the spec
 

@@ -130,6 +130,7 @@ SPEC = {"kind": "arm", "urdf": str(pybullet_data_file("kuka_iiwa/model.urdf")),
     ({"ready": [0.0, 3.0, 0.0, 0.0, 0.0, 0.0, 0.0]}, r"ready \[0.0, 3.0, .*\] is outside the joint limits"),
     ({"arm_joints": ["lbr_iiwa_joint_1", "j2", "j3"]}, r"arm_joints names \['j2', 'j3'\], not moving joints"),
     ({"speed_limits": [1.0] * 7 + [2.0]}, r"speed_limits must be 7 numbers in \[0.01, 20\]"),
+    ({"arm_joints": "lbr_iiwa_joint_1"}, r"arm_joints must be a list of 3 to 9 joint names"),
     ({"gripper": True}, r"unknown keys \['gripper'\]; an arm spec takes"),
 ])
 def test_a_bad_arm_spec_is_refused_naming_the_key(change, message):
