@@ -49,13 +49,16 @@ def register_robot(name: str, kind: str, make: Callable[[], Any] | Mapping[str, 
     function that returns the kind's model.
 
     Raises:
-        ValueError: the name is taken, or the kind unknown.
+        ValueError: the name is taken, the kind unknown, or a spec given for a kind whose specs are not read.
     """
     if kind not in KINDS:
         raise ValueError(f"robot kind must be one of {list(KINDS)}, got {kind!r}")
     if name in _ROBOTS:
         raise ValueError(f"a robot named {name!r} is already registered (a {KINDS[_ROBOTS[name].kind]})")
     if isinstance(make, Mapping):
+        if kind not in SPEC_READERS:
+            raise ValueError(f"specs of kind {kind!r} are not read yet (only {list(SPEC_READERS)}); register a "
+                             "function that makes the robot instead")
         spec = dict(make)
         make = lambda: SPEC_READERS[kind](spec, f"robot {name!r}", None)  # noqa: E731  (read on first use)
     _ROBOTS[name] = RobotEntry(kind, make)

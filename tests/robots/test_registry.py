@@ -12,7 +12,7 @@ import pybullet_data
 import pytest
 
 from clutter_gym.assets import asset_path
-from clutter_gym.robots.registry import registered
+from clutter_gym.robots.registry import register_robot, registered
 from clutter_gym.robots.urdf_prep import TOKEN_MASS, Mount, prepared_urdf
 from clutter_gym.robots.wheeled import diffbot, wheeled_base_from_spec
 from clutter_gym.util.quiet import quiet_c_output
@@ -45,6 +45,22 @@ def test_each_env_takes_its_kind_and_names_the_robots_it_takes():
         gym.make("ClutterFly-v0", robot={"kind": "multirotor", "urdf": "drone.urdf"})
     with pytest.raises(ValueError, match="kind 'arm' does not fit; ClutterNav-v0 takes a wheeled base"):
         gym.make("ClutterNav-v0", robot={"kind": "arm", "urdf": "arm.urdf"})
+
+
+def test_a_registered_spec_is_read_when_an_env_first_asks_for_it(monkeypatch):
+    from clutter_gym.robots import registry
+
+    monkeypatch.setattr(registry, "_ROBOTS", dict(registry._ROBOTS))  # the test's registrations end with it
+    register_robot("my_bot", "diff_drive", {**DIFFBOT_SPEC, "name": "my_bot", "wheel_radius": 0.0})
+    with pytest.raises(ValueError, match=r"robot 'my_bot': wheel_radius must be a number in \[0.005, 2\], got 0.0"):
+        gym.make("ClutterNav-v0", robot="my_bot")
+    with pytest.raises(ValueError, match="a robot named 'husky' is already registered"):
+        register_robot("husky", "diff_drive", DIFFBOT_SPEC)
+    with pytest.raises(ValueError, match=r"robot kind must be one of \['diff_drive', 'arm', 'multirotor'\]"):
+        register_robot("boat", "boat", DIFFBOT_SPEC)
+    with pytest.raises(ValueError, match="specs of kind 'multirotor' are not read yet"):
+        register_robot("drone", "multirotor", {"urdf": "drone.urdf"})
+    assert "my_bot" in registered("diff_drive")
 
 
 def test_the_default_robots_are_todays():
