@@ -44,7 +44,7 @@ class DiffDriveConfig:
     footprint_radius: float = 0.17
 
     def __post_init__(self) -> None:
-        for field, hi in (("max_linear_speed", 2.0), ("max_angular_speed", 10.0), ("max_wheel_torque", 20.0)):
+        for field, hi in (("max_linear_speed", 2.0), ("max_angular_speed", 10.0), ("max_wheel_torque", 500.0)):
             value = getattr(self, field)
             if not (np.isfinite(value) and 0.0 < value <= hi):
                 raise ValueError(f"{field} must be in (0, {hi}], got {value!r}")
