@@ -4,7 +4,7 @@ resolved, and links without mass given a token one, written once into the user c
 URDFs from other projects rarely carry the links an env's sensors sit on (ClutterNav's LIDAR casts from
 ``lidar_link``), some keep unexpanded ``$(optenv NAME default)`` substitutions from xacro (pybullet_data's Husky
 does), and pybullet gives every link without an ``<inertial>`` 1 kg (six phantom kilograms on the Husky). The
-prepared copy fixes exactly those three things and nothing else: it adds a massless fixed link per sensor mount,
+prepared copy fixes exactly those three things and nothing else: it adds a fixed link per sensor mount,
 takes each ``optenv``'s default (never the environment: a URDF must not change with a shell variable), and gives
 mass-less links 1 g. The meshes it names (by relative, ``package://`` or ``file://`` paths) are copied beside it
 and named by paths relative to it, so its text, and with it the cache key of everything derived from it (the
