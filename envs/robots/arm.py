@@ -10,10 +10,9 @@ from pathlib import Path
 import numpy as np
 from gymnasium import spaces
 
-from clutter_gym.noise.dynamics import DynamicsSample
 from clutter_gym.robots.arm_model import ArmModel
-from clutter_gym.robots.dynamics import scale_link_dynamics
 from clutter_gym.robots.state import RobotState
+from clutter_gym.robots.urdf_robot import UrdfRobot
 from clutter_gym.sim import Sim
 
 CONTROLS = ("joint_velocity", "ee_position")
@@ -46,7 +45,7 @@ class ArmConfig:
             raise ValueError(f"max_ee_step must be in (0, 0.2] metres, got {self.max_ee_step!r}")
 
 
-class Arm:
+class Arm(UrdfRobot):
     """A position-controlled fixed-base arm (``model``): actions become joint targets that pybullet's motors track
     under the arm's effort limits.
 
@@ -71,8 +70,6 @@ class Arm:
             "joint_velocity": spaces.Box(-2 * m.speed_limit.astype(f32), 2 * m.speed_limit.astype(f32), dtype=f32),
             "ee_position": spaces.Box(-1.5, 1.5, shape=(3,), dtype=f32),
         }
-        self._sim: Sim | None = None
-        self._body = -1
         self._target = np.array(m.ready)
         self._forces = m.effort_limit.copy()
         self._ee_target = np.zeros(3)
@@ -86,37 +83,23 @@ class Arm:
     def urdf_path(self) -> Path:
         return self.model.urdf
 
-    @property
-    def body(self) -> int:
-        return self._body
-
     def load(self, sim: Sim) -> int:
         """Load the URDF with a fixed base at the origin and look up joint and link indices."""
-        self._sim = sim
-        self._body = sim.load_urdf("robot", self.urdf_path, fixed_base=True)
-        sim.hide_from_rays(self._body)
+        self._load(sim, fixed_base=True)
         joints = sim.joint_indices(self._body)
         m = self.model
         self._arm = [joints[name] for name in m.arm_joints]
         self._fingers = [joints[name] for name in m.finger_joints]
-        self.link_index = sim.link_indices(self._body)
-        self.link_names = m.tracked_links
-        self._tracked = tuple(self.link_index[name] for name in m.tracked_links)
+        self._index_links(m.tracked_links)
         self._ee = self.link_index[m.ee_link]
         links = sorted(i for i in self.link_index.values() if i >= 0)
         self._nominal = dict(zip(links, sim.inertial_properties(self._body, links)))
-        self._dynamics = DynamicsSample()
         self._forces = m.effort_limit.copy()
         self._all_movable = sorted(self._arm + self._fingers)
         return self._body
 
-    def apply_dynamics(self, sample: DynamicsSample) -> None:
-        """This episode's link masses (inertias scale with them), friction, restitution and motor strength."""
-        if sample == self._dynamics:
-            return
-        scale_link_dynamics(self._sim, self._body, self._nominal, sample)
-        self._forces = self.model.effort_limit * sample.motor_scale
-        self._dynamics = sample
+    def _set_motor_scale(self, scale: float) -> None:
+        self._forces = self.model.effort_limit * scale
 
     def reset_to(self, q: tuple[float, ...]) -> None:
         """Arm at joint positions ``q`` (n,) at rest, fingers (if any) at their opening, motors holding."""

@@ -9,9 +9,8 @@ from pathlib import Path
 import numpy as np
 from gymnasium import spaces
 
-from clutter_gym.noise.dynamics import DynamicsSample
-from clutter_gym.robots.dynamics import scale_link_dynamics
 from clutter_gym.robots.state import RobotState, floating_base_state
+from clutter_gym.robots.urdf_robot import UrdfRobot
 from clutter_gym.robots.wheeled import WheeledBase, diffbot
 from clutter_gym.sim import Sim
 from clutter_gym.util.transforms import quat_to_matrix, yaw_quat
@@ -50,7 +49,7 @@ class DiffDriveConfig:
                 raise ValueError(f"{field} must be in (0, {hi}], got {value!r}")
 
 
-class DiffDriveRobot:
+class DiffDriveRobot(UrdfRobot):
     """Velocity-commanded differential drive.
 
     Action: Box(-1, 1, (2,)) = (linear, angular) velocity command normalised by the configured maxima. Values
@@ -74,17 +73,11 @@ class DiffDriveRobot:
         self.velocity_bound = np.array([2.0 * c.max_linear_speed, 2.0 * c.max_angular_speed], dtype=np.float32)
         self.spaces = {"velocity": spaces.Box(-self.velocity_bound, self.velocity_bound, dtype=np.float32)}
         self._velocity_limits = (float(self.velocity_bound[0]), float(self.velocity_bound[1]))
-        self._sim: Sim | None = None
-        self._body = -1
         self._hold: list[float] | None = None  # wheel angles held while the command is zero
 
     @property
     def urdf_path(self) -> Path:
         return self.base.urdf
-
-    @property
-    def body(self) -> int:
-        return self._body
 
     @property
     def wheel_joints(self) -> list[int]:
@@ -98,33 +91,22 @@ class DiffDriveRobot:
 
     def load(self, sim: Sim) -> int:
         """Load the URDF into ``sim`` and look up joint and link indices."""
-        self._sim = sim
-        self._body = sim.load_urdf("robot", self.urdf_path)
+        self._load(sim)
         self._hold = None
-        sim.hide_from_rays(self._body)
         joints = sim.joint_indices(self._body)
         b = self.base
         self._wheels = [joints[name] for name in (*b.left_wheels, *b.right_wheels)]
         self._n_left = len(b.left_wheels)
-        self.link_index = sim.link_indices(self._body)
-        self.link_names = b.tracked_links
-        self._tracked = tuple(self.link_index[name] for name in b.tracked_links)
+        self._index_links(b.tracked_links)
         self._com_offset = sim.base_inertial_offset(self._body)
         self._torques = [self.config.max_wheel_torque] * len(self._wheels)
         self._still = [0.0] * len(self._wheels)
         links = [-1, *sorted(self.link_index.values())]
         self._nominal = dict(zip(links, sim.inertial_properties(self._body, links)))
-        self._dynamics = DynamicsSample()
         return self._body
 
-    def apply_dynamics(self, sample: DynamicsSample) -> None:
-        """Set this episode's masses (inertias scale with them), friction, restitution and motor strength,
-        relative to the URDF's nominal values (a no-op when nothing changed)."""
-        if sample == self._dynamics:
-            return
-        scale_link_dynamics(self._sim, self._body, self._nominal, sample)
-        self._torques = [self.config.max_wheel_torque * sample.motor_scale] * len(self._wheels)
-        self._dynamics = sample
+    def _set_motor_scale(self, scale: float) -> None:
+        self._torques = [self.config.max_wheel_torque * scale] * len(self._wheels)
 
     def reset_to(self, start: tuple[float, float, float]) -> None:
         """Place the robot at rest at ``start`` = (x m, y m, yaw rad)."""

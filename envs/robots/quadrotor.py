@@ -24,6 +24,7 @@ from clutter_gym.robots.rigid_body import RigidFrames, rigid_body
 from clutter_gym.robots.rotors import RotorModel
 from clutter_gym.robots.state import RobotState
 from clutter_gym.robots.thrust_estimate import RATIO_BOUNDS, ThrustRatioEstimator
+from clutter_gym.robots.urdf_robot import UrdfRobot
 from clutter_gym.sim import Sim
 from clutter_gym.util.checks import is_number
 from clutter_gym.util.transforms import quat_to_matrix, yaw_quat
@@ -151,7 +152,7 @@ class QuadrotorConfig:
                          self.rate_integral_limit)
 
 
-class Quadrotor:
+class Quadrotor(UrdfRobot):
     """Rate- or motor-commanded quadrotor on per-rotor forces.
 
     Action: Box(-1, 1, (4,)). With ``control="rates"``: ``T = (a0 + 1) / 2 * 4 kf w_max^2`` (N, collective
@@ -202,8 +203,6 @@ class Quadrotor:
         self._rates = c.control == "rates"
         self._drag = "drag" in c.aero
         self._ground_effect = "ground_effect" in c.aero
-        self._sim: Sim | None = None
-        self._body = -1
         self._controller: RateController | None = None
         self._estimator: ThrustRatioEstimator | None = None
         self._nominal_thrust = 0.0  # N, the model's thrust over the last tick (what the estimator compares)
@@ -218,10 +217,6 @@ class Quadrotor:
     @property
     def urdf_path(self) -> Path:
         return asset_path(self.urdf)
-
-    @property
-    def body(self) -> int:
-        return self._body
 
     @property
     def rotor_speeds(self) -> np.ndarray:
@@ -253,12 +248,10 @@ class Quadrotor:
             ValueError: a link's URDF inertia has products of inertia (pybullet takes principal moments only), or
                 the merged body's centre of mass is not the URDF's (mass on a link other than the base).
         """
-        self._sim = sim
-        self._body = sim.load_urdf("robot", self.urdf_path, merge_fixed_links=True)
+        self._load(sim, merge_fixed_links=True)
         sim.set_damping(self._body, 0.0, 0.0)
         sim.paint(self._body, AIRFRAME_COLOUR)  # one colour: a camera hides the merged body and shows it again
-        sim.hide_from_rays(self._body)
-        self.link_index = sim.link_indices(self._body)
+        self.link_index = sim.link_indices(self._body)  # the merged body's: the tracked links follow from the base
         self.link_names = TRACKED_LINKS
         self._com_offset = sim.base_inertial_offset(self._body)
         if np.abs(self._com_offset - self.model.com).max() > 1e-9:
@@ -281,18 +274,12 @@ class Quadrotor:
                 raise ValueError(f"{self.urdf} link {names[link]!r}: give the inertia in principal axes")
             self._nominal[link] = (mass, mu, tuple(np.diag(inertia).tolist()))
         scale_link_dynamics(sim, self._body, self._nominal, DynamicsSample())
-        self._dynamics = DynamicsSample()
         self._thrust_scale = 1.0
         return self._body
 
-    def apply_dynamics(self, sample: DynamicsSample) -> None:
-        """Set this episode's masses (inertias scale with them), friction and restitution relative to the URDF,
-        and scale the rotors' thrust and torque by the motor strength (the inner loop keeps the nominal model)."""
-        if sample == self._dynamics:
-            return
-        scale_link_dynamics(self._sim, self._body, self._nominal, sample)
-        self._thrust_scale = float(sample.motor_scale)
-        self._dynamics = sample
+    def _set_motor_scale(self, scale: float) -> None:
+        """The rotors' thrust and torque scale with the motor strength (the inner loop keeps the nominal model)."""
+        self._thrust_scale = float(scale)
 
     def reset_to(self, start: tuple[float, float, float, float]) -> None:
         """Place the robot at rest at ``start`` = (x m, y m, z m of the base frame, yaw rad), level; the rotors
