@@ -27,7 +27,6 @@ fails when they no longer match their URDFs.
 from __future__ import annotations
 
 import json
-import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -40,6 +39,7 @@ from clutter_gym.collision.fidelity import COARSE_LEVELS, CONFIRM_LEVEL, build_l
 from clutter_gym.collision.kinematics import UrdfKinematics
 from clutter_gym.collision.urdf_geometry import load_collision_elements, urdf_digest
 from clutter_gym.util.atomic import write_text_atomically
+from clutter_gym.util.cache_dir import user_cache_dir
 
 ACM_SAMPLES = 10_000
 ALWAYS_FRACTION = 0.95
@@ -186,11 +186,6 @@ def _count_collisions(model, kinematics: UrdfKinematics, q: np.ndarray, candidat
     return hits
 
 
-def _user_cache_dir() -> Path:
-    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(base) / "clutter-gym" / "acm"
-
-
 def load_acm(urdf: str | Path, fidelity: str, samples: int = ACM_SAMPLES,
              seed: int = ACM_SEED) -> AllowedCollisionMatrix:
     """The cached ACM of ``urdf`` at ``fidelity`` (shipped or user cache), generating and caching it if absent.
@@ -203,7 +198,7 @@ def load_acm(urdf: str | Path, fidelity: str, samples: int = ACM_SAMPLES,
         fidelity = "mesh"
     key = acm_key(urdf, fidelity, samples, seed)
     name = f"{Path(urdf).stem}-{key}.json"
-    for folder in (SHIPPED_DIR, _user_cache_dir()):
+    for folder in (SHIPPED_DIR, user_cache_dir("acm")):
         path = folder / name
         if path.is_file():
             acm = AllowedCollisionMatrix.from_json(path.read_text())
@@ -211,7 +206,7 @@ def load_acm(urdf: str | Path, fidelity: str, samples: int = ACM_SAMPLES,
                 return acm
     acm = generate_acm(urdf, fidelity, samples, seed)
     try:
-        save_acm(acm, urdf, _user_cache_dir())
+        save_acm(acm, urdf, user_cache_dir("acm"))
     except OSError:  # a read-only home still gets a working (uncached) ACM
         pass
     return acm

@@ -15,7 +15,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import pybullet_data
 import yaml
 
 from clutter_gym.robots.arm import Arm
@@ -23,6 +22,7 @@ from clutter_gym.robots.arm_model import arm_from_spec
 from clutter_gym.robots.panda import PandaArm
 from clutter_gym.robots.quadrotor import Quadrotor
 from clutter_gym.robots.wheeled import diffbot, wheeled_base_from_spec
+from clutter_gym.sim import pybullet_data_file
 
 #: What each kind is, in words, for error messages.
 KINDS = {"diff_drive": "wheeled base", "arm": "fixed-base arm", "multirotor": "multirotor"}
@@ -120,7 +120,7 @@ register_robot("quadrotor", "multirotor", lambda: Quadrotor)
 # bumper's edge, 0.35 m above the floor (below the generated clutter's 0.5 m tops, which a scan from the top
 # plate would pass over), the camera above it; the URDF has its own IMU link.
 register_robot("husky", "diff_drive", {
-    "urdf": str(Path(pybullet_data.getDataPath()) / "husky" / "husky.urdf"),
+    "urdf": str(pybullet_data_file("husky/husky.urdf")),
     "name": "husky",
     "left_wheels": ["front_left_wheel", "rear_left_wheel"],
     "right_wheels": ["front_right_wheel", "rear_right_wheel"],
@@ -131,7 +131,7 @@ register_robot("husky", "diff_drive", {
 # The KUKA LBR iiwa 7 R800 from pybullet_data, with a tool point 0.1 m out from its flange. Its URDF claims 10 rad/s
 # and 300 N m on every joint; the limits here are the robot's datasheet values.
 register_robot("kuka_iiwa", "arm", {
-    "urdf": str(Path(pybullet_data.getDataPath()) / "kuka_iiwa" / "model.urdf"),
+    "urdf": str(pybullet_data_file("kuka_iiwa/model.urdf")),
     "name": "kuka_iiwa",
     "arm_joints": [f"lbr_iiwa_joint_{i}" for i in range(1, 8)],
     "ee_link": "tool_point",
@@ -143,7 +143,7 @@ register_robot("kuka_iiwa", "arm", {
 })
 # The UFactory xArm6 from pybullet_data, with a tool point 0.1 m out from its flange; its URDF's limits are kept.
 register_robot("xarm6", "arm", {
-    "urdf": str(Path(pybullet_data.getDataPath()) / "xarm" / "xarm6_robot.urdf"),
+    "urdf": str(pybullet_data_file("xarm/xarm6_robot.urdf")),
     "name": "xarm6",
     "arm_joints": [f"joint{i}" for i in range(1, 7)],
     "ee_link": "tool_point",

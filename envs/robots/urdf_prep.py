@@ -14,7 +14,6 @@ allowed-collision matrix), is the same on every machine.
 from __future__ import annotations
 
 import hashlib
-import os
 import re
 import shutil
 import xml.etree.ElementTree as ET
@@ -23,6 +22,7 @@ from pathlib import Path
 
 from clutter_gym.collision.urdf_geometry import parse_urdf, resolve_mesh
 from clutter_gym.util.atomic import atomic_path, write_text_atomically
+from clutter_gym.util.cache_dir import user_cache_dir
 
 #: kg of a link the URDF gives no mass (pybullet's default would be 1 kg)
 TOKEN_MASS = 1e-3
@@ -37,12 +37,6 @@ class Mount:
     parent: str
     xyz: tuple[float, float, float] = (0.0, 0.0, 0.0)
     rpy: tuple[float, float, float] = (0.0, 0.0, 0.0)
-
-
-def user_cache_dir(what: str) -> Path:
-    """``$XDG_CACHE_HOME/clutter-gym/<what>`` (default ``~/.cache/clutter-gym/<what>``)."""
-    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(base) / "clutter-gym" / what
 
 
 def prepared_urdf(source: str | Path, name: str, mounts: tuple[Mount, ...] = ()) -> Path:
