@@ -4,7 +4,7 @@
 Each command first makes ``.venv`` (once) and installs clutter-gym into it with its test, training, benchmark and Ray
 extras, with torch's version pinned through ``constraints.txt``. The package itself is reinstalled (not in editable
 mode) whenever its sources change, so tests always import what a user's ``pip install .`` would give them. ``test``
-runs ``ruff check .`` (settings in pyproject.toml) before pytest.
+runs ``ruff check .`` (settings in pyproject.toml) and mypy on the contracts (:data:`TYPED_MODULES`) before pytest.
 
 pybullet 3.2.7 ships wheels for CPython 3.10 and 3.11 only; on a newer Python pip compiles it from source (a C++
 compiler, the Python headers and many minutes, see the README). So when ``.venv`` does not exist yet and this file
@@ -27,6 +27,10 @@ VENV = ROOT / ".venv"
 BIN = VENV / ("Scripts" if sys.platform == "win32" else "bin")
 PY = BIN / "python"
 SOURCES = ("pyproject.toml", "constraints.txt", "envs", "training", "assets")
+#: mypy checks these, as installed: the contracts (datatypes.py, interfaces.py), the env core, and the modules that
+#: build each env's parts, so every robot, arena, task and sensor an env is made of is held to its protocol.
+TYPED_MODULES = ("clutter_gym.datatypes", "clutter_gym.interfaces", "clutter_gym.core", "clutter_gym.sensors.suite",
+                 "clutter_gym.clutter_nav", "clutter_gym.clutter_reach", "clutter_gym.clutter_fly")
 #: The Pythons pybullet 3.2.7 has wheels for, newest first.
 WHEEL_PYTHONS = ((3, 11), (3, 10))
 
@@ -96,6 +100,19 @@ def ensure_installed() -> None:
         pkg_stamp.write_text(pkg)
 
 
+def static_checks() -> bool:
+    """ruff over the repository, then mypy over :data:`TYPED_MODULES` (imports followed, their errors not shown)."""
+    if subprocess.run([str(PY), "-m", "ruff", "check", "."], cwd=ROOT).returncode != 0:
+        print("ruff: style errors above (ruff check --fix . fixes import order)", file=sys.stderr)
+        return False
+    mypy = [str(PY), "-m", "mypy", "--follow-imports=silent", *(arg for m in TYPED_MODULES for arg in ("-m", m))]
+    if subprocess.run(mypy, cwd=ROOT).returncode != 0:
+        print("mypy: a part no longer has what its protocol in clutter_gym/interfaces.py declares (above)",
+              file=sys.stderr)
+        return False
+    return True
+
+
 def main(argv: list[str]) -> int:
     commands = {
         "main": [str(BIN / "clutter-gym"), "report"],
@@ -108,8 +125,7 @@ def main(argv: list[str]) -> int:
         return 2
     use_a_wheel_python(argv)
     ensure_installed()
-    if argv[0] == "test" and subprocess.run([str(PY), "-m", "ruff", "check", "."], cwd=ROOT).returncode != 0:
-        print("ruff: style errors above (ruff check --fix . fixes import order)", file=sys.stderr)
+    if argv[0] == "test" and not static_checks():
         return 1
     return subprocess.run([*commands[argv[0]], *argv[1:]], cwd=ROOT).returncode
 

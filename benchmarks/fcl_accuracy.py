@@ -19,7 +19,7 @@ import numpy as np
 from benchmarks.harness import table_header
 from clutter_gym.collision import obstacle_object
 from clutter_gym.collision.distance import signed_distance
-from clutter_gym.worlds.scene import Obstacle
+from clutter_gym.datatypes import Obstacle
 
 CHASSIS_RADIUS = 0.17
 OBSTACLES = (

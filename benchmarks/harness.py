@@ -13,7 +13,7 @@ from typing import TypeVar
 import gymnasium as gym
 import numpy as np
 
-from clutter_gym.robots.state import RobotState
+from clutter_gym.datatypes import RobotState
 from clutter_gym.training.baselines import PotentialFieldNavigator
 from clutter_gym.util.quiet import quiet_c_output
 

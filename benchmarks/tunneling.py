@@ -46,10 +46,9 @@ import numpy as np
 
 import clutter_gym  # noqa: F401  (registers the envs)
 from clutter_gym.collision import CollisionChecker, CollisionElement, RobotCollisionModel, build_link_shapes
+from clutter_gym.datatypes import LinkStates, Obstacle, RobotState
 from clutter_gym.robots.panda import READY
-from clutter_gym.robots.state import RobotState
-from clutter_gym.sim import LinkStates, Sim, pb
-from clutter_gym.worlds.scene import Obstacle
+from clutter_gym.sim import Sim, pb
 
 SPEEDS = (5.0, 10.0, 20.0)  # launch speeds, m/s
 WALLS = (0.01, 0.05)  # wall thicknesses for the launched bodies, metres

@@ -12,7 +12,7 @@ from clutter_gym.collision import RobotCollisionModel
 from clutter_gym.core import ClutterEnv, collision_checker
 from clutter_gym.make_checks import check_env_settings, check_flags, check_numbers
 from clutter_gym.noise.profiles import NoiseProfile, resolve_noise
-from clutter_gym.robots import QuadrotorConfig
+from clutter_gym.robots import Quadrotor, QuadrotorConfig
 from clutter_gym.robots.quadrotor import TRACKED_LINKS
 from clutter_gym.robots.registry import resolve_robot
 from clutter_gym.robots.rigid_body import RigidBody
@@ -206,15 +206,15 @@ class ClutterFlyEnv(ClutterEnv):
             raise ValueError(f"swept_speed must be > 0 m/s (inf disables swept checks), got {swept_speed!r}")
         if isinstance(aero, str) or not isinstance(aero, Sequence):
             raise ValueError(f"aero must be a tuple of names from ('drag', 'ground_effect'), got {aero!r}")
-        flyer = resolve_robot(robot, "multirotor", "ClutterFly-v0")
-        robot = flyer(QuadrotorConfig(aero=tuple(aero), observe_thrust_ratio=observe_thrust_ratio))
+        make_flyer = resolve_robot(robot, "multirotor", "ClutterFly-v0")
+        flyer: Quadrotor = make_flyer(QuadrotorConfig(aero=tuple(aero), observe_thrust_ratio=observe_thrust_ratio))
         spec = _volume_spec(volume_size, obstacle_density, ceiling)
         # the airframe is rigid (fixed joints only), so self-collision is off and no allowed-collision matrix is
         # needed; the task reads only the robot's clearance, so no link's own is resolved
-        checker = collision_checker(robot, TRACKED_LINKS, collision_fidelity, collision_padding, contact_tolerance,
+        checker = collision_checker(flyer, TRACKED_LINKS, collision_fidelity, collision_padding, contact_tolerance,
                                     max(CLEARANCE_RANGE, clearance_margin), control_hz, self_collision=False,
                                     swept_speed=swept_speed, per_link=False)
-        radius = bounding_radius(checker.model, robot.model)
+        radius = bounding_radius(checker.model, flyer.model)
         lidar = LidarConfig(n_rays=n_rays, fov=lidar_fov, max_range=lidar_range, n_channels=lidar_channels,
                             vertical_fov=lidar_vertical_fov, link=SENSOR_LINK, caster=lidar_caster)
         camera = camera_config(camera_size, camera_modes, camera_fov, camera_far, camera_renderer, link=SENSOR_LINK)
@@ -229,13 +229,13 @@ class ClutterFlyEnv(ClutterEnv):
             clearance_margin=clearance_margin,
             max_tilt=max_tilt,
             terminate_on_collision=terminate_on_collision,
-            hover_action=robot.hover_action(GRAVITY),
+            hover_action=flyer.hover_action(GRAVITY),
             subgoal_lookahead=subgoal_lookahead,
         )
         super().__init__(
             physics_hz=physics_hz,
             solver_iterations=solver_iterations,
-            robot=robot,
+            robot=flyer,
             arena=VolumeArena(spec, radius, floor_obstacle=True),
             sensors=sensor_objects,
             checker=checker,
@@ -265,7 +265,8 @@ def _volume_spec(size: Any, density: float, ceiling: bool) -> VolumeSpec:
     height = size[2] if isinstance(size, (Sequence, np.ndarray)) and len(size) == 3 else None
     opening = OPENING_SIZE
     if is_number(height) and math.isfinite(height) and height > 0.0:
-        opening = tuple(min(own, share * float(height)) for own, share in zip(OPENING_SIZE, OPENING_SHARE))
+        (width, tall), (width_share, tall_share) = OPENING_SIZE, OPENING_SHARE
+        opening = (min(width, width_share * float(height)), min(tall, tall_share * float(height)))
     try:
         return VolumeSpec(size=size, obstacle_density=density, ceiling=ceiling, opening_size=opening)
     except ValueError as exc:

@@ -207,7 +207,7 @@ class ClutterNavEnv(ClutterEnv):
         check_flags(terminate_on_collision=terminate_on_collision, reverse=reverse, observe_bearing=observe_bearing)
         self.forward_only = not reverse  # the linear action maps onto stand..full speed (see _command)
         base = resolve_robot(robot, "diff_drive", "ClutterNav-v0")
-        robot = DiffDriveRobot(DiffDriveConfig(max_linear_speed=max_linear_speed, max_angular_speed=max_angular_speed),
+        drive = DiffDriveRobot(DiffDriveConfig(max_linear_speed=max_linear_speed, max_angular_speed=max_angular_speed),
                                base)
         spec = ClutterSpec(arena_size=arena_size, obstacle_density=obstacle_density,
                            movable_fraction=movable_obstacles)
@@ -225,20 +225,20 @@ class ClutterNavEnv(ClutterEnv):
             terminate_on_collision=terminate_on_collision,
             max_goal_distance=math.sqrt(2.0) * arena_size,
             spec=spec,
-            robot_radius=robot.config.footprint_radius,
+            robot_radius=drive.config.footprint_radius,
             subgoal_lookahead=subgoal_lookahead,
             observe_bearing=observe_bearing,
         )
         # the whole arena is in range: every step reports the distance to the nearest obstacle
-        checker = collision_checker(robot, base.tracked_links, collision_fidelity, collision_padding, contact_tolerance,
+        checker = collision_checker(drive, base.tracked_links, collision_fidelity, collision_padding, contact_tolerance,
                                     math.sqrt(2.0) * arena_size, control_hz)
-        safety = _safety_filter(SafetyConfig(safety_horizon, safety_margin, safety_recovery), sensors, lidar, robot,
+        safety = _safety_filter(SafetyConfig(safety_horizon, safety_margin, safety_recovery), sensors, lidar, drive,
                                 control_hz)
         super().__init__(
             physics_hz=physics_hz,
             solver_iterations=solver_iterations,
-            robot=robot,
-            arena=ClutterArena(spec, robot.config.footprint_radius),
+            robot=drive,
+            arena=ClutterArena(spec, drive.config.footprint_radius),
             sensors=sensor_objects,
             checker=checker,
             task=task,

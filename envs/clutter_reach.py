@@ -10,7 +10,7 @@ from clutter_gym.core import ClutterEnv, collision_checker
 from clutter_gym.make_checks import check_env_settings, check_flags, check_numbers
 from clutter_gym.noise.profiles import NoiseProfile, resolve_noise
 from clutter_gym.planning.joint_space import ArmPlanner
-from clutter_gym.robots.arm import ArmConfig
+from clutter_gym.robots.arm import Arm, ArmConfig
 from clutter_gym.robots.registry import resolve_robot
 from clutter_gym.tasks import ReachRewardWeights, ReachTask
 from clutter_gym.worlds import TableSpec, TabletopArena
@@ -160,12 +160,12 @@ class ClutterReachEnv(ClutterEnv):
             raise ValueError(f"clearance_range must be in [0.01, 2] metres, got {clearance_range!r}")
         if not (swept_speed > 0.0):  # inf allowed: no swept checks
             raise ValueError(f"swept_speed must be > 0 m/s (inf disables swept checks), got {swept_speed!r}")
-        arm = resolve_robot(robot, "arm", "ClutterReach-v0")
-        robot = arm(ArmConfig(control, max_joint_speed, max_ee_step), control_dt=1.0 / control_hz)
-        model = robot.model
-        checker = collision_checker(robot, model.tracked_links, collision_fidelity, collision_padding,
+        make_arm = resolve_robot(robot, "arm", "ClutterReach-v0")
+        arm: Arm = make_arm(ArmConfig(control, max_joint_speed, max_ee_step), control_dt=1.0 / control_hz)
+        model = arm.model
+        checker = collision_checker(arm, model.tracked_links, collision_fidelity, collision_padding,
                                     contact_tolerance, clearance_range, control_hz, self_collision=self_collision,
-                                    swept_speed=swept_speed, fixed_links=(robot.base_link, *model.fixed_links))
+                                    swept_speed=swept_speed, fixed_links=(arm.base_link, *model.fixed_links))
         task = ReachTask(
             ReachRewardWeights(progress_weight, success_weight, contact_weight, self_contact_weight, clearance_weight,
                                tunneling_weight, control_weight),
@@ -183,7 +183,7 @@ class ClutterReachEnv(ClutterEnv):
         super().__init__(
             physics_hz=physics_hz,
             solver_iterations=solver_iterations,
-            robot=robot,
+            robot=arm,
             arena=TabletopArena(TableSpec(n_obstacles=n_obstacles, shelf=bool(shelf), movable_fraction=movable_obstacles),
                                 model.ready, model.lower, model.upper, model.shoulder, model.reach),
             sensors=(),

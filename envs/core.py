@@ -9,20 +9,20 @@ from __future__ import annotations
 import math
 from collections import deque
 from collections.abc import Mapping, Sequence
-from typing import Any
+from typing import Any, cast
 
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from clutter_gym.collision import CollisionChecker, CollisionReport, RobotCollisionModel, check_fidelity
-from clutter_gym.interfaces import Arena, Layout, Robot, Sensor, Task
+from clutter_gym.collision import CollisionChecker, RobotCollisionModel, check_fidelity
+from clutter_gym.datatypes import CollisionReport, RobotState
+from clutter_gym.interfaces import Arena, L, Layout, Robot, Sensor, Task, TickedRobot
 from clutter_gym.make_checks import RENDER_MODES, check_keywords
 from clutter_gym.noise.action import ActionChannel
 from clutter_gym.noise.dynamics import sample_dynamics
 from clutter_gym.noise.profiles import NoiseProfile
 from clutter_gym.robots.safety import SafetyFilter
-from clutter_gym.robots.state import RobotState
 from clutter_gym.sensors.timing import SampleHoldDelay, timed_reading
 from clutter_gym.sim import Sim
 from clutter_gym.util.camera_view import CameraView, orbit_angles
@@ -49,11 +49,14 @@ class ClutterEnv(gym.Env):
         noise: sensor timing, actuation noise and dynamics randomisation (the sensors carry their own noise).
         render_mode: None, "rgb_array" or "human".
         render_size: (width, height) of rgb_array frames in pixels.
-        safety: slows each action's linear command by what the latest ``lidar_ranges`` reading allows, and spins
-            the base free when it stays pinned, before actuation noise and latency (None: actions pass unchanged).
+        safety: slows each action's linear command by what the latest reading of its sensor (``safety.sensor``, one
+            of ``sensors``) allows, and spins the base free when it stays pinned, before actuation noise and latency
+            (None: actions pass unchanged).
     """
 
     metadata = {"render_modes": list(RENDER_MODES), "render_fps": 20}
+    arena: Arena[Any]  # and the task: of one layout type, which __init__'s signature holds them to
+    task: Task[Any]
 
     def __new__(cls, *args: Any, **kwargs: Any) -> ClutterEnv:
         """Check the keyword arguments against the env's own before it is built: a misspelt one is named with the
@@ -66,10 +69,10 @@ class ClutterEnv(gym.Env):
         physics_hz: float,
         solver_iterations: int,
         robot: Robot,
-        arena: Arena,
+        arena: Arena[L],
         sensors: Sequence[Sensor],
         checker: CollisionChecker,
-        task: Task,
+        task: Task[L],
         control_hz: float,
         noise: NoiseProfile,
         render_mode: str | None = None,
@@ -83,7 +86,8 @@ class ClutterEnv(gym.Env):
                   visuals=visuals)
         self.sim, self.robot, self.arena, self.checker, self.task = sim, robot, arena, checker, task
         self.safety = safety
-        self._scan: np.ndarray | None = None  # the latest lidar_ranges delivered, for the safety filter
+        self._scan: np.ndarray | None = None  # the reading of the safety filter's sensor delivered last
+        self._scan_from = _sensor_named(self.sensors, safety.sensor) if safety else None
         self.noise = noise
         self._clocks = tuple(SampleHoldDelay(noise.timing[s.name], 1.0 / control_hz) for s in self.sensors)
         self._action_channel = ActionChannel(noise.action, robot.action_space.shape[0])
@@ -96,7 +100,7 @@ class ClutterEnv(gym.Env):
         self.metadata = {**self.metadata, "render_fps": control_hz}
         self.substeps = int(round(sim.physics_hz / control_hz))  # physics ticks per action
         # a TickedRobot (interfaces.py) acts before every physics tick; others once per action
-        self._before_tick = robot.before_tick if getattr(robot, "ticked", False) else None
+        self._before_tick = cast(TickedRobot, robot).before_tick if getattr(robot, "ticked", False) else None
         self._build_world()
         self.action_space = robot.action_space
         self._action_low = self.action_space.low.astype(np.float64)
@@ -193,7 +197,11 @@ class ClutterEnv(gym.Env):
                 raise RuntimeError(f"the last reset() failed ({self._failed_reset}); call reset() again before step()")
             raise RuntimeError("call reset() before step()")
         a = self._command(self._checked_action(action))
-        applied, speed_scale = self.safety.filter(a, self._scan) if self.safety else (a, 1.0)
+        if self.safety:
+            assert self._scan is not None  # every reset delivers a reading of the filter's sensor
+            applied, speed_scale = self.safety.filter(a, self._scan)
+        else:
+            applied, speed_scale = a, 1.0
         command = self._action_channel.send(applied, self._noise_rng)
         if command is not applied:
             command = np.minimum(np.maximum(command, self._action_low), self._action_high)
@@ -237,7 +245,7 @@ class ClutterEnv(gym.Env):
         """``action`` as float64 within the bounds: any real dtype and container of the right shape, clipped, and an
         object array whose every element is a real number (Python's, numpy's, a Fraction); anything else (strings,
         None, bools, complex numbers, NaN, Inf) is a ``ValueError`` naming the action."""
-        shape = self.action_space.shape
+        shape = self._action_low.shape
         try:
             a = np.asarray(action)
         except ValueError:  # ragged nesting
@@ -271,10 +279,11 @@ class ClutterEnv(gym.Env):
         obs: dict[str, np.ndarray] = {}
         info: dict[str, Any] = {}
         for sensor, clock in zip(self.sensors, self._clocks):
-            sensor_obs, sensor_info = timed_reading(sensor, clock, self.sim, state, self._noise_rng)
+            sensor_obs, sensor_info, reading = timed_reading(sensor, clock, self.sim, state, self._noise_rng)
             obs.update(sensor_obs)
             info.update(sensor_info)
-        self._scan = info.get("lidar_ranges")
+            if sensor is self._scan_from:
+                self._scan = reading
         obs.update(self.task.observe(state, report))
         obs.update(self.robot.observe(state))
         floats = [v for v in obs.values() if v.dtype.kind == "f"]  # integer images cannot hold NaN/Inf
@@ -306,7 +315,8 @@ class ClutterEnv(gym.Env):
         focus, goal = self._focus_and_goal()
         eye, target = self.arena.render_camera(self.sim, focus, goal)
         width, height = self.render_size
-        return CameraView(tuple(map(float, eye)), tuple(map(float, target)), width, height)
+        return CameraView((float(eye[0]), float(eye[1]), float(eye[2])),
+                          (float(target[0]), float(target[1]), float(target[2])), width, height)
 
     def _note_focus(self, state: RobotState, restart: bool = False) -> None:
         """Remember where the robot's focus is, for the trail the frames draw; only while a render mode is set."""
@@ -319,8 +329,8 @@ class ClutterEnv(gym.Env):
 
     def _focus_and_goal(self) -> tuple[np.ndarray, np.ndarray]:
         """The robot's focus and the goal marker's centre, world frame (before the first reset: where the robot
-        stands, for both)."""
-        if not self._trail:
+        stands, for both; so too after a reset that failed, which left no scene)."""
+        if not self._trail or self.scene is None:
             centre, self._focus_radius = self.robot.render_focus(self.robot.state())
             return np.asarray(centre, dtype=float), np.asarray(centre, dtype=float)
         return self._trail[-1], np.asarray(self.task.marker_position(self.scene), dtype=float)
@@ -367,9 +377,13 @@ def collision_checker(robot: Robot, tracked_links: Sequence[str], fidelity: str,
                             fixed_links=fixed_links, per_link=per_link)
 
 
+def _sensor_named(sensors: Sequence[Sensor], name: str) -> Sensor:
+    """The sensor called ``name`` among ``sensors``.
 
-
-
-
-
-
+    Raises:
+        ValueError: none is (the message lists the sensors there are).
+    """
+    for sensor in sensors:
+        if sensor.name == name:
+            return sensor
+    raise ValueError(f"the safety filter reads the {name!r} sensor; the env's sensors are {[s.name for s in sensors]}")

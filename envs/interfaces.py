@@ -12,18 +12,16 @@ user's ``options["scene"]``), the robot starts at ``scene.start``, and the task 
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol, TypeVar
 
-import numpy as np
-from gymnasium import spaces
+from clutter_gym.datatypes import CollisionReport, DynamicsSample, Obstacle, RobotState, StepOutcome
 
-from clutter_gym.collision import CollisionReport
-from clutter_gym.noise.dynamics import DynamicsSample
-from clutter_gym.robots.state import RobotState
-from clutter_gym.sim import Sim
-from clutter_gym.worlds.scene import Obstacle
+if TYPE_CHECKING:  # names in signatures only: importing this module loads no engine
+    import numpy as np
+    from gymnasium.spaces import Box, Space
+
+    from clutter_gym.sim import Sim
 
 
 class Layout(Protocol):
@@ -33,10 +31,18 @@ class Layout(Protocol):
     arm. ``to_dict()`` gives the ``options["scene"]`` form that reproduces the scene.
     """
 
-    obstacles: tuple[Obstacle, ...]
-    start: tuple[float, ...]
+    @property
+    def obstacles(self) -> tuple[Obstacle, ...]: ...
+
+    @property
+    def start(self) -> tuple[float, ...]: ...
 
     def to_dict(self) -> dict[str, Any]: ...
+
+
+#: An env's layout type: its arena draws that type and its task reads it (a type checker holds the two to one type).
+L = TypeVar("L", bound=Layout)
+L_contra = TypeVar("L_contra", bound=Layout, contravariant=True)
 
 
 class Robot(Protocol):
@@ -49,12 +55,27 @@ class Robot(Protocol):
         action_space: the env's action space (``Box(-1, 1, ...)``).
         spaces: the observation entries :meth:`observe` fills.
         body: pybullet body id once loaded.
+        link_names: the links :meth:`state` reads every step, the rows of ``RobotState.links``; set by :meth:`load`.
+        link_index: pybullet index of every link by URDF name (-1 for the base); set by :meth:`load`.
     """
 
-    name: str
-    base_link: str
-    action_space: spaces.Box
-    spaces: dict[str, spaces.Space]
+    @property
+    def name(self) -> str: ...
+
+    @property
+    def base_link(self) -> str: ...
+
+    @property
+    def action_space(self) -> Box: ...
+
+    @property
+    def spaces(self) -> Mapping[str, Space]: ...
+
+    @property
+    def link_names(self) -> tuple[str, ...]: ...
+
+    @property
+    def link_index(self) -> Mapping[str, int]: ...
 
     @property
     def urdf_path(self) -> Path: ...
@@ -96,23 +117,24 @@ class TickedRobot(Robot, Protocol):
     robots without the attribute keep ``sim.step(substeps)``.
     """
 
-    ticked: bool
+    @property
+    def ticked(self) -> bool: ...
 
     def before_tick(self) -> None:
         """Apply this tick's actuation (forces, motor targets) from the command :meth:`Robot.apply_action` held."""
 
 
-class Arena(Protocol):
+class Arena(Protocol[L]):
     """The world around the robot: fixed structure built with the world, clutter moved into place per episode."""
 
     def load(self, sim: Sim) -> None:
         """Build the fixed structure (walls, a table) in an empty world; like :meth:`Robot.load`, called again
         after :meth:`Sim.clear`."""
 
-    def choose_scene(self, rng: np.random.Generator, options: Mapping[str, Any] | None) -> Layout:
+    def choose_scene(self, rng: np.random.Generator, options: Mapping[str, Any] | None) -> L:
         """The user's ``options["scene"]`` (validated: errors name the field) or a layout drawn from ``rng``."""
 
-    def place(self, scene: Layout) -> tuple[tuple[Obstacle, ...], list[int]]:
+    def place(self, scene: L) -> tuple[tuple[Obstacle, ...], list[int]]:
         """Move pooled bodies into ``scene``; returns every obstacle (fixed structure included) and its body ids,
         in the same order, for the collision checker."""
 
@@ -123,23 +145,7 @@ class Arena(Protocol):
         front of an obstacle) but never changes the world."""
 
 
-@dataclass(frozen=True, slots=True)
-class StepOutcome:
-    """Reward, its signed terms, the episode-ending flags and the safety cost of one step, by cause (the env puts
-    each in ``info["cost_<cause>"]`` and their sum in ``info["cost"]``)."""
-
-    reward: float
-    terms: dict[str, float]
-    terminated: bool
-    is_success: bool
-    costs: dict[str, float]
-
-    @property
-    def cost(self) -> float:
-        return sum(self.costs.values())
-
-
-class Task(Protocol):
+class Task(Protocol[L_contra]):
     """Turns ground truth (never noisy observations) into named reward terms, a cost and termination.
 
     Attributes:
@@ -147,13 +153,16 @@ class Task(Protocol):
         spaces: the observation entries :meth:`observe` fills (the goal, as the robot would know it).
     """
 
-    success_radius: float
-    spaces: dict[str, spaces.Space]
+    @property
+    def success_radius(self) -> float: ...
 
-    def marker_position(self, scene: Layout) -> tuple[float, float, float]:
+    @property
+    def spaces(self) -> Mapping[str, Space]: ...
+
+    def marker_position(self, scene: L_contra) -> tuple[float, float, float]:
         """Where the goal marker is drawn, world frame."""
 
-    def reset(self, scene: Layout, state: RobotState) -> None:
+    def reset(self, scene: L_contra, state: RobotState) -> None:
         """Start an episode on ``scene`` with the robot in ``state``."""
 
     def observe(self, state: RobotState, report: CollisionReport) -> dict[str, np.ndarray]:
@@ -177,10 +186,17 @@ class Sensor(Protocol):
         renders: the sensor draws images of the world, so the Sim must give obstacles visual shapes.
     """
 
-    name: str
-    spaces: dict[str, spaces.Space]
-    read_every_step: bool
-    renders: bool
+    @property
+    def name(self) -> str: ...
+
+    @property
+    def spaces(self) -> Mapping[str, Space]: ...
+
+    @property
+    def read_every_step(self) -> bool: ...
+
+    @property
+    def renders(self) -> bool: ...
 
     def reset(self, sim: Sim, state: RobotState, rng: np.random.Generator) -> None:
         """Start an episode: draw per-episode errors (biases, gains) from ``rng``."""

@@ -11,8 +11,8 @@ import pytest
 from helpers import SHELF_SEED
 
 from clutter_gym.collision.fidelity import COARSE_LEVELS, FIDELITY_LEVELS
+from clutter_gym.datatypes import Obstacle
 from clutter_gym.training.baselines import ProximityFieldReacher, StraightLineReacher
-from clutter_gym.worlds.scene import Obstacle
 from clutter_gym.worlds.tabletop import TABLE, TableSpec, point_clearance, sample_reach_scene
 
 READY = [0.0, -math.pi / 4, 0.0, -3 * math.pi / 4, 0.0, math.pi / 2, math.pi / 4]

@@ -10,9 +10,9 @@ from clutter_gym.collision.checker import CollisionChecker
 from clutter_gym.collision.fidelity import FIDELITY_LEVELS, LinkShape, build_link_shapes, check_fidelity
 from clutter_gym.collision.kinematics import UrdfKinematics
 from clutter_gym.collision.obstacles import obstacle_object
-from clutter_gym.collision.report import CollisionReport, Contact
 from clutter_gym.collision.robot_model import RobotCollisionModel, SelfClearance
 from clutter_gym.collision.urdf_geometry import CollisionElement, load_collision_elements
+from clutter_gym.datatypes import CollisionReport, Contact
 
 __all__ = [
     "FIDELITY_LEVELS",

@@ -16,7 +16,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from clutter_gym.collision.kernels import box_cylinder_distance
-from clutter_gym.worlds.scene import Obstacle
+from clutter_gym.datatypes import Obstacle
 
 
 class ObstacleBounds:

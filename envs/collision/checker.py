@@ -33,10 +33,8 @@ from clutter_gym.collision.bounds import ObstacleBounds
 from clutter_gym.collision.distance import signed_distance
 from clutter_gym.collision.kernels import shape_travel
 from clutter_gym.collision.obstacles import ObstacleObjects
-from clutter_gym.collision.report import CollisionReport, Contact
 from clutter_gym.collision.robot_model import RobotCollisionModel
-from clutter_gym.robots.state import RobotState
-from clutter_gym.worlds.scene import Obstacle
+from clutter_gym.datatypes import CollisionReport, Contact, Obstacle, RobotState
 
 #: Clearance reported when there is nothing to measure against (an empty scene without walls), metres.
 NO_OBSTACLE_CLEARANCE = 1e3

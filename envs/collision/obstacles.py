@@ -8,8 +8,8 @@ from collections.abc import Sequence
 import fcl
 import numpy as np
 
+from clutter_gym.datatypes import Obstacle
 from clutter_gym.util.transforms import quat_to_matrix, yaw_quat
-from clutter_gym.worlds.scene import Obstacle
 
 #: obstacle FCL objects kept for reuse; past this many the cache starts again (see :class:`ObstacleObjects`)
 MAX_CACHED_OBJECTS = 4096

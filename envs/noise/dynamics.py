@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from clutter_gym.datatypes import DynamicsSample
 from clutter_gym.noise.params import NoiseParams, param
 
 
@@ -25,16 +26,6 @@ class DynamicsNoise(NoiseParams):
     restitution_max: float = param(0.0, 0.0, 1.0, "", "largest restitution drawn")
     mass_range: float = param(0.0, 0.0, 0.9, "", "relative mass spread")
     motor_range: float = param(0.0, 0.0, 0.9, "", "relative torque-limit spread")
-
-
-@dataclass(frozen=True)
-class DynamicsSample:
-    """One episode's dynamics: multipliers of the nominal values, and an absolute restitution."""
-
-    friction_scale: float = 1.0
-    restitution: float = 0.0
-    mass_scale: float = 1.0
-    motor_scale: float = 1.0
 
 
 def sample_dynamics(rng: np.random.Generator, params: DynamicsNoise) -> DynamicsSample:

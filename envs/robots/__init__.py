@@ -1,10 +1,10 @@
 """Robots: one module each; a robot loads itself into a Sim, maps actions to motors and reads its state."""
 
+from clutter_gym.datatypes import RobotState
 from clutter_gym.robots.arm import Arm, ArmConfig
 from clutter_gym.robots.diffdrive import DiffDriveConfig, DiffDriveRobot
 from clutter_gym.robots.panda import PandaArm, PandaConfig
 from clutter_gym.robots.quadrotor import Quadrotor, QuadrotorConfig
-from clutter_gym.robots.state import RobotState
 
 __all__ = ["Arm", "ArmConfig", "DiffDriveConfig", "DiffDriveRobot", "PandaArm", "PandaConfig", "Quadrotor",
            "QuadrotorConfig", "RobotState"]

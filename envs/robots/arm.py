@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 from gymnasium import spaces
 
+from clutter_gym.datatypes import RobotState
 from clutter_gym.robots.arm_model import ArmModel
-from clutter_gym.robots.state import RobotState
 from clutter_gym.robots.urdf_robot import UrdfRobot
 from clutter_gym.sim import Sim
 

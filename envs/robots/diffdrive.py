@@ -9,7 +9,8 @@ from pathlib import Path
 import numpy as np
 from gymnasium import spaces
 
-from clutter_gym.robots.state import RobotState, floating_base_state
+from clutter_gym.datatypes import RobotState
+from clutter_gym.robots.state import floating_base_state
 from clutter_gym.robots.urdf_robot import UrdfRobot
 from clutter_gym.robots.wheeled import WheeledBase, diffbot
 from clutter_gym.sim import Sim
@@ -108,7 +109,7 @@ class DiffDriveRobot(UrdfRobot):
     def _set_motor_scale(self, scale: float) -> None:
         self._torques = [self.config.max_wheel_torque * scale] * len(self._wheels)
 
-    def reset_to(self, start: tuple[float, float, float]) -> None:
+    def reset_to(self, start: tuple[float, ...]) -> None:
         """Place the robot at rest at ``start`` = (x m, y m, yaw rad)."""
         self.reset_pose(*start)
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 
-from clutter_gym.noise.dynamics import DynamicsSample
+from clutter_gym.datatypes import DynamicsSample
 from clutter_gym.sim import Sim
 
 

@@ -16,13 +16,12 @@ import numpy as np
 from gymnasium import spaces
 
 from clutter_gym.assets import asset_path
-from clutter_gym.noise.dynamics import DynamicsSample
+from clutter_gym.datatypes import DynamicsSample, RobotState
 from clutter_gym.robots.aero import AERO_EFFECTS, ground_effect_gain, rotor_drag
 from clutter_gym.robots.dynamics import scale_link_dynamics
 from clutter_gym.robots.rate_loop import Mixer, RateController, RateGains, allocation
 from clutter_gym.robots.rigid_body import RigidFrames, rigid_body
 from clutter_gym.robots.rotors import RotorModel
-from clutter_gym.robots.state import RobotState
 from clutter_gym.robots.thrust_estimate import RATIO_BOUNDS, ThrustRatioEstimator
 from clutter_gym.robots.urdf_robot import UrdfRobot
 from clutter_gym.sim import Sim
@@ -281,7 +280,7 @@ class Quadrotor(UrdfRobot):
         """The rotors' thrust and torque scale with the motor strength (the inner loop keeps the nominal model)."""
         self._thrust_scale = float(scale)
 
-    def reset_to(self, start: tuple[float, float, float, float]) -> None:
+    def reset_to(self, start: tuple[float, ...]) -> None:
         """Place the robot at rest at ``start`` = (x m, y m, z m of the base frame, yaw rad), level; the rotors
         spin at hover speed (``start_hovering``) or stand, and the command holds that state."""
         x, y, z, yaw = start

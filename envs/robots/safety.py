@@ -74,7 +74,13 @@ class SafetyFilter:
         mount_xy: the scan origin in the base frame, metres.
         max_range: a range at or beyond it is no return.
         control_dt: seconds between two commands.
+
+    Attributes:
+        sensor: the name of the sensor whose readings (ranges, metres, one per beam) :meth:`filter` takes; the env
+            hands it that sensor's latest delivered reading, with the agent's latency and sample-and-hold.
     """
+
+    sensor = "lidar"
 
     def __init__(
         self,

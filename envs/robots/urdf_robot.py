@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
-from clutter_gym.noise.dynamics import DynamicsSample
+from clutter_gym.datatypes import DynamicsSample
 from clutter_gym.robots.dynamics import scale_link_dynamics
 from clutter_gym.sim import Sim
 

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 from gymnasium import spaces
 
+from clutter_gym.datatypes import RobotState
 from clutter_gym.noise.camera import (
     DepthEpisode,
     DepthNoise,
@@ -28,7 +29,6 @@ from clutter_gym.noise.camera import (
     start_rgb_episode,
 )
 from clutter_gym.noise.distortion import Intrinsics
-from clutter_gym.robots.state import RobotState
 from clutter_gym.sim import Sim
 
 CAMERA_MODES = ("rgb", "depth", "segmentation")
@@ -128,7 +128,7 @@ class Camera:
         self.rgb_noise = rgb_noise or RgbNoise()
         self.depth_noise = depth_noise or DepthNoise()
         shape = (c.height, c.width)
-        all_spaces = {
+        all_spaces: dict[str, spaces.Space] = {
             "rgb": spaces.Box(0, 255, (*shape, 3), dtype=np.uint8),
             "depth": spaces.Box(0.0, c.far, shape, dtype=np.float32),
             "segmentation": spaces.Box(0, len(SEGMENTATION_CLASSES) - 1, shape, dtype=np.uint8),

@@ -16,8 +16,8 @@ from typing import Any
 import numpy as np
 from gymnasium import spaces
 
+from clutter_gym.datatypes import RobotState
 from clutter_gym.noise.imu import ACCEL_RANGE, GYRO_RANGE, ImuEpisode, ImuNoise, apply_imu_noise, start_imu_episode
-from clutter_gym.robots.state import RobotState
 from clutter_gym.sim import GRAVITY, Sim
 
 

@@ -10,8 +10,8 @@ from typing import Any
 import numpy as np
 from gymnasium import spaces
 
+from clutter_gym.datatypes import RobotState
 from clutter_gym.noise.lidar import LidarEpisode, LidarNoise, angle_offsets, apply_lidar_noise, start_lidar_episode
-from clutter_gym.robots.state import RobotState
 from clutter_gym.sim import RAY_CASTERS, Sim
 from clutter_gym.util.checks import check_integer
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 from clutter_gym.interfaces import Sensor
 from clutter_gym.noise.profiles import NoiseProfile
@@ -29,7 +29,7 @@ def build_sensors(
     names: Sequence[str], noise: NoiseProfile, lidar: LidarConfig, imu: ImuConfig, camera: CameraConfig
 ) -> list[Sensor]:
     """One sensor per name, in order, each with its noise from the profile."""
-    factories = {
+    factories: dict[str, Callable[[], Sensor]] = {  # typed: mypy holds each sensor to the Sensor protocol
         "lidar": lambda: Lidar(lidar, noise.lidar),
         "imu": lambda: Imu(imu, noise.imu),
         "camera": lambda: Camera(camera, noise.camera_rgb, noise.camera_depth),

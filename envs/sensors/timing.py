@@ -11,9 +11,9 @@ from typing import Any
 
 import numpy as np
 
+from clutter_gym.datatypes import RobotState
 from clutter_gym.interfaces import Sensor
 from clutter_gym.noise.timing import SensorTiming
-from clutter_gym.robots.state import RobotState
 from clutter_gym.sim import Sim
 
 
@@ -62,16 +62,18 @@ class SampleHoldDelay:
 
 
 def timed_reading(sensor: Sensor, clock: SampleHoldDelay, sim: Sim, state: RobotState,
-                  rng: np.random.Generator) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
-    """One control step of ``sensor`` behind its ``clock``: the (observation, info) entries that arrive now.
+                  rng: np.random.Generator) -> tuple[dict[str, np.ndarray], dict[str, Any], Any]:
+    """One control step of ``sensor`` behind its ``clock``: the (observation, info, reading) that arrive now, the
+    reading in the sensor's physical units (what a filter downstream of the sensor gets).
 
     The sensor reads when its clock makes a reading due (or every step, if it must keep its own state current);
-    a held or delayed reading was handed out before, so it comes back as copies.
+    a held or delayed reading was handed out before, so its observation and info entries come back as copies.
     """
     due = clock.due()
     reading = sensor.read(sim, state, rng) if due or sensor.read_every_step else None
-    fresh = (sensor.observe(reading), sensor.info(reading)) if due else None
+    fresh = (sensor.observe(reading), sensor.info(reading), reading) if due else None
     delivered = clock.push(fresh)
     if delivered is not fresh:
-        delivered = tuple({k: np.copy(v) for k, v in part.items()} for part in delivered)
+        obs, info, reading = delivered
+        delivered = ({k: np.copy(v) for k, v in obs.items()}, {k: np.copy(v) for k, v in info.items()}, reading)
     return delivered

@@ -15,9 +15,9 @@ from clutter_gym.util.quiet import quiet_c_output
 with quiet_c_output():
     import pybullet as pb
 
-from clutter_gym.sim.core import GRAVITY, LinkStates, Sim, pybullet_data_file  # noqa: E402  (after the quiet import)
+from clutter_gym.sim.core import GRAVITY, Sim, pybullet_data_file  # noqa: E402  (after the quiet import)
 from clutter_gym.sim.obstacles import CYLINDER_SIDES, MAX_BODY_BATCH  # noqa: E402
 from clutter_gym.sim.rays import MAX_RAY_BATCH, RAY_CASTERS, RAY_INVISIBLE_GROUP  # noqa: E402
 
 __all__ = ["CYLINDER_SIDES", "GRAVITY", "MAX_BODY_BATCH", "MAX_RAY_BATCH", "RAY_CASTERS", "RAY_INVISIBLE_GROUP",
-           "LinkStates", "Sim", "pb", "pybullet_data_file"]
+           "Sim", "pb", "pybullet_data_file"]

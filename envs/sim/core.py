@@ -10,12 +10,12 @@ from __future__ import annotations
 import contextlib
 import weakref
 from collections.abc import Sequence
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pybullet as pb  # imported quietly by the package first
 
+from clutter_gym.datatypes import LinkStates
 from clutter_gym.sim.actuation import Actuation
 from clutter_gym.sim.obstacles import ObstacleBodies
 from clutter_gym.sim.primitives import PrimitiveTable
@@ -31,23 +31,6 @@ from clutter_gym.util.view_culling import ViewCuller
 GRAVITY = 9.81
 MAX_SHAPES = 256
 MAX_REMOVED_BODIES = 2_000
-
-
-@dataclass(frozen=True, slots=True)
-class LinkStates:
-    """Batched link states, world frame, one row per requested link.
-
-    Attributes:
-        position: (n, 3) link frame origins in metres (the URDF link frame, not the inertial frame).
-        rotation: (n, 3, 3) link frame orientations (columns are the link axes in world coordinates).
-        linear_velocity: (n, 3) velocity of the link's centre of mass in m/s.
-        angular_velocity: (n, 3) angular velocity in rad/s.
-    """
-
-    position: np.ndarray
-    rotation: np.ndarray
-    linear_velocity: np.ndarray
-    angular_velocity: np.ndarray
 
 
 def _disconnect(client: int) -> None:

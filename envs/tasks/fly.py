@@ -14,9 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
-from clutter_gym.collision import CollisionReport
-from clutter_gym.interfaces import StepOutcome
-from clutter_gym.robots.state import RobotState
+from clutter_gym.datatypes import CollisionReport, RobotState, StepOutcome
 from clutter_gym.tasks.terms import check_weights, clearance_term, control_term, cost_by_cause
 from clutter_gym.worlds.volume_path import VolumePathDistance
 from clutter_gym.worlds.volume_scene import VolumeScene, boundary_distance
@@ -83,7 +81,7 @@ class FlyTask:
         clearance_margin: float,
         max_tilt: float,
         terminate_on_collision: bool,
-        hover_action: Sequence[float],
+        hover_action: np.ndarray | Sequence[float],
         subgoal_lookahead: float = 0.0,
     ) -> None:
         if not (math.isfinite(success_radius) and 0.0 < success_radius <= 2.0):

@@ -12,9 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
-from clutter_gym.collision import CollisionReport
-from clutter_gym.interfaces import StepOutcome
-from clutter_gym.robots.state import RobotState
+from clutter_gym.datatypes import CollisionReport, RobotState, StepOutcome
 from clutter_gym.tasks.terms import check_weights, clearance_term, control_term, cost_by_cause
 from clutter_gym.worlds.clutter import ClutterSpec
 from clutter_gym.worlds.path_distance import PathDistance

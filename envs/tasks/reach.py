@@ -11,10 +11,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 from gymnasium import spaces
 
-from clutter_gym.collision import CollisionReport
-from clutter_gym.interfaces import StepOutcome
+from clutter_gym.datatypes import CollisionReport, RobotState, StepOutcome
 from clutter_gym.planning.joint_space import JointPath
-from clutter_gym.robots.state import RobotState
 from clutter_gym.tasks.terms import check_weights, clearance_term, control_term, cost_by_cause
 from clutter_gym.worlds.tabletop import ReachScene
 
@@ -128,6 +126,7 @@ class ReachTask:
                                                 dtype=np.float32)
         self._target = np.zeros(3)
         self._previous = 0.0
+        self._followed: RobotState | None = None  # the state the path index was last moved to
 
     def marker_position(self, scene: ReachScene) -> tuple[float, float, float]:
         return scene.target
@@ -140,6 +139,7 @@ class ReachTask:
             self.path = None if path is None else JointPath(path)
             if self.path is not None and self.path.length > 0.0:
                 self._path_scale = self.distance(state) / self.path.length
+        self._followed = None
         self._previous = self._to_go(state)
 
     def _to_go(self, state: RobotState) -> float:
@@ -148,7 +148,8 @@ class ReachTask:
         straight distance it replaces."""
         if not self._path_scale:
             return self.distance(state)
-        path, q = self.path, state.joint_position  # observe() has moved the path index to q (it runs first)
+        self._follow(state)
+        path, q = self.path, state.joint_position
         left = path.length - path.arc[path.index] + np.linalg.norm(q - path.points[path.index])
         return float(self._path_scale * left)
 
@@ -178,14 +179,23 @@ class ReachTask:
         if self.observe_offset:
             obs["target_offset"] = (self._target - state.links.position[self._ee_row]).astype(np.float32)
         if self.planner is not None:
-            obs["subgoal"] = self._subgoal(state.joint_position)
+            obs["subgoal"] = self._subgoal(state)
         return obs
 
-    def _subgoal(self, q: np.ndarray) -> np.ndarray:
-        """The path point ``subgoal_lookahead`` ahead of the one nearest ``q``, minus ``q``; zero without a path."""
+    def _follow(self, state: RobotState) -> None:
+        """Move the path index to ``state``'s joints, once per state: :meth:`observe` and :meth:`evaluate` both
+        read it, in whichever order they run (the index only moves forward, so a second move would skip ahead)."""
+        if self.path is not None and state is not self._followed:
+            self.path.advance(state.joint_position, window=max(2.0 * self.subgoal_lookahead, 0.3))
+            self._followed = state
+
+    def _subgoal(self, state: RobotState) -> np.ndarray:
+        """The path point ``subgoal_lookahead`` ahead of the one nearest the joints, minus the joints; zero without a
+        path."""
+        q = state.joint_position
         if self.path is None:
             return np.zeros(len(q), dtype=np.float32)
-        self.path.advance(q, window=max(2.0 * self.subgoal_lookahead, 0.3))
+        self._follow(state)
         offset = self.path.waypoint(self.subgoal_lookahead) - q
         return np.clip(offset, -SUBGOAL_BOUND, SUBGOAL_BOUND).astype(np.float32)
 

@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import numbers
-from typing import Any
+from typing import Any, TypeGuard
 
 import numpy as np
 
 
-def is_number(value: Any) -> bool:
-    """An int, float or numpy number, not a bool."""
+def is_number(value: Any) -> TypeGuard[float]:
+    """An int, float or numpy number, not a bool (to a type checker: a float, which all of these act as)."""
     return isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
 
 

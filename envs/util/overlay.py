@@ -25,8 +25,9 @@ RING_PX = 2  # ring line width
 TRAIL_PX = 2
 
 
-def draw_marks(frame: np.ndarray, view: CameraView, robot: tuple[Sequence[float], float],
-               goal: tuple[Sequence[float], float], trail: np.ndarray | Sequence[Sequence[float]]) -> np.ndarray:
+def draw_marks(frame: np.ndarray, view: CameraView, robot: tuple[np.ndarray | Sequence[float], float],
+               goal: tuple[np.ndarray | Sequence[float], float],
+               trail: np.ndarray | Sequence[np.ndarray | Sequence[float]]) -> np.ndarray:
     """``frame`` (H, W, 3) uint8 with the marks drawn over it, as a new array.
 
     Args:

@@ -1,10 +1,11 @@
 """Worlds: scenes as plain data, seeded clutter layouts (the floor, the table, the ClutterFly volume), and the body
 pool that puts a scene into a Sim."""
 
+from clutter_gym.datatypes import Obstacle
 from clutter_gym.worlds.arena import ClutterArena
 from clutter_gym.worlds.clutter import ClutterSpec, sample_scene
 from clutter_gym.worlds.pool import ObstaclePool
-from clutter_gym.worlds.scene import Obstacle, Scene, parse_scene
+from clutter_gym.worlds.scene import Scene, parse_scene
 from clutter_gym.worlds.tabletop import ReachScene, TableSpec, TabletopArena, sample_reach_scene
 from clutter_gym.worlds.volume import sample_volume_scene
 from clutter_gym.worlds.volume_arena import VolumeArena

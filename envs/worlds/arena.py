@@ -8,11 +8,12 @@ from typing import Any
 
 import numpy as np
 
+from clutter_gym.datatypes import Obstacle
 from clutter_gym.sim import Sim
 from clutter_gym.util.camera_view import fitting_distance
 from clutter_gym.worlds.clutter import ClutterSpec, sample_scene
 from clutter_gym.worlds.pool import ObstaclePool, arena_walls
-from clutter_gym.worlds.scene import Obstacle, Scene, parse_scene, scene_from_options
+from clutter_gym.worlds.scene import Scene, parse_scene, scene_from_options
 
 #: The rgb_array view (:meth:`ClutterArena.render_camera`): its angle above the floor, how far inside the frame's
 #: edges it keeps the robot and the goal (a fraction of the half-frame), the nearest it comes (metres), and the

@@ -32,8 +32,9 @@ import numba
 import numpy as np
 from scipy import ndimage
 
+from clutter_gym.datatypes import Obstacle
 from clutter_gym.util.checks import check_fraction, check_integer
-from clutter_gym.worlds.scene import Obstacle, Scene, polyline_distances, with_masses
+from clutter_gym.worlds.scene import Scene, polyline_distances, with_masses
 
 MAX_DENSITY = 0.3  # beyond this a walled arena cannot reliably keep a free path for the robot
 PLAIN_ATTEMPTS = 5  # attempts at unconstrained clutter before the generator keeps a corridor clear

@@ -18,9 +18,9 @@ from __future__ import annotations
 from collections import OrderedDict, defaultdict
 from itertools import islice
 
+from clutter_gym.datatypes import Obstacle
 from clutter_gym.sim import Sim
 from clutter_gym.util.transforms import yaw_quat
-from clutter_gym.worlds.scene import Obstacle
 
 PARK_DEPTH = -10.0  # parked bodies wait this far below the floor (metres)
 PARK_SPACING = 2.0  # metres between parked bodies: piled at one point, moving each one costs more the more there are

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 
+from clutter_gym.datatypes import Obstacle
 from clutter_gym.util.checks import is_number
 
 if TYPE_CHECKING:
@@ -26,87 +27,6 @@ SHAPES = ("box", "cylinder")
 MAX_OBSTACLE_HEIGHT = 5.0  # metres; anything taller only costs render time
 MASS_RANGE = (1e-3, 1e3)  # kg of a movable obstacle: from a gram to a tonne
 L = TypeVar("L")  # a layout: a Scene, or another world's scene type
-
-
-@dataclass(frozen=True)
-class Obstacle:
-    """An upright obstacle: a box or a cylinder standing on the floor or on a surface, static or movable.
-
-    Attributes:
-        shape: "box" or "cylinder".
-        size: full extents (sx, sy, sz) in metres; a cylinder has sx = sy = 2 * radius.
-        position: footprint centre (x, y) in metres.
-        yaw: rotation about +z in radians (ignored by the geometry of a cylinder).
-        z: height of the bottom face above the floor, metres.
-        mass: kilograms of a movable obstacle (uniform density); 0 for a static one.
-    """
-
-    shape: str
-    size: tuple[float, float, float]
-    position: tuple[float, float]
-    yaw: float = 0.0
-    z: float = 0.0
-    mass: float = 0.0
-
-    @property
-    def movable(self) -> bool:
-        """True for an obstacle the physics moves (it has a mass)."""
-        return self.mass > 0.0
-
-    @property
-    def volume(self) -> float:
-        """m^3."""
-        return self.area * self.size[2]
-
-    @property
-    def centre(self) -> tuple[float, float, float]:
-        """Centre of the obstacle, metres."""
-        return (self.position[0], self.position[1], self.z + 0.5 * self.size[2])
-
-    @property
-    def radius(self) -> float:
-        """Cylinder radius, or the radius of the circle enclosing a box footprint."""
-        if self.shape == "cylinder":
-            return 0.5 * self.size[0]
-        return 0.5 * math.hypot(self.size[0], self.size[1])
-
-    @property
-    def area(self) -> float:
-        """Footprint area in m^2."""
-        if self.shape == "cylinder":
-            return math.pi * self.radius**2
-        return self.size[0] * self.size[1]
-
-    def distance(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        """Signed 2D distance (metres) from points (x, y) to the footprint; negative inside."""
-        dx, dy = x - self.position[0], y - self.position[1]
-        if self.shape == "cylinder":
-            return np.hypot(dx, dy) - self.radius
-        c, s = math.cos(self.yaw), math.sin(self.yaw)
-        qx = np.abs(c * dx + s * dy) - 0.5 * self.size[0]
-        qy = np.abs(-s * dx + c * dy) - 0.5 * self.size[1]
-        outside = np.hypot(np.maximum(qx, 0.0), np.maximum(qy, 0.0))
-        return outside + np.minimum(np.maximum(qx, qy), 0.0)
-
-    def distance3d(self, point: np.ndarray) -> float:
-        """Signed distance (metres) from a 3D point to the obstacle's surface; negative inside."""
-        dx, dy = point[0] - self.position[0], point[1] - self.position[1]
-        dz = abs(point[2] - self.z - 0.5 * self.size[2]) - 0.5 * self.size[2]
-        if self.shape == "cylinder":
-            radial = math.hypot(dx, dy) - self.radius
-            return math.hypot(max(radial, 0.0), max(dz, 0.0)) + min(max(radial, dz), 0.0)
-        c, s = math.cos(self.yaw), math.sin(self.yaw)
-        q = (abs(c * dx + s * dy) - 0.5 * self.size[0], abs(-s * dx + c * dy) - 0.5 * self.size[1], dz)
-        return math.sqrt(sum(max(v, 0.0) ** 2 for v in q)) + min(max(q), 0.0)
-
-    def to_dict(self) -> dict[str, Any]:
-        if self.shape == "cylinder":
-            out = {"shape": "cylinder", "radius": self.radius, "height": self.size[2], "position": list(self.position)}
-        else:
-            out = {"shape": "box", "size": list(self.size), "position": list(self.position), "yaw": self.yaw}
-        if self.z:
-            out["z"] = self.z
-        return {**out, "mass": self.mass} if self.mass else out
 
 
 def with_masses(obstacles: Sequence[Obstacle], eligible: Sequence[int], fraction: float,

@@ -14,11 +14,11 @@ from typing import Any
 
 import numpy as np
 
+from clutter_gym.datatypes import Obstacle
 from clutter_gym.sim import Sim
 from clutter_gym.util.checks import check_fraction, check_integer
 from clutter_gym.worlds.pool import ObstaclePool
 from clutter_gym.worlds.scene import (
-    Obstacle,
     check_scene_keys,
     parse_numbers,
     parse_obstacles,
@@ -202,7 +202,7 @@ class TabletopArena:
     """
 
     def __init__(self, spec: TableSpec, ready: Sequence[float], lower: np.ndarray, upper: np.ndarray,
-                 shoulder: Sequence[float] = SHOULDER, reach: float = REACH_RADIUS) -> None:
+                 shoulder: np.ndarray | Sequence[float] = SHOULDER, reach: float = REACH_RADIUS) -> None:
         self.spec = spec
         self.ready = tuple(ready)
         self._lower, self._upper = lower, upper

@@ -30,7 +30,7 @@ import math
 import numpy as np
 from scipy import ndimage
 
-from clutter_gym.worlds.scene import Obstacle
+from clutter_gym.datatypes import Obstacle
 from clutter_gym.worlds.volume_grid import VolumeGrid, cell_index, clearance_field, free_margin, signed_distance
 from clutter_gym.worlds.volume_scene import VolumeScene
 from clutter_gym.worlds.volume_spec import VolumeSpec

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from clutter_gym.worlds.scene import Obstacle
+from clutter_gym.datatypes import Obstacle
 from clutter_gym.worlds.volume_scene import VolumeScene
 from clutter_gym.worlds.volume_spec import VolumeSpec
 

@@ -14,7 +14,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from clutter_gym.worlds.scene import Obstacle, check_scene_keys, parse_numbers, parse_obstacles
+from clutter_gym.datatypes import Obstacle
+from clutter_gym.worlds.scene import check_scene_keys, parse_numbers, parse_obstacles
 from clutter_gym.worlds.volume_spec import VolumeSpec
 
 if TYPE_CHECKING:

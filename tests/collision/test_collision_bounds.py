@@ -12,8 +12,8 @@ from clutter_gym.collision.bounds import ObstacleBounds
 from clutter_gym.collision.checker import SMALL_SCENE
 from clutter_gym.collision.distance import signed_distance
 from clutter_gym.collision.obstacles import obstacle_object
+from clutter_gym.datatypes import Obstacle
 from clutter_gym.robots import PandaArm
-from clutter_gym.worlds.scene import Obstacle
 
 URDF = PandaArm().urdf_path
 KIN = UrdfKinematics(URDF)

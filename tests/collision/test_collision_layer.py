@@ -22,11 +22,9 @@ from clutter_gym.collision import (
 )
 from clutter_gym.collision import acm as acm_module
 from clutter_gym.collision.fidelity import fitted_primitive
+from clutter_gym.datatypes import LinkStates, Obstacle, RobotState
 from clutter_gym.robots import DiffDriveRobot, PandaArm
 from clutter_gym.robots.panda import READY
-from clutter_gym.robots.state import RobotState
-from clutter_gym.sim import LinkStates
-from clutter_gym.worlds.scene import Obstacle
 
 URDF = PandaArm().urdf_path
 KIN = UrdfKinematics(URDF)

@@ -58,10 +58,8 @@ from clutter_gym.collision import (
     RobotCollisionModel,
     build_link_shapes,
 )
-from clutter_gym.robots.state import RobotState
-from clutter_gym.sim import LinkStates
+from clutter_gym.datatypes import LinkStates, Obstacle, RobotState
 from clutter_gym.util.transforms import quat_to_matrix, yaw_quat
-from clutter_gym.worlds.scene import Obstacle
 
 EXACT_TOL = 1e-9  # metres: exact levels against the closed form (measured 1.0e-10, the near-duplicates' jitter)
 SPHERES_LOOSENESS = 1.5  # a cube version's ``spheres`` bulge over the clean cube's (measured up to 1.12)

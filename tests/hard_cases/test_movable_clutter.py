@@ -18,8 +18,9 @@ from benchmarks.hard_scenes import PUSH_BOX_HALF, PUSH_WALL_FACE, movable_poses,
 from benchmarks.stacking import stack_scene, tilt_degrees
 from clutter_gym.collision.distance import signed_distance
 from clutter_gym.collision.obstacles import obstacle_object
+from clutter_gym.datatypes import Obstacle
 from clutter_gym.worlds.pool import inertia
-from clutter_gym.worlds.scene import Obstacle, parse_obstacle
+from clutter_gym.worlds.scene import parse_obstacle
 
 ZERO = np.zeros(2)
 

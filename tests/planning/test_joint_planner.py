@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from helpers import SHELF_SEED
 
+from clutter_gym.datatypes import Obstacle
 from clutter_gym.planning.joint_space import (
     GOAL_BALL,
     ArmPlanner,
@@ -19,7 +20,6 @@ from clutter_gym.planning.joint_space import (
     time_parameterise,
 )
 from clutter_gym.training.joint_planner import JointPlannerReacher
-from clutter_gym.worlds.scene import Obstacle
 
 READY = np.array([0.0, -math.pi / 4, 0.0, -3 * math.pi / 4, 0.0, math.pi / 2, math.pi / 4])
 

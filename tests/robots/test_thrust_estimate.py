@@ -9,7 +9,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from clutter_gym.noise.dynamics import DynamicsSample
+from clutter_gym.datatypes import DynamicsSample
 from clutter_gym.robots import Quadrotor, QuadrotorConfig
 from clutter_gym.robots.thrust_estimate import RATIO_BOUNDS, ThrustRatioEstimator
 from clutter_gym.sim import Sim

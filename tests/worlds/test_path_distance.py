@@ -9,10 +9,11 @@ import pytest
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
+from clutter_gym.datatypes import Obstacle
 from clutter_gym.tasks.navigate import SUBGOAL_PLAN_MARGIN
 from clutter_gym.worlds.clutter import ClutterSpec, clearance_field, sample_scene
 from clutter_gym.worlds.path_distance import _MOVES, PathDistance, _dijkstra_from
-from clutter_gym.worlds.scene import Obstacle, Scene
+from clutter_gym.worlds.scene import Scene
 
 SPEC = ClutterSpec(arena_size=6.0)
 R = 0.17  # the diffbot's footprint radius

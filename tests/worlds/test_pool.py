@@ -7,9 +7,9 @@ import numpy as np
 import pybullet as pb
 import pytest
 
+from clutter_gym.datatypes import Obstacle
 from clutter_gym.sim import Sim
 from clutter_gym.worlds.pool import ObstaclePool
-from clutter_gym.worlds.scene import Obstacle
 
 
 def mixed_obstacles(n: int, seed: int) -> tuple[Obstacle, ...]:

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 import clutter_gym.worlds.volume
+from clutter_gym.datatypes import Obstacle
 from clutter_gym.sim import Sim, pb
-from clutter_gym.worlds.scene import Obstacle
 from clutter_gym.worlds.volume import sample_volume_scene, wall_with_opening
 from clutter_gym.worlds.volume_arena import VolumeArena, volume_boundary
 from clutter_gym.worlds.volume_grid import clearance_field
