@@ -14,12 +14,10 @@ obstacle) pair from below in one compiled pass, then:
 2. pairs within ``contact_tolerance`` are enumerated as contacts with their penetration depth;
 3. enabled self pairs (the ACM) are tested, after a bounding-ball filter; at a coarse level a hit counts only when
    the ``convex`` level's shapes of the two links touch as well (:mod:`confirm`);
-4. shapes that moved faster than ``swept_speed`` are swept from their previous pose (``fcl.continuousCollide``,
-   translation motion, conservative advancement) against the obstacles near their path: a hit the end-of-step
-   check does not see is *tunneling*, unless the pair was in contact at the previous check (a shape leaving a
-   contact). The translation motion holds the start rotation (measured: it ignores rotation), so a step's rotation
-   is covered only at its two ends; mesh shapes sweep their convex hull (conservative advancement never detects a
-   moving BVH).
+4. shapes that moved faster than ``swept_speed`` are swept from their previous pose on the screw motion to their
+   pose now, rotation included (:mod:`.sweep`: conservative advancement on FCL's exact distance), against the
+   obstacles near their path: a hit the end-of-step check does not see is *tunneling*, unless the pair was in
+   contact at the previous check (a shape leaving a contact). Mesh shapes sweep their convex hull.
 """
 
 from __future__ import annotations
@@ -34,6 +32,7 @@ from clutter_gym.collision.distance import signed_distance
 from clutter_gym.collision.kernels import shape_travel
 from clutter_gym.collision.obstacles import ObstacleObjects
 from clutter_gym.collision.robot_model import RobotCollisionModel
+from clutter_gym.collision.sweep import ScrewMotion, time_of_impact
 from clutter_gym.datatypes import CollisionReport, Contact, Obstacle, RobotState
 
 #: Clearance reported when there is nothing to measure against (an empty scene without walls), metres.
@@ -105,7 +104,6 @@ class CollisionChecker:
         self._bounds = ObstacleBounds(())
         self._obstacle_bodies: frozenset[int] = frozenset()
         self._contact_request = fcl.CollisionRequest(num_max_contacts=4, enable_contact=True)
-        self._ccd_request = fcl.ContinuousCollisionRequest()
         self._rows: np.ndarray | None = None
         self._previous: tuple[np.ndarray, np.ndarray] | None = None
         self._touching: set[tuple[int, int]] = set()
@@ -365,7 +363,7 @@ class CollisionChecker:
                 touching.add((i, j))
         return tuple(out)
 
-    def _pair_distance(self, shape: int, obstacle: int) -> float:
+    def pair_distance(self, shape: int, obstacle: int) -> float:
         """Padded signed distance from a robot shape (its solid: a mesh's hull) to an obstacle, metres."""
         d, _ = signed_distance(self.model.solid_object(shape), self._obstacles[obstacle])
         return d - self.model.padding[shape]
@@ -389,23 +387,25 @@ class CollisionChecker:
         rows = np.flatnonzero(travel > self.swept_speed * self.dt)
         if rows.size == 0:
             return 0
-        reach = bound[rows] - travel[rows, None]
+        travel = travel[rows]
+        reach = bound[rows] - travel[:, None]
         tol = self.contact_tolerance
-        if len(candidates) < len(self._obstacles) and travel[rows].max() + tol > self.clearance_range:
+        if len(candidates) < len(self._obstacles) and travel.max() + tol > self.clearance_range:
             # obstacles left out of the end-of-step bounds may be in the way: bound the whole sweeps instead
-            candidates, bound = self._lower_bounds(grow=travel)
+            grown = np.zeros(len(moving))
+            grown[rows] = travel
+            candidates, bound = self._lower_bounds(grow=grown)
             reach = bound[rows]
+        touching_now = self._touching  # the pairs within the tolerance now (the contacts, found before the sweep)
         hits = 0
+        motions: dict[int, ScrewMotion] = {}
         for row, k in zip(*np.nonzero(reach <= tol)):
-            i, j = moving[rows[row]], int(candidates[k])
-            if (int(i), j) in touching_before:
-                continue
-            sweeper, obstacle = self._sweepers[i], self._obstacles[j]
-            sweeper.setRotation(previous[1][i])
-            sweeper.setTranslation(previous[0][i])
-            result = fcl.ContinuousCollisionResult()
-            fcl.continuousCollide(sweeper, fcl.Transform(now[1][i], now[0][i]), obstacle, obstacle.getTransform(),
-                                  self._ccd_request, result)
-            if result.is_collide and self._pair_distance(i, j) > tol:  # clear at the end
+            i, j = int(moving[rows[row]]), int(candidates[k])
+            if (i, j) in touching_before or (i, j) in touching_now:
+                continue  # leaving a contact, or ending in one: the end-of-step check reports that
+            if i not in motions:
+                motions[i] = ScrewMotion(previous[1][i], previous[0][i], now[1][i], now[0][i])
+            if time_of_impact(self._sweepers[i], self._radii[i], motions[i], self._obstacles[j],
+                              tol + model.padding[i]) is not None:
                 hits += 1
         return hits

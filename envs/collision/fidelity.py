@@ -61,8 +61,7 @@ class LinkShape:
             for the ball about the origin.
         hull: for a ``mesh`` shape, its convex hull (``fcl.Convex``), used where FCL's triangle BVH gives no
             answer: penetration depth (its signed distance returns 0 or -1 on overlap), contact depth and swept
-            checks (a BVH mover is never detected by conservative advancement, and a shape moving against a
-            BVH crashes it). None otherwise.
+            checks (the sweep's advancement needs a convex shape). None otherwise.
     """
 
     link: str

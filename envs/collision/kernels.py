@@ -17,8 +17,10 @@ from numba import njit
 
 @njit(cache=True, error_model="numpy")
 def shape_travel(position, rotation, previous_position, previous_rotation, radii, moving):  # pragma: no cover
-    """(len(moving),) how far any point of each moving shape can have moved between two poses, metres: its origin's
-    displacement plus the rotation angle times its radius about that origin.
+    """(len(moving),) how far any point of each moving shape travels on the screw motion between two poses
+    (:class:`clutter_gym.collision.sweep.ScrewMotion`), metres, bounded from above: the rotation angle times its
+    radius about its origin, plus its origin's displacement times angle / (2 sin(angle / 2)) (an arc over its chord:
+    the twist's translation rate is at most that much longer than the displacement).
 
     Args:
         position, rotation: (n, 3) and (n, 3, 3) the shapes' poses now.
@@ -34,10 +36,12 @@ def shape_travel(position, rotation, previous_position, previous_rotation, radii
             for b in range(3):
                 trace += rotation[i, a, b] * previous_rotation[i, a, b]
         cos_angle = min(max((trace - 1.0) / 2.0, -1.0), 1.0)
+        angle = math.acos(cos_angle)
+        arc = angle / (2.0 * math.sin(0.5 * angle)) if angle > 1e-6 else 1.0
         dx = position[i, 0] - previous_position[i, 0]
         dy = position[i, 1] - previous_position[i, 1]
         dz = position[i, 2] - previous_position[i, 2]
-        out[row] = math.sqrt(dx * dx + dy * dy + dz * dz) + math.acos(cos_angle) * radii[i]
+        out[row] = arc * math.sqrt(dx * dx + dy * dy + dz * dz) + angle * radii[i]
     return out
 
 

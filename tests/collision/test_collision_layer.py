@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import json
 
-import fcl
 import numpy as np
 import pytest
 
@@ -261,16 +260,6 @@ def test_a_ball_leaving_a_contact_fast_is_no_tunneling():
     assert not after.in_contact and after.tunneling == 0
     checker.check(ball_state(-0.065))
     assert checker.check(ball_state(0.3)).tunneling == 1
-
-
-def test_continuous_collide_time_of_contact_is_exact():
-    """The request the checker uses (translation motion, conservative advancement) on the 1 cm wall."""
-    ball = fcl.CollisionObject(fcl.Sphere(0.05), fcl.Transform(np.eye(3), [-0.5, 0.0, 0.5]))
-    wall = fcl.CollisionObject(fcl.Box(0.01, 1.0, 1.0), fcl.Transform(np.eye(3), [0.0, 0.0, 0.5]))
-    result = fcl.ContinuousCollisionResult()
-    fcl.continuousCollide(ball, fcl.Transform(np.eye(3), [0.5, 0.0, 0.5]), wall, wall.getTransform(),
-                          fcl.ContinuousCollisionRequest(), result)
-    assert result.is_collide and result.time_of_contact == pytest.approx((0.5 - 0.05 - 0.005) / 1.0, abs=2e-4)
 
 
 def test_padding_is_an_exact_inflation():
