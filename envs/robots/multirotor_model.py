@@ -1,8 +1,13 @@
-"""What the env needs to know of a multirotor's URDF: a rigid airframe (fixed joints only: it is loaded as one pybullet
-body) whose rotors push along the base's +z at their links' origins and yaw it by their drag torque
-(``robots/multirotor.py`` flies it). The rotors' layout must be able to fly: its allocation (collective thrust and
-roll, pitch and yaw torque from the rotor thrusts) must have full rank, and every rotor must carry a positive share
-of a level hover's thrust. The IMU reads the link ``imu``, the LIDAR and the camera sit on ``sensor_mount``.
+"""What the env needs to know of a multirotor's URDF, and how it is read from a robot spec.
+
+A multirotor of kind ``multirotor`` is a rigid airframe (fixed joints only: it is loaded as one pybullet body) whose
+rotors push along the base's +z at their links' origins and yaw it by their drag torque (``robots/multirotor.py``
+flies it). The spec names the rotor links, each rotor's spin and the rotor coefficients; the rotor positions, the
+mass, the centre of mass and the inertia are read from the URDF. The layout must be able to fly: its allocation
+(collective thrust and roll, pitch and yaw torque from the rotor thrusts) must have full rank, every rotor must carry
+a positive share of a level hover's thrust, and the rotors together must lift the airframe. The IMU reads the link
+``imu``, the LIDAR and the camera sit on ``sensor_mount``; a spec's ``mounts`` adds them where the URDF has none
+(``robots/urdf_prep.py``). docs/robots.md shows a spec.
 """
 
 from __future__ import annotations
@@ -15,14 +20,21 @@ from pathlib import Path
 import numpy as np
 
 from clutter_gym.robots.rate_loop import allocation, mixing_matrix
-from clutter_gym.robots.rigid_body import RigidBody
+from clutter_gym.robots.rigid_body import RigidBody, rigid_body
 from clutter_gym.robots.rotors import RotorModel
+from clutter_gym.robots.spec_reading import check_keys, load_spec_urdf, spec_mounts
+from clutter_gym.sim import GRAVITY
 from clutter_gym.util.checks import is_number
 
 #: The IMU's link, and the link the LIDAR and the camera sit on.
 IMU_LINK, SENSOR_LINK = "imu", "sensor_mount"
 #: The airframe's colour in renders: a merged body's base takes one colour (``Sim.paint``).
 AIRFRAME_COLOUR = (0.15, 0.15, 0.15, 1.0)
+#: The keys of a ``multirotor`` spec (besides ``kind``); the first six are required.
+SPEC_KEYS = ("urdf", "rotor_links", "spin", "thrust_coefficient", "torque_coefficient", "max_rotor_speed", "name",
+             "min_rotor_speed", "motor_time_constant", "drag_xy", "drag_z", "rotor_radius", "mounts")
+#: What a spec that leaves them out gets: motors that may stop, the built-in quadrotor's motor lag, no rotor drag.
+SPEC_DEFAULTS = {"min_rotor_speed": 0.0, "motor_time_constant": 0.05, "drag_xy": 0.0, "drag_z": 0.0}
 #: (low, high, low_open) of every number of the airframe: low < value (low_open) or low <= value, and value <= high
 RANGES = {
     "thrust_coefficient": (0.0, 1e-4, True),
@@ -143,7 +155,114 @@ def _rank(rows: np.ndarray) -> int:
     return int(np.sum(singular > RANK_TOLERANCE * singular[0]))
 
 
+def multirotor_from_spec(spec: Mapping[str, object], where: str, folder: Path | None = None) -> MultirotorModel:
+    """The multirotor a ``multirotor`` spec describes (keys :data:`SPEC_KEYS`); ``urdf`` relative to ``folder``.
+
+    Raises:
+        ValueError: a key is missing, unknown or out of range, names a link the URDF does not have, the URDF is not
+            a rigid airframe pybullet can merge, or the rotors cannot fly it; the message names the key, the URDF
+            and what it offers.
+    """
+    check_keys(spec, SPEC_KEYS, 6, "multirotor", where)
+    urdf = load_spec_urdf(spec, where, folder, spec_mounts(spec, where))
+    kinematics, source, links, root = urdf.kinematics, urdf.source, urdf.kinematics.links, urdf.kinematics.root
+    if kinematics.joints:
+        raise ValueError(f"{where}: {source} has moving joints {[j.name for j in kinematics.joints]}; a multirotor's "
+                         "airframe is rigid: make them fixed")
+    rotors = _rotor_links(spec["rotor_links"], links, source, where)
+    spin = _spin(spec["spin"], len(rotors), where)
+    absent = [link for link in (IMU_LINK, SENSOR_LINK) if link not in links]
+    if absent:
+        raise ValueError(f"{where}: {source} has no {absent} (the IMU's link, the LIDAR's and camera's mount); add "
+                         f"them with mounts, e.g. mounts: {{{IMU_LINK}: {{parent: {root}}}, {SENSOR_LINK}: {{parent: "
+                         f"{root}, xyz: [0, 0, 0.01]}}}} (its links: {links})")
+    try:
+        body = rigid_body(urdf.urdf)
+    except ValueError as error:
+        raise ValueError(f"{where}: the URDF was refused: {error}") from None
+    problem = airframe_problem(body)
+    if problem:
+        raise ValueError(f"{where}: {source}: {problem}")
+    tilted = [link for link in rotors if body.frames[link][1][2, 2] < 1.0 - 1e-9]
+    if tilted:
+        raise ValueError(f"{where}: rotor_links {tilted} of {source} are tilted: a rotor pushes along the base's +z, "
+                         "so its link's z axis must be the base's (turn its joint about z only)")
+    cylinders = [e.size[0] for e in urdf.elements if e.link in rotors and e.kind == "cylinder"]
+    if "rotor_radius" not in spec and not cylinders:
+        raise ValueError(f"{where}: rotor_radius is needed: the rotor links of {source} have no collision cylinder "
+                         "to read it from")
+    defaults = {**SPEC_DEFAULTS, "rotor_radius": max(cylinders, default=math.nan)}  # the others are required
+    values = {key: _number(spec[key] if key in spec else defaults[key]) for key in RANGES}
+    try:
+        check_ranges(values, RANGES)
+        hubs = np.array([body.frames[link][0][:2] for link in rotors])
+        geometric = {e.link for e in urdf.elements} - {root}
+        model = MultirotorModel(
+            name=urdf.name, urdf=urdf.urdf, base_link=root, rotor_links=rotors, spin=spin,
+            tracked_links=tuple(dict.fromkeys([link for link in links if link in geometric] + [IMU_LINK, SENSOR_LINK])),
+            focus_radius=float(np.max(np.hypot(hubs[:, 0], hubs[:, 1]))) + values["rotor_radius"], **values)
+    except ValueError as error:
+        raise ValueError(f"{where}: {error}") from None
+    matrix = model.allocation(body)
+    problem = layout_problem(matrix, spin)
+    if problem:
+        raise ValueError(f"{where}: rotor_links {list(rotors)} with spin {list(spin)}: {problem}")
+    lift = model.rotor_model().max_thrust / float(np.max(mixing_matrix(matrix)[:, 0]))
+    if lift <= body.mass * GRAVITY:
+        raise ValueError(f"{where}: max_rotor_speed {model.max_rotor_speed} rad/s gives at most {lift:.4g} N of "
+                         f"collective thrust, which does not lift the airframe's {body.mass * GRAVITY:.4g} N "
+                         f"({body.mass:.4g} kg): raise max_rotor_speed or thrust_coefficient")
+    return model
+
+
+def airframe_problem(body: RigidBody) -> str | None:
+    """Why pybullet would not fly ``body`` as the URDF gives it, merged into one body (None when it would): it puts
+    the merged centre of mass at the mass-weighted mean of the links' frame origins, not of their centres of mass,
+    and takes the inertia's principal moments only."""
+    masses = {link: mass for link, (mass, _) in body.link_inertias.items()}
+    merged = sum(mass * body.frames[link][0] for link, mass in masses.items()) / body.mass
+    if np.abs(merged - body.com).max() > 1e-9:
+        off = [link for link, mass in masses.items() if mass > 0.0 and np.any(body.link_coms[link]
+                                                                              != body.frames[link][0])]
+        return (f"pybullet would put the merged airframe's centre of mass at {np.round(merged, 6).tolist()}, not at "
+                f"the URDF's {np.round(body.com, 6).tolist()}: links {off} carry mass off their origins; give each "
+                f"link's <inertial> the link's origin, or put the mass on {body.root}")
+    if not in_principal_axes(body.inertia):
+        return (f"the airframe's inertia about its centre of mass has products of inertia "
+                f"{np.round(body.inertia, 12).tolist()} in the base's axes; pybullet takes principal moments only: "
+                f"give the base's axes along the principal axes")
+    return None
+
+
 def in_principal_axes(inertia: np.ndarray) -> bool:
     """Whether the (3, 3) ``inertia``'s products are negligible (:data:`PRINCIPAL_TOLERANCE`)."""
     products = inertia - np.diag(np.diag(inertia))
     return bool(np.abs(products).max() <= PRINCIPAL_TOLERANCE * np.abs(np.diag(inertia)).max())
+
+
+def _rotor_links(value: object, links: Sequence[str], source: Path, where: str) -> tuple[str, ...]:
+    """``rotor_links``: 3 to 16 distinct link names of the URDF."""
+    if isinstance(value, str) or not isinstance(value, (list, tuple)) or not 3 <= len(value) <= 16 \
+            or len(set(map(str, value))) != len(value):
+        raise ValueError(f"{where}: rotor_links must be a list of 3 to 16 distinct link names, got {value!r}")
+    missing = [str(link) for link in value if link not in links]
+    if missing:
+        raise ValueError(f"{where}: rotor_links names {missing}, not links of {source}; its links: {links}")
+    return tuple(str(link) for link in value)
+
+
+def _spin(value: object, n: int, where: str) -> tuple[float, ...]:
+    """``spin``: +1 (counter-clockwise seen from above) or -1 (clockwise) per rotor."""
+    if isinstance(value, str) or not isinstance(value, (list, tuple)) or len(value) != n \
+            or not all(is_number(s) and s in (1, -1) for s in value):
+        raise ValueError(f"{where}: spin must be {n} values, one per rotor_links entry: +1 for a rotor that turns "
+                         f"counter-clockwise seen from above, -1 for clockwise; got {value!r}")
+    return tuple(float(s) for s in value)
+
+
+def _number(value: object) -> object:
+    """``value`` as a float where it reads as one (YAML leaves ``3e-8`` a string), else as it is."""
+    try:
+        return float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        return value
