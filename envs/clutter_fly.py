@@ -212,9 +212,9 @@ class ClutterFlyEnv(ClutterEnv):
         spec = _volume_spec(volume_size, obstacle_density, ceiling)
         # the airframe is rigid (fixed joints only), so self-collision is off and no allowed-collision matrix is
         # needed; the task reads only the robot's clearance, so no link's own is resolved
-        checker = collision_checker(robot, robot.model.tracked_links, collision_fidelity, collision_padding, contact_tolerance,
-                                    max(CLEARANCE_RANGE, clearance_margin), control_hz, self_collision=False,
-                                    swept_speed=swept_speed, per_link=False)
+        checker = collision_checker(robot, robot.model.tracked_links, collision_fidelity, collision_padding,
+                                    contact_tolerance, max(CLEARANCE_RANGE, clearance_margin), control_hz,
+                                    self_collision=False, swept_speed=swept_speed, per_link=False)
         radius = bounding_radius(checker.model, robot.mass_properties)
         lidar = LidarConfig(n_rays=n_rays, fov=lidar_fov, max_range=lidar_range, n_channels=lidar_channels,
                             vertical_fov=lidar_vertical_fov, link=SENSOR_LINK, caster=lidar_caster)
