@@ -300,6 +300,22 @@ def test_mixer_moves_thrust_before_attitude_and_scales_roll_pitch_keeping_their_
     assert f.max() - f.min() == pytest.approx(0.15)
 
 
+def test_mixer_with_unequal_shares_moves_the_collective_along_them_and_keeps_the_torques():
+    """Six rotors about a centre of mass 10 mm off their centre: the pseudo-inverse loads the near rotors more, and
+    a collective beyond the range moves rotor by rotor in those shares, which changes no torque (a common shift of
+    every rotor would roll the airframe)."""
+    angles = np.radians(30.0 + 60.0 * np.arange(6))
+    positions = 0.06 * np.stack([np.cos(angles), np.sin(angles)], axis=1) - [0.01, 0.0]
+    alloc = allocation(positions, np.array([1.0, -1.0] * 3), 0.006)
+    m = Mixer(alloc, 0.0, 0.15)
+    assert sum(m.shares) == pytest.approx(1.0, rel=1e-12) and max(m.shares) / min(m.shares) > 1.5
+    demand = np.array([0.85, 2e-4, -1e-4, 5e-5])  # more collective than the rotors give beside these torques
+    f = m.mix(demand[0], demand[1:])
+    got = alloc @ f
+    assert f.min() >= 0.0 and f.max() == pytest.approx(0.15, rel=1e-12) and got[0] < demand[0]
+    np.testing.assert_allclose(got[1:], demand[1:], rtol=1e-9)
+
+
 # ------------------------------------------------------------------------------------------------------ config
 @pytest.mark.parametrize(
     "field, value",
