@@ -1,4 +1,5 @@
-"""ClutterFly: a nano quadrotor flies through a cluttered 3D volume to a goal point without touching anything."""
+"""ClutterFly: a multirotor (a nano quadrotor by default) flies through a cluttered 3D volume to a goal point without
+touching anything."""
 
 from __future__ import annotations
 
@@ -12,8 +13,8 @@ from clutter_gym.collision import RobotCollisionModel
 from clutter_gym.core import ClutterEnv, collision_checker
 from clutter_gym.make_checks import check_env_settings, check_flags, check_numbers
 from clutter_gym.noise.profiles import NoiseProfile, resolve_noise
-from clutter_gym.robots import Quadrotor, QuadrotorConfig
-from clutter_gym.robots.quadrotor import TRACKED_LINKS
+from clutter_gym.robots import Multirotor, MultirotorConfig
+from clutter_gym.robots.multirotor_model import IMU_LINK, SENSOR_LINK
 from clutter_gym.robots.registry import resolve_robot
 from clutter_gym.robots.rigid_body import RigidBody
 from clutter_gym.sensors import ImuConfig, LidarConfig, build_sensors, camera_config
@@ -22,8 +23,6 @@ from clutter_gym.tasks import FlyRewardWeights, FlyTask
 from clutter_gym.util.checks import is_number
 from clutter_gym.worlds import VolumeArena, VolumeSpec
 
-#: The link the LIDAR and the camera sit on, and the IMU's link (assets/robots/quadrotor.urdf).
-SENSOR_LINK, IMU_LINK = "sensor_mount", "imu"
 #: The generator's wall openings, (min, max) width and height in metres, as a share of the volume's height where
 #: that is lower than their own: an opening must be lower than the top.
 OPENING_SIZE, OPENING_SHARE = (0.8, 1.6), (0.4, 0.8)
@@ -40,7 +39,7 @@ class ClutterFlyEnv(ClutterEnv):
     """## Description
 
     A Crazyflie-sized nano quadrotor (``assets/robots/quadrotor.urdf``, 27 g, flying on per-rotor forces; see
-    docs/quadrotor.md) starts hovering in a box-shaped volume with a floor, four walls and by default a ceiling,
+    docs/quadrotor.md), or any multirotor a spec describes (``robot``), starts hovering in a box-shaped volume with a floor, four walls and by default a ceiling,
     cluttered with vertical poles, boxes on the floor or hanging, horizontal beams and walls with one opening, and
     must fly to a goal point. Every generated volume is seeded and guaranteed reachable for a sphere enclosing the
     drone (``worlds/volume.py``). The floor, the walls and the ceiling are obstacles like the clutter. FCL measures
@@ -50,8 +49,9 @@ class ClutterFlyEnv(ClutterEnv):
 
     ## Action space
 
-    ``Box(-1, 1, (4,), float32)``: (collective thrust, roll rate, pitch rate, yaw rate), normalised. Thrust
-    ``(a0 + 1) / 2`` of the four rotors' maximum (0 to a thrust-to-weight of about 2.25; hover near a0 = -0.11);
+    ``Box(-1, 1, (4,), float32)``: (collective thrust, roll rate, pitch rate, yaw rate), normalised, whatever the
+    number of rotors. Thrust ``(a0 + 1) / 2`` of the rotors' maximum (the quadrotor's: 0 to a thrust-to-weight of
+    about 2.25; hover near a0 = -0.11);
     body rates ``a1 * 3``, ``a2 * 3``, ``a3 * 2`` rad/s about body x (forward), y (left), z (up), counter-clockwise
     positive. An inner rate loop and mixer turn the command into rotor speeds at the physics rate, and the rotors
     follow with a first-order lag (docs/quadrotor.md). Finite values outside [-1, 1] are clipped; NaN/Inf or a wrong
@@ -72,12 +72,12 @@ class ClutterFlyEnv(ClutterEnv):
     | ``subgoal`` | (3,) | the point ``subgoal_lookahead`` ahead on the shortest path through the known layout (the progress reward's path), minus the base origin; only with ``subgoal_lookahead > 0`` | m; body frame | +-subgoal_lookahead |
     | ``attitude`` | (3,) | the world's up axis in the body frame (z = cosine of the tilt) | -; body frame | [-1, 1] |
     | ``velocity`` | (6,) | linear velocity (v_x, v_y, v_z), body rates (p, q, r) | m/s, rad/s; body frame | +-20, +-6 |
-    | ``rotor_speeds`` | (4,) | rotor speed / max rotor speed, rotors front right, rear right, rear left, front left | - | [0, 1] |
+    | ``rotor_speeds`` | (n rotors,) | rotor speed / max rotor speed, in the robot's ``rotor_links`` order (the quadrotor's: front right, rear right, rear left, front left) | - | [0, 1] |
     | ``thrust_ratio`` | (1,) | the flight controller's estimate of the thrust per unit mass the airframe gets over its nominal model's (motor strength / mass scale; 1 when nominal), filtered over 0.25 s; only with ``observe_thrust_ratio`` | - | [0.25, 4] |
 
     Sensor entries are present only when listed in ``sensors`` (``("imu",)`` by default; camera entries only for
-    its ``camera_modes``, ``(w, h) = camera_size``). The LIDAR and the camera sit on the ``sensor_mount`` link,
-    10 mm above the centre of mass, looking along body +x; rays and the camera see through the drone. The IMU reads
+    its ``camera_modes``, ``(w, h) = camera_size``). The LIDAR and the camera sit on the ``sensor_mount`` link
+    (the quadrotor's: 10 mm above the centre of mass), looking along its +x; rays and the camera see through the drone. The IMU reads
     +9.81 m/s^2 on z in a level hover. With a noise profile the sensor entries carry that profile's noise, update
     rate (held between updates) and latency; ``goal``, ``attitude``, ``velocity``, ``rotor_speeds`` and
     ``thrust_ratio`` are the flight controller's state estimate, taken as exact (``thrust_ratio`` follows from the
@@ -124,7 +124,8 @@ class ClutterFlyEnv(ClutterEnv):
 
     ## Arguments
 
-    ``robot`` (a registered multirotor: ``"quadrotor"``; docs/robots.md);
+    ``robot`` (a registered multirotor, ``"quadrotor"``, or a ``multirotor`` spec: a mapping or a YAML file;
+    docs/robots.md);
     ``render_mode`` (None, "rgb_array", "human"); ``sensors`` (subset of ("imu", "lidar", "camera"));
     ``noise`` (profile name, override mapping or NoiseProfile); ``volume_size`` (x, y, z) m, x and y in [2, 30],
     z in [1, 5]; ``obstacle_density`` volume fraction [0, 0.25]; ``ceiling``; ``n_rays`` [1, 4096];
@@ -195,7 +196,7 @@ class ClutterFlyEnv(ClutterEnv):
         rate_weight: float = 0.01,
         subgoal_lookahead: float = 0.0,
         observe_thrust_ratio: bool = False,
-        robot: str = "quadrotor",
+        robot: str | Mapping[str, Any] = "quadrotor",
     ) -> None:
         check_numbers(ClutterFlyEnv.__init__, locals())
         check_env_settings(render_mode, physics_hz, control_hz, solver_iterations, contact_tolerance,
@@ -207,14 +208,14 @@ class ClutterFlyEnv(ClutterEnv):
         if isinstance(aero, str) or not isinstance(aero, Sequence):
             raise ValueError(f"aero must be a tuple of names from ('drag', 'ground_effect'), got {aero!r}")
         make_flyer = resolve_robot(robot, "multirotor", "ClutterFly-v0")
-        flyer: Quadrotor = make_flyer(QuadrotorConfig(aero=tuple(aero), observe_thrust_ratio=observe_thrust_ratio))
+        flyer: Multirotor = make_flyer(MultirotorConfig(aero=tuple(aero), observe_thrust_ratio=observe_thrust_ratio))
         spec = _volume_spec(volume_size, obstacle_density, ceiling)
         # the airframe is rigid (fixed joints only), so self-collision is off and no allowed-collision matrix is
         # needed; the task reads only the robot's clearance, so no link's own is resolved
-        checker = collision_checker(flyer, TRACKED_LINKS, collision_fidelity, collision_padding, contact_tolerance,
-                                    max(CLEARANCE_RANGE, clearance_margin), control_hz, self_collision=False,
-                                    swept_speed=swept_speed, per_link=False)
-        radius = bounding_radius(checker.model, flyer.model)
+        checker = collision_checker(flyer, flyer.model.tracked_links, collision_fidelity, collision_padding,
+                                    contact_tolerance, max(CLEARANCE_RANGE, clearance_margin), control_hz,
+                                    self_collision=False, swept_speed=swept_speed, per_link=False)
+        radius = bounding_radius(checker.model, flyer.mass_properties)
         lidar = LidarConfig(n_rays=n_rays, fov=lidar_fov, max_range=lidar_range, n_channels=lidar_channels,
                             vertical_fov=lidar_vertical_fov, link=SENSOR_LINK, caster=lidar_caster)
         camera = camera_config(camera_size, camera_modes, camera_fov, camera_far, camera_renderer, link=SENSOR_LINK)

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from benchmarks import aero_cost
-from clutter_gym.robots import QuadrotorConfig
 from clutter_gym.robots.aero import ground_effect_gain
+from clutter_gym.robots.quadrotor import quadrotor_model
 
 
 @pytest.fixture(scope="module")
@@ -33,7 +33,7 @@ def test_drag_matters_in_the_fast_cruise_and_ground_effect_near_the_floor(rows):
 
 def test_only_ground_effect_lifts_a_hover_by_the_model_gain_at_its_rotor_hubs(rows):
     hub = 0.018  # rotor hubs above the base origin (assets/robots/quadrotor.urdf)
-    radius = QuadrotorConfig().rotor_radius
+    radius = quadrotor_model().rotor_radius
     for aero, r in rows.items():
         if "ground_effect" in aero:
             gain = ground_effect_gain(np.array([aero_cost.LOW_START_Z + hub, r["spawn_height"] + hub]), radius)

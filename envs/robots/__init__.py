@@ -3,8 +3,9 @@
 from clutter_gym.datatypes import RobotState
 from clutter_gym.robots.arm import Arm, ArmConfig
 from clutter_gym.robots.diffdrive import DiffDriveConfig, DiffDriveRobot
+from clutter_gym.robots.multirotor import Multirotor, MultirotorConfig
 from clutter_gym.robots.panda import PandaArm, PandaConfig
 from clutter_gym.robots.quadrotor import Quadrotor, QuadrotorConfig
 
-__all__ = ["Arm", "ArmConfig", "DiffDriveConfig", "DiffDriveRobot", "PandaArm", "PandaConfig", "Quadrotor",
-           "QuadrotorConfig", "RobotState"]
+__all__ = ["Arm", "ArmConfig", "DiffDriveConfig", "DiffDriveRobot", "Multirotor", "MultirotorConfig", "PandaArm",
+           "PandaConfig", "Quadrotor", "QuadrotorConfig", "RobotState"]

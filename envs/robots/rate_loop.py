@@ -1,16 +1,16 @@
-"""A quadrotor's inner loop: body-rate PI control and the mixer from thrust and torques to rotor thrusts.
+"""A multirotor's inner loop: body-rate PI control and the mixer from thrust and torques to rotor thrusts.
 
-It runs once per physics tick, on 3-vectors and four rotors, so it works on Python floats: numpy's cost per call
-is many times that of the arithmetic at these sizes. Matrices are turned into tuples of rows once, when a
+It runs once per physics tick, on 3-vectors and a handful of rotors, so it works on Python floats: numpy's cost per
+call is many times that of the arithmetic at these sizes. Matrices are turned into tuples of rows once, when a
 controller or mixer is made. The rate loop turns a body-rate setpoint into a torque,
 ``tau = J (kp * e + ki * integral(e)) + w x J w`` with ``e = w_ref - w`` in the body frame: gains are in 1/s and
 1/s^2 and scaled by the inertia ``J``, as PX4 and Betaflight scale theirs by the airframe, so the same gains give
 the same closed loop on any inertia. The gyroscopic term ``w x J w`` cancels the coupling between the axes.
 
-The mixer inverts the X-configuration allocation (collective thrust and three torques from four rotor thrusts)
-and, when the rotors cannot give all of it, gives up what matters least first: yaw torque, then collective thrust,
-then roll and pitch torque scaled down together (their direction kept). The attitude then stays controllable
-when the thrust saturates, as in PX4's mixer.
+The mixer inverts the allocation (collective thrust and three torques from the rotor thrusts; with more than four
+rotors, its pseudo-inverse) and, when the rotors cannot give all of it, gives up what matters least first: yaw
+torque, then collective thrust, then roll and pitch torque scaled down together (their direction kept). The
+attitude then stays controllable when the thrust saturates, as in PX4's mixer.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-Vector3 = tuple[float, float, float]
+from clutter_gym.util.transforms import Vector3, times
 
 
 @dataclass(frozen=True)
@@ -47,12 +47,12 @@ class RateController:
         dt: period of one update, seconds (the physics tick).
 
     Attributes:
-        inertia: ``inertia`` as three rows of floats.
+        inertia: ``inertia`` as 9 floats, row by row.
         integral: the integrated rate error, rad, per axis.
     """
 
     def __init__(self, inertia: np.ndarray, gains: RateGains, dt: float) -> None:
-        self.inertia = tuple(tuple(row) for row in np.asarray(inertia, dtype=float).tolist())
+        self.inertia = tuple(np.asarray(inertia, dtype=float).ravel().tolist())
         self.kp = tuple(float(k) for k in gains.kp)
         self.ki = tuple(float(k) for k in gains.ki)
         self.dt = dt
@@ -74,21 +74,14 @@ class RateController:
         self.integral = ip, iq, ir
         (kp_p, kp_q, kp_r), (ki_p, ki_q, ki_r) = self.kp, self.ki
         # the angular acceleration the gains ask for, then J times it, plus rate x (J rate)
-        tp, tq, tr = _times(self.inertia, (kp_p * ep + ki_p * ip, kp_q * eq + ki_q * iq, kp_r * er + ki_r * ir))
-        hp, hq, hr = _times(self.inertia, rate)
+        tp, tq, tr = times(self.inertia, (kp_p * ep + ki_p * ip, kp_q * eq + ki_q * iq, kp_r * er + ki_r * ir))
+        hp, hq, hr = times(self.inertia, rate)
         return tp + (q * hr - r * hq), tq + (r * hp - p * hr), tr + (p * hq - q * hp)
 
 
 def _clip(x: float, limit: float) -> float:
     """``x`` within [-limit, limit]."""
     return -limit if x < -limit else limit if x > limit else x
-
-
-def _times(matrix: tuple[Vector3, Vector3, Vector3], v: Sequence[float]) -> Vector3:
-    """``matrix @ v`` for a 3x3 matrix given as rows."""
-    x, y, z = v
-    (a, b, c), (d, e, f), (g, h, i) = matrix
-    return a * x + b * y + c * z, d * x + e * y + f * z, g * x + h * y + i * z
 
 
 def allocation(positions: np.ndarray, spin: np.ndarray, torque_ratio: float) -> np.ndarray:
@@ -103,18 +96,35 @@ def allocation(positions: np.ndarray, spin: np.ndarray, torque_ratio: float) -> 
     return np.vstack([np.ones_like(x), y, -x, -torque_ratio * spin])
 
 
+def mixing_matrix(allocation_matrix: np.ndarray) -> np.ndarray:
+    """The (n, 4) matrix from (collective thrust, roll, pitch, yaw torque) to rotor thrusts: the inverse of a (4, 4)
+    allocation, else its pseudo-inverse (of all the rotor thrusts that meet a demand, the one with the least sum of
+    squares). Its first column is each rotor's share of the collective thrust.
+
+    The pseudo-inverse of a square allocation is its inverse too, to rounding: four rotors take the exact inverse,
+    which the seeded trajectories were recorded with.
+    """
+    if allocation_matrix.shape == (4, 4):
+        return np.linalg.inv(allocation_matrix)
+    return np.linalg.pinv(allocation_matrix)
+
+
 class Mixer:
     """Rotor thrusts for a collective thrust and body torques, within the rotors' thrust range.
 
     Args:
-        allocation_matrix: (4, 4) from :func:`allocation`.
+        allocation_matrix: (4, n) from :func:`allocation`, of rank 4, and every rotor's share of the collective thrust
+            positive (``robots/multirotor_model.py`` checks a spec's layout).
         min_thrust: lowest thrust of one rotor, N.
         max_thrust: highest thrust of one rotor, N.
+
+    Attributes:
+        shares: each rotor's share of the collective thrust (they sum to 1).
     """
 
     def __init__(self, allocation_matrix: np.ndarray, min_thrust: float, max_thrust: float) -> None:
-        inverse = np.linalg.inv(allocation_matrix)
-        self._collective = tuple(inverse[:, 0].tolist())
+        inverse = mixing_matrix(allocation_matrix)
+        self.shares = tuple(inverse[:, 0].tolist())
         self._torque_rows = tuple(map(tuple, inverse[:, 1:].tolist()))  # per rotor: N per roll, pitch, yaw N m
         self.min_thrust = min_thrust
         self.max_thrust = max_thrust
@@ -148,13 +158,15 @@ class Mixer:
                         for rp_i, yaw_i in zip(rp, yaw) for rp_j, yaw_j in zip(rp, yaw) if yaw_i > yaw_j)
                 k = max(0.0, k)
                 differential = [r + y * k for r, y in zip(rp, yaw)]
-        thrusts = [thrust * c + d for c, d in zip(self._collective, differential)]
-        low, high = min(thrusts), max(thrusts)
-        # one common shift brings every rotor into range: the differential part fits the span by construction
-        if low < lo:
-            shift = lo - low
-            thrusts = [min(f + shift, hi) for f in thrusts]  # min: rounding
-        elif high > hi:
-            shift = high - hi
-            thrusts = [max(f - shift, lo) for f in thrusts]
+        shares = self.shares
+        thrusts = [thrust * c + d for c, d in zip(shares, differential)]
+        # the collective moves by the least that brings every rotor into range, each rotor by its share of it (which
+        # changes no torque); with equal shares the differential part fits the span by construction, with unequal
+        # ones a rotor the move pushes past the other end is held there
+        if min(thrusts) < lo:
+            shift = max((lo - f) / c for f, c in zip(thrusts, shares))
+            thrusts = [min(f + shift * c, hi) for f, c in zip(thrusts, shares)]  # min: rounding
+        elif max(thrusts) > hi:
+            shift = max((f - hi) / c for f, c in zip(thrusts, shares))
+            thrusts = [max(f - shift * c, lo) for f, c in zip(thrusts, shares)]
         return thrusts

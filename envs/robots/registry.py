@@ -4,7 +4,6 @@ A robot has a kind, and a task takes the kinds it can drive: ClutterNav-v0 a whe
 ClutterReach-v0 a fixed-base arm (``arm``), ClutterFly-v0 a multirotor (``multirotor``). Registering a robot of a
 known kind takes a name and a spec (or a function that makes the robot's model); a user's robot of a known kind
 needs no Python at all: ``robot={"kind": "diff_drive", "urdf": ..., ...}`` or ``robot="my_robot.yaml"``.
-Specs of the kind ``multirotor`` are not read yet: ClutterFly-v0 takes its registered quadrotor only.
 """
 
 from __future__ import annotations
@@ -19,6 +18,8 @@ import yaml
 
 from clutter_gym.robots.arm import Arm
 from clutter_gym.robots.arm_model import arm_from_spec
+from clutter_gym.robots.multirotor import Multirotor
+from clutter_gym.robots.multirotor_model import multirotor_from_spec
 from clutter_gym.robots.panda import PandaArm
 from clutter_gym.robots.quadrotor import Quadrotor
 from clutter_gym.robots.wheeled import diffbot, wheeled_base_from_spec
@@ -26,10 +27,12 @@ from clutter_gym.sim import pybullet_data_file
 
 #: What each kind is, in words, for error messages.
 KINDS = {"diff_drive": "wheeled base", "arm": "fixed-base arm", "multirotor": "multirotor"}
-#: The kinds whose robots a spec (a mapping or a YAML file) can describe, and the reader of each.
+#: The reader of each kind's specs (a mapping or a YAML file): what it gives is what the kind's env builds its robot
+#: from.
 SPEC_READERS: dict[str, Callable[[Mapping[str, Any], str, Path | None], Any]] = {
     "diff_drive": wheeled_base_from_spec,
     "arm": lambda spec, where, folder: functools.partial(Arm, arm_from_spec(spec, where, folder)),
+    "multirotor": lambda spec, where, folder: functools.partial(Multirotor, multirotor_from_spec(spec, where, folder)),
 }
 
 
@@ -45,20 +48,17 @@ _ROBOTS: dict[str, RobotEntry] = {}
 
 
 def register_robot(name: str, kind: str, make: Callable[[], Any] | Mapping[str, Any]) -> None:
-    """Register ``name`` as a robot of ``kind``: ``make`` is a spec mapping (kinds in :data:`SPEC_READERS`), or a
-    function that returns the kind's model.
+    """Register ``name`` as a robot of ``kind``: ``make`` is a spec mapping, or a function that returns what the
+    kind's env builds its robot from (what :data:`SPEC_READERS` gives).
 
     Raises:
-        ValueError: the name is taken, the kind unknown, or a spec given for a kind whose specs are not read.
+        ValueError: the name is taken or the kind unknown.
     """
     if kind not in KINDS:
         raise ValueError(f"robot kind must be one of {list(KINDS)}, got {kind!r}")
     if name in _ROBOTS:
         raise ValueError(f"a robot named {name!r} is already registered (a {KINDS[_ROBOTS[name].kind]})")
     if isinstance(make, Mapping):
-        if kind not in SPEC_READERS:
-            raise ValueError(f"specs of kind {kind!r} are not read yet (only {list(SPEC_READERS)}); register a "
-                             "function that makes the robot instead")
         spec = dict(make)
         make = lambda: SPEC_READERS[kind](spec, f"robot {name!r}", None)  # noqa: E731  (read on first use)
     _ROBOTS[name] = RobotEntry(kind, make)
@@ -77,9 +77,7 @@ def resolve_robot(robot: str | Path | Mapping[str, Any], kind: str, env_id: str)
         ValueError: an unknown name, a robot of another kind, or a bad spec; the message lists the registered robots
             the env takes.
     """
-    takes = f"{env_id} takes a {KINDS[kind]}: robot= one of {registered(kind)}"
-    if kind in SPEC_READERS:
-        takes += f", or a spec with kind {kind!r}"
+    takes = f"{env_id} takes a {KINDS[kind]}: robot= one of {registered(kind)}, or a spec with kind {kind!r}"
     where = "robot"
     folder = None
     if isinstance(robot, (str, Path)) and Path(robot).suffix in (".yaml", ".yml"):
@@ -97,8 +95,6 @@ def resolve_robot(robot: str | Path | Mapping[str, Any], kind: str, env_id: str)
         spec_kind = robot.get("kind")
         if spec_kind != kind:
             raise ValueError(f"{where}: kind {spec_kind!r} does not fit; {takes}")
-        if kind not in SPEC_READERS:
-            raise ValueError(f"{where}: specs of kind {kind!r} are not read yet (only {list(SPEC_READERS)}); {takes}")
         return SPEC_READERS[kind](robot, where, folder)
     if not isinstance(robot, str) or robot not in _ROBOTS:
         raise ValueError(f"unknown robot {robot!r}; {takes}")

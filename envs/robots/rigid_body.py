@@ -45,9 +45,9 @@ class RigidBody:
 
 
 class RigidFrames:
-    """States of chosen links of a rigid body from its root link's state alone: every link's pose and velocity
-    follow from the root's, so nothing more needs reading from the physics engine (the same values as pybullet's
-    link reads, to rounding).
+    """States of chosen links of a rigid body loaded as one merged pybullet body from its base's state alone: every
+    link's pose and velocity follow from the base's, so nothing more needs reading from the physics engine (the same
+    values as pybullet's link reads, to rounding).
 
     Args:
         body: the body's mass properties and link frames.
@@ -55,24 +55,23 @@ class RigidFrames:
     """
 
     def __init__(self, body: RigidBody, links: tuple[str, ...]) -> None:
-        root_com = body.link_coms[body.root]
-        self._root_com = root_com
+        self._com = body.com
         self._origins = np.array([body.frames[n][0] for n in links])
         self._axes = np.array([body.frames[n][1] for n in links])
-        self._levers = np.array([body.link_coms[n] for n in links]) - root_com  # from the root's centre of mass
+        self._levers = np.array([body.link_coms[n] for n in links]) - body.com  # from the centre of mass
 
-    def link_states(self, root_com: tuple[float, float, float], rotation: np.ndarray,
+    def link_states(self, com: tuple[float, float, float], rotation: np.ndarray,
                     linear_velocity: tuple[float, float, float], angular_velocity: tuple[float, float, float]
                     ) -> LinkStates:
         """The links' states (as :meth:`Sim.link_states` gives them).
 
         Args:
-            root_com: the root link's own centre of mass (pybullet's base position), world frame, metres.
+            com: the whole body's centre of mass (the merged body's base position in pybullet), world frame, metres.
             rotation: (3, 3) the root link's orientation.
-            linear_velocity: velocity of ``root_com``, m/s.
+            linear_velocity: velocity of ``com``, m/s.
             angular_velocity: rad/s, the same for every link.
         """
-        origin = np.asarray(root_com) - rotation @ self._root_com
+        origin = np.asarray(com) - rotation @ self._com
         wx, wy, wz = angular_velocity
         spin = np.array([[0.0, -wz, wy], [wz, 0.0, -wx], [-wy, wx, 0.0]])  # w x v = spin @ v (np.cross costs more)
         return LinkStates(
@@ -95,7 +94,7 @@ def rigid_body(urdf: str | Path) -> RigidBody:
     """Compose the links of ``urdf`` into one body (parallel-axis theorem per link).
 
     Raises:
-        ValueError: the URDF cannot be read, has a joint that is not fixed, or a link with a negative mass.
+        ValueError: the URDF cannot be read, has a joint that is not fixed, a link with a negative mass, or no mass.
     """
     urdf = Path(urdf)
     root = parse_urdf(urdf)
@@ -142,6 +141,8 @@ def rigid_body(urdf: str | Path) -> RigidBody:
         link_coms[name] = centres[-1]
         inertias.append(axes @ local @ axes.T)
     total = float(sum(masses))
+    if not total > 0.0:
+        raise ValueError(f"{urdf.name}: its links weigh nothing: give the mass in an <inertial> element")
     com = sum(m * c for m, c in zip(masses, centres)) / total
     inertia = np.zeros((3, 3))
     for m, c, i in zip(masses, centres, inertias):

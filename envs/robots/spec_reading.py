@@ -94,6 +94,14 @@ def number(spec: Mapping[str, object], key: str, where: str, default: float, low
         raise ValueError(f"{where}: {key} must be a number in [{low:g}, {high:g}], got {value!r}") from None
 
 
+def spec_mounts(spec: Mapping[str, object], where: str) -> tuple[Mount, ...]:
+    """The links a spec's ``mounts`` (``{link: {"parent": ..., "xyz": [...], "rpy": [...]}}``) adds, if any."""
+    mounts = spec.get("mounts") or {}
+    if not isinstance(mounts, Mapping):
+        raise ValueError(f"{where}: mounts must be a mapping of link names to mounts, got {mounts!r}")
+    return tuple(mount(str(link), entry, f"{where}: mounts.{link}") for link, entry in mounts.items())
+
+
 def mount(link: str, entry: object, where: str) -> Mount:
     """A link to add, from ``{"parent": link, "xyz": [...], "rpy": [...]}``."""
     if not isinstance(entry, Mapping) or "parent" not in entry:

@@ -38,9 +38,18 @@ class UrdfRobot:
         return self._body
 
     def _load(self, sim: Sim, fixed_base: bool = False, merge_fixed_links: bool = False) -> int:
-        """Load the URDF into ``sim`` (once per Sim), hidden from rays; a fresh episode's dynamics are nominal."""
+        """Load the URDF into ``sim`` (once per Sim), hidden from rays; a fresh episode's dynamics are nominal.
+
+        Raises:
+            ValueError: pybullet refuses the URDF (the message names the robot: a spec's URDF is loaded from its
+                prepared copy in the user cache).
+        """
         self._sim = sim
-        self._body = sim.load_urdf("robot", self.urdf_path, fixed_base=fixed_base, merge_fixed_links=merge_fixed_links)
+        try:
+            self._body = sim.load_urdf("robot", self.urdf_path, fixed_base=fixed_base,
+                                       merge_fixed_links=merge_fixed_links)
+        except ValueError as error:
+            raise ValueError(f"robot {self.name!r}: {error}") from None
         sim.hide_from_rays(self._body)
         self._dynamics = DynamicsSample()
         return self._body

@@ -21,7 +21,7 @@ import numpy as np
 
 from clutter_gym.assets import asset_path
 from clutter_gym.collision.urdf_geometry import CollisionElement
-from clutter_gym.robots.spec_reading import check_keys, joint_names, load_spec_urdf, mount, number
+from clutter_gym.robots.spec_reading import check_keys, joint_names, load_spec_urdf, number, spec_mounts
 from clutter_gym.util.transforms import quat_to_matrix
 
 #: The links the sensors sit on.
@@ -82,11 +82,7 @@ def wheeled_base_from_spec(spec: Mapping[str, object], where: str, folder: Path 
             message names the key, the URDF and what the URDF offers.
     """
     check_keys(spec, SPEC_KEYS, 3, "diff_drive", where)
-    mounts = spec.get("mounts") or {}
-    if not isinstance(mounts, Mapping):
-        raise ValueError(f"{where}: mounts must be a mapping of link names to mounts, got {mounts!r}")
-    urdf = load_spec_urdf(spec, where, folder, tuple(mount(str(k), v, f"{where}: mounts.{k}")
-                                                     for k, v in mounts.items()))
+    urdf = load_spec_urdf(spec, where, folder, spec_mounts(spec, where))
     kinematics, elements, source = urdf.kinematics, urdf.elements, urdf.source
     sides = {side: joint_names(spec, side, urdf, where) for side in ("left_wheels", "right_wheels")}
     moving = [j.name for j in kinematics.joints]

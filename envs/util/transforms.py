@@ -1,12 +1,33 @@
-"""Rigid-transform helpers on plain numpy arrays. Quaternions are (x, y, z, w), as pybullet writes them."""
+"""Rigid-transform helpers on plain numpy arrays, and 3x3 matrix-vector products on Python floats for the per-tick
+loops where numpy's per-call cost outweighs three dot products. Quaternions are (x, y, z, w), as pybullet writes
+them; a matrix as floats is its 9 entries row by row (pybullet's ``getMatrixFromQuaternion`` order)."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import TypeVar
 
 import numpy as np
 
 Real = TypeVar("Real", float, np.ndarray)
+Vector3 = tuple[float, float, float]
+
+
+def times(m: Sequence[float], v: Sequence[float]) -> Vector3:
+    """``M v`` for a 3x3 matrix ``m`` given as 9 floats row by row."""
+    x, y, z = v
+    return (m[0] * x + m[1] * y + m[2] * z,
+            m[3] * x + m[4] * y + m[5] * z,
+            m[6] * x + m[7] * y + m[8] * z)
+
+
+def times_transposed(m: Sequence[float], v: Sequence[float]) -> Vector3:
+    """``M^T v`` for a 3x3 matrix ``m`` given as 9 floats row by row: a world vector in the body frame, for ``m``
+    a body's rotation."""
+    x, y, z = v
+    return (m[0] * x + m[3] * y + m[6] * z,
+            m[1] * x + m[4] * y + m[7] * z,
+            m[2] * x + m[5] * y + m[8] * z)
 
 
 def quat_to_matrix(q: np.ndarray) -> np.ndarray:

@@ -11,14 +11,15 @@ that lead.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from clutter_gym.assets import asset_path
-from clutter_gym.robots import Quadrotor, QuadrotorConfig
+from clutter_gym.robots import Multirotor, Quadrotor, QuadrotorConfig
 from clutter_gym.robots.aero import ground_effect_gain, rotor_drag
-from clutter_gym.robots.quadrotor import ROTOR_SPIN
+from clutter_gym.robots.quadrotor import ROTOR_SPIN, quadrotor_model
 from clutter_gym.robots.rate_loop import Mixer, allocation
 from clutter_gym.robots.rigid_body import rigid_body
 from clutter_gym.sim import Sim, pb
@@ -28,11 +29,13 @@ DT = 1.0 / HZ
 START = (0.0, 0.0, 5.0, 0.0)
 
 
-def flying(config: QuadrotorConfig | None = None, start=START, ground: bool = False) -> tuple[Sim, Quadrotor]:
+def flying(config: QuadrotorConfig | None = None, start=START, ground: bool = False,
+           **airframe: float) -> tuple[Sim, Quadrotor]:
+    """The quadrotor hovering at ``start`` in a fresh Sim; ``airframe`` changes its model's values."""
     sim = Sim(physics_hz=HZ)
     if ground:
         sim.add_ground(visual_size=1.0)
-    robot = Quadrotor(config)
+    robot = Multirotor(replace(quadrotor_model(), **airframe), config)
     robot.load(sim)
     robot.reset_to(start)
     return sim, robot
@@ -129,7 +132,7 @@ def test_hover_at_the_computed_rotor_speed_holds_position_for_ten_seconds(sims, 
     sim, robot = make(sims, QuadrotorConfig(control=control))
     robot.apply_action(robot.hover_action(sim.gravity))
     speeds = run(sim, robot, int(10 * HZ), lambda r: r.rotor_speeds)
-    np.testing.assert_allclose(speeds, math.sqrt(0.027 * sim.gravity / (4 * robot.config.thrust_coefficient)),
+    np.testing.assert_allclose(speeds, math.sqrt(0.027 * sim.gravity / (4 * robot.model.thrust_coefficient)),
                                rtol=1e-12)
     position, velocity, _ = base(robot)
     # thrust and weight balance to rounding, so only rounding moves it: 1 mm (the spec) is far above that
@@ -154,8 +157,8 @@ def test_free_fall_with_rotors_stopped_matches_g_t_squared_over_two(sims):
 
 def test_thrust_step_follows_the_exact_first_order_motor_response(sims):
     sim, robot = make(sims, QuadrotorConfig(control="motors"))
-    c = robot.config
-    w0 = robot.hover_speed(sim.gravity)
+    c = robot.model
+    w0 = robot.hover_speeds(sim.gravity)[0]
     w1 = 1.2 * w0
     robot.apply_action(np.full(4, 2 * w1 / c.max_rotor_speed - 1))  # min_rotor_speed is 0
     n = int(0.3 * HZ)  # six time constants
@@ -172,8 +175,8 @@ def test_thrust_step_follows_the_exact_first_order_motor_response(sims):
 
 def test_pure_yaw_command_gives_the_yaw_acceleration_of_the_coefficients_and_inertia(sims):
     sim, robot = make(sims, QuadrotorConfig(control="motors"))
-    c = robot.config
-    w0 = robot.hover_speed(sim.gravity)
+    c = robot.model
+    w0 = robot.hover_speeds(sim.gravity)[0]
     spin = np.array(ROTOR_SPIN)
     # clockwise rotors (spin -1) faster, counter-clockwise slower, squares moved alike: thrust unchanged at rest
     command = w0 * np.sqrt(1 - 0.2 * spin)
@@ -217,9 +220,9 @@ def test_rate_step_through_the_inner_loop_settles_with_bounded_overshoot(sims, a
 
 def test_rotor_drag_gives_the_terminal_climb_rate_of_its_model(sims):
     # no motor lag, so the rotors spin at w from the first tick and the climb is a first-order response
-    sim, robot = make(sims, QuadrotorConfig(control="motors", aero=("drag",), motor_time_constant=0.0))
-    c = robot.config
-    w = 1.05 * robot.hover_speed(sim.gravity)
+    sim, robot = make(sims, QuadrotorConfig(control="motors", aero=("drag",)), motor_time_constant=0.0)
+    c = robot.model
+    w = 1.05 * robot.hover_speeds(sim.gravity)[0]
     robot.apply_action(np.full(4, 2 * w / c.max_rotor_speed - 1))
     n = int(30 * HZ)
     vz = np.array(run(sim, robot, n, lambda r: r.state().linear_velocity[2]))
@@ -234,7 +237,7 @@ def test_rotor_drag_gives_the_terminal_climb_rate_of_its_model(sims):
 
 
 def test_ground_effect_lifts_a_hovering_rotor_set_by_the_cheeseman_bennett_gain(sims):
-    radius = QuadrotorConfig().rotor_radius
+    radius = quadrotor_model().rotor_radius
     hub = 0.018  # rotor hubs above the base origin
     height = 2 * radius  # gain 1 / (1 - 1/64)
     sim, robot = make(sims, QuadrotorConfig(control="motors", aero=("ground_effect",)),
@@ -297,16 +300,30 @@ def test_mixer_moves_thrust_before_attitude_and_scales_roll_pitch_keeping_their_
     assert f.max() - f.min() == pytest.approx(0.15)
 
 
+def test_mixer_with_unequal_shares_moves_the_collective_along_them_and_keeps_the_torques():
+    """Six rotors about a centre of mass 10 mm off their centre: the pseudo-inverse loads the near rotors more, and
+    a collective beyond the range moves rotor by rotor in those shares, which changes no torque (a common shift of
+    every rotor would roll the airframe)."""
+    angles = np.radians(30.0 + 60.0 * np.arange(6))
+    positions = 0.06 * np.stack([np.cos(angles), np.sin(angles)], axis=1) - [0.01, 0.0]
+    alloc = allocation(positions, np.array([1.0, -1.0] * 3), 0.006)
+    m = Mixer(alloc, 0.0, 0.15)
+    assert sum(m.shares) == pytest.approx(1.0, rel=1e-12) and max(m.shares) / min(m.shares) > 1.5
+    demand = np.array([0.85, 2e-4, -1e-4, 5e-5])  # more collective than the rotors give beside these torques
+    f = m.mix(demand[0], demand[1:])
+    got = alloc @ f
+    assert f.min() >= 0.0 and f.max() == pytest.approx(0.15, rel=1e-12) and got[0] < demand[0]
+    np.testing.assert_allclose(got[1:], demand[1:], rtol=1e-9)
+
+
 # ------------------------------------------------------------------------------------------------------ config
 @pytest.mark.parametrize(
     "field, value",
     [
-        ("control", "attitude"), ("thrust_coefficient", 0.0), ("torque_coefficient", -1e-10),
-        ("motor_time_constant", 2.0), ("min_rotor_speed", -1.0), ("max_rotor_speed", math.inf),
-        ("max_roll_rate", 0.0), ("max_pitch_rate", 50.0), ("max_yaw_rate", "2"), ("rate_kp_roll_pitch", 0.0),
-        ("rate_kp_yaw", 1e3), ("rate_ki_roll_pitch", -1.0), ("rate_ki_yaw", math.nan), ("rate_integral_limit", 0.0),
-        ("drag_xy", -1e-7), ("drag_z", 1.0), ("rotor_radius", 0.0), ("aero", ("drag", "drag")),
-        ("aero", ["drag"]), ("aero", ("wind",)), ("start_hovering", 1),
+        ("control", "attitude"), ("max_roll_rate", 0.0), ("max_pitch_rate", 50.0), ("max_yaw_rate", "2"),
+        ("rate_kp_roll_pitch", 0.0), ("rate_kp_yaw", 1e3), ("rate_ki_roll_pitch", -1.0), ("rate_ki_yaw", math.nan),
+        ("rate_integral_limit", 0.0), ("aero", ("drag", "drag")), ("aero", ["drag"]), ("aero", ("wind",)),
+        ("start_hovering", 1),
     ],
 )
 def test_config_errors_name_the_field(field, value):
@@ -314,9 +331,22 @@ def test_config_errors_name_the_field(field, value):
         QuadrotorConfig(**{field: value})
 
 
+@pytest.mark.parametrize(
+    "field, value",
+    [
+        ("thrust_coefficient", 0.0), ("torque_coefficient", 0.0), ("motor_time_constant", 2.0),
+        ("min_rotor_speed", -1.0), ("max_rotor_speed", math.inf), ("drag_xy", -1e-7), ("drag_z", 1.0),
+        ("rotor_radius", 0.0), ("spin", (1.0, -1.0, 1.0)), ("spin", (1.0, -1.0, 1.0, 0.0)),
+    ],
+)
+def test_airframe_errors_name_the_field(field, value):
+    with pytest.raises(ValueError, match=field):
+        replace(quadrotor_model(), **{field: value})
+
+
 def test_min_rotor_speed_must_stay_below_the_maximum():
     with pytest.raises(ValueError, match="min_rotor_speed"):
-        QuadrotorConfig(min_rotor_speed=2000.0, max_rotor_speed=1000.0)
+        replace(quadrotor_model(), min_rotor_speed=2000.0, max_rotor_speed=1000.0)
 
 
 # ------------------------------------------------------------------------------------------------- determinism

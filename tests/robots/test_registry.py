@@ -1,4 +1,5 @@
-"""Robots chosen by ``robot=``: the registry's refusals, the prepared URDF, a base read from a spec, the Husky."""
+"""Robots chosen by ``robot=``: the registry's refusals, the prepared URDF, a base read from a spec, the Husky.
+Multirotor specs: test_multirotor_spec.py."""
 
 from __future__ import annotations
 
@@ -39,9 +40,9 @@ def test_each_env_takes_its_kind_and_names_the_robots_it_takes():
                                          r"one of \['diffbot', 'husky'\], or a spec with kind 'diff_drive'"):
         gym.make("ClutterNav-v0", robot="panda")
     with pytest.raises(ValueError, match=r"unknown robot 'nope'; ClutterFly-v0 takes a multirotor: robot= one of "
-                                         r"\['quadrotor'\]$"):
+                                         r"\['quadrotor'\], or a spec with kind 'multirotor'$"):
         gym.make("ClutterFly-v0", robot="nope")
-    with pytest.raises(ValueError, match="specs of kind 'multirotor' are not read yet"):
+    with pytest.raises(ValueError, match=r"robot: missing 'rotor_links' \(a multirotor spec needs \['urdf'"):
         gym.make("ClutterFly-v0", robot={"kind": "multirotor", "urdf": "drone.urdf"})
     with pytest.raises(ValueError, match="kind 'arm' does not fit; ClutterNav-v0 takes a wheeled base"):
         gym.make("ClutterNav-v0", robot={"kind": "arm", "urdf": "arm.urdf"})
@@ -58,8 +59,6 @@ def test_a_registered_spec_is_read_when_an_env_first_asks_for_it(monkeypatch):
         register_robot("husky", "diff_drive", DIFFBOT_SPEC)
     with pytest.raises(ValueError, match=r"robot kind must be one of \['diff_drive', 'arm', 'multirotor'\]"):
         register_robot("boat", "boat", DIFFBOT_SPEC)
-    with pytest.raises(ValueError, match="specs of kind 'multirotor' are not read yet"):
-        register_robot("drone", "multirotor", {"urdf": "drone.urdf"})
     assert "my_bot" in registered("diff_drive")
 
 
