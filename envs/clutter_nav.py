@@ -10,7 +10,7 @@ import numpy as np
 
 from clutter_gym.collision.kinematics import UrdfKinematics
 from clutter_gym.core import ClutterEnv, collision_checker
-from clutter_gym.make_checks import check_env_settings, check_flags, check_numbers
+from clutter_gym.make_checks import check_env_settings, check_flags, check_numbers, check_physics_mode
 from clutter_gym.noise.profiles import NoiseProfile, resolve_noise
 from clutter_gym.robots import DiffDriveConfig, DiffDriveRobot
 from clutter_gym.robots.registry import resolve_robot
@@ -97,7 +97,7 @@ class ClutterNavEnv(ClutterEnv):
     ``n_contacts`` (FCL link/obstacle pairs within ``contact_tolerance``), ``pybullet_contacts`` (pybullet
     contact points within the same tolerance), ``contact_disagreement`` (exactly one engine sees contact),
     ``lidar_ranges`` (m, as the sensor reports them: noisy, and ``inf`` for no return if the profile says so),
-    ``noise_profile`` (at reset), ``safety_scale`` (the fraction of the linear command the collision monitor let
+    ``noise_profile`` and ``physics`` (at reset: the physics the episode runs at, and why), ``safety_scale`` (the fraction of the linear command the collision monitor let
     through, when it is on) and ``safety_recovery`` (True on the steps of a recovery spin, when the monitor drove
     instead of the policy).
 
@@ -128,7 +128,10 @@ class ClutterNavEnv(ClutterEnv):
     ``sensors``); ``reverse`` (False: forward driving only, see "Action space"); ``robot`` (a registered wheeled
     base, ``"diffbot"`` or ``"husky"``, a spec mapping or a YAML spec file: docs/robots.md); ``observe_bearing``
     (the goal entry ends with the bearing angle / pi, which jumps where the goal is straight behind: from sin and cos
-    alone, a continuous policy's turn passes through zero there, and a deterministic one can stop for good).
+    alone, a continuous policy's turn passes through zero there, and a deterministic one can stop for good);
+    ``physics`` ("auto": a user scene that stacks movable obstacles ticks faster with more solver iterations, as
+    much as it needs and never less than ``physics_hz`` and ``solver_iterations``, and the reset's
+    ``info["physics"]`` says what it chose and why; "fixed": always ``physics_hz`` and ``solver_iterations``).
 
     ``subgoal_lookahead > 0`` makes the env map-based: the ``subgoal`` entry comes from a path planned on the
     known layout (shortest on a costmap that charges passing within 0.25 m of touching; see
@@ -200,10 +203,12 @@ class ClutterNavEnv(ClutterEnv):
         reverse: bool = True,
         observe_bearing: bool = False,
         robot: str | Mapping[str, Any] = "diffbot",
+        physics: str = "auto",
     ) -> None:
         check_numbers(ClutterNavEnv.__init__, locals())
         check_env_settings(render_mode, physics_hz, control_hz, solver_iterations, contact_tolerance,
                            env_id="ClutterNav-v0", min_physics_hz=MIN_PHYSICS_HZ)
+        check_physics_mode(physics)
         check_flags(terminate_on_collision=terminate_on_collision, reverse=reverse, observe_bearing=observe_bearing)
         self.forward_only = not reverse  # the linear action maps onto stand..full speed (see _command)
         base = resolve_robot(robot, "diff_drive", "ClutterNav-v0")
@@ -246,6 +251,7 @@ class ClutterNavEnv(ClutterEnv):
             noise=profile,
             render_mode=render_mode,
             safety=safety,
+            physics=physics,
         )
 
 

@@ -7,7 +7,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from clutter_gym.core import ClutterEnv, collision_checker
-from clutter_gym.make_checks import check_env_settings, check_flags, check_numbers
+from clutter_gym.make_checks import check_env_settings, check_flags, check_numbers, check_physics_mode
 from clutter_gym.noise.profiles import NoiseProfile, resolve_noise
 from clutter_gym.planning.joint_space import ArmPlanner
 from clutter_gym.robots.arm import Arm, ArmConfig
@@ -87,11 +87,11 @@ class ClutterReachEnv(ClutterEnv):
     ``clearance_range``), ``closest_pair`` ((link, obstacle index) or None), ``witness_points`` ((2, 3) world
     points on the link and the obstacle, or None), ``n_contacts``, ``max_penetration`` (m), ``self_collision``
     ((link, link) or None), ``tunneling`` (swept hits), ``pybullet_contacts`` and ``contact_disagreement``
-    (pybullet's contact points against FCL's verdict), ``noise_profile`` (at reset).
+    (pybullet's contact points against FCL's verdict), ``noise_profile`` and ``physics`` (at reset: the physics the episode runs at, and why).
 
     ## Arguments
 
-    ``robot`` (a registered arm: ``"panda"``; docs/robots.md);
+    ``robot`` (a registered arm: ``"panda"``; docs/robots.md); ``physics`` ("auto" or "fixed", as ClutterNav-v0's);
     ``render_mode``; ``control`` ("joint_velocity", "ee_position"); ``max_joint_speed`` (0, 1];
     ``max_ee_step`` m; ``collision_fidelity`` (one of ``FIDELITY_LEVELS``: docs/collision.md);
     ``collision_padding`` m; ``self_collision``; ``n_obstacles`` [0, 20]; ``movable_obstacles`` fraction [0, 1]
@@ -150,10 +150,12 @@ class ClutterReachEnv(ClutterEnv):
         control_weight: float = 0.005,
         subgoal_lookahead: float = 0.0,
         robot: str = "panda",
+        physics: str = "auto",
     ) -> None:
         check_numbers(ClutterReachEnv.__init__, locals())
         check_env_settings(render_mode, physics_hz, control_hz, solver_iterations, contact_tolerance,
                            env_id="ClutterReach-v0", min_physics_hz=MIN_PHYSICS_HZ)
+        check_physics_mode(physics)
         check_flags(self_collision=self_collision, shelf=shelf, observe_directions=observe_directions,
                     observe_target_offset=observe_target_offset, terminate_on_collision=terminate_on_collision)
         if not (math.isfinite(clearance_range) and 0.01 <= clearance_range <= 2.0):
@@ -192,4 +194,5 @@ class ClutterReachEnv(ClutterEnv):
             control_hz=control_hz,
             noise=resolve_noise(noise),
             render_mode=render_mode,
+            physics=physics,
         )

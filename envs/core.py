@@ -15,6 +15,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from clutter_gym.auto_physics import PhysicsChoice, choose_physics
 from clutter_gym.collision import CollisionChecker, RobotCollisionModel, check_fidelity
 from clutter_gym.datatypes import CollisionReport, RobotState
 from clutter_gym.interfaces import Arena, L, Layout, Robot, Sensor, Task, TickedRobot
@@ -52,6 +53,9 @@ class ClutterEnv(gym.Env):
         safety: slows each action's linear command by what the latest reading of its sensor (``safety.sensor``, one
             of ``sensors``) allows, and spins the base free when it stays pinned, before actuation noise and latency
             (None: actions pass unchanged).
+        physics: "fixed" runs every episode at ``physics_hz`` and ``solver_iterations``; "auto" raises them for a
+            scene that needs more (:func:`clutter_gym.auto_physics.choose_physics`), never lowers them, and says what
+            it chose in the reset's ``info["physics"]``.
     """
 
     metadata = {"render_modes": list(RENDER_MODES), "render_fps": 20}
@@ -78,6 +82,7 @@ class ClutterEnv(gym.Env):
         render_mode: str | None = None,
         render_size: tuple[int, int] = (320, 240),
         safety: SafetyFilter | None = None,
+        physics: str = "fixed",
     ) -> None:
         self.sensors = tuple(sensors)
         # an env that never draws gives its obstacles no visual shapes (docs/design-notes.md#obstacle-visuals)
@@ -99,6 +104,11 @@ class ClutterEnv(gym.Env):
         self._focus_radius = 0.0
         self.metadata = {**self.metadata, "render_fps": control_hz}
         self.substeps = int(round(sim.physics_hz / control_hz))  # physics ticks per action
+        self._control_hz = control_hz
+        self._auto_physics = physics == "auto"
+        self.physics = PhysicsChoice(sim.physics_hz, solver_iterations, "the env's settings (physics='fixed')")
+        self._base_physics = self.physics
+        self._running = (sim.physics_hz, int(solver_iterations))  # what the Sim ticks at now
         # a TickedRobot (interfaces.py) acts before every physics tick; others once per action
         self._before_tick = cast(TickedRobot, robot).before_tick if getattr(robot, "ticked", False) else None
         self._build_world()
@@ -148,6 +158,7 @@ class ClutterEnv(gym.Env):
                ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
         super().reset(seed=seed)
         scene = self.arena.choose_scene(self.np_random, options)
+        self._choose_physics(scene)
         if self.sim.needs_rebuild:  # memory pybullet only frees by emptying the world: build it again
             self.sim.clear()
             self._build_world()
@@ -176,7 +187,7 @@ class ClutterEnv(gym.Env):
         obs, info = self._observe(state, report)
         info.update(
             min_clearance=report.min_clearance, n_contacts=report.n_contacts, is_success=False,
-            noise_profile=self.noise.name,
+            noise_profile=self.noise.name, physics=self.physics.as_info(),
         )
         self._failed_reset = None
         if self.render_mode == "human":
@@ -234,6 +245,19 @@ class ClutterEnv(gym.Env):
         if self.render_mode == "human":
             self.render()
         return obs, float(outcome.reward), outcome.terminated, False, info
+
+    def _choose_physics(self, scene: Layout) -> None:
+        """Under ``physics="auto"``, tick this episode at what ``scene`` needs (the env's own settings unless it
+        needs more)."""
+        if not self._auto_physics:
+            return
+        base = self._base_physics
+        self.physics = chosen = choose_physics(scene.obstacles, base.physics_hz, base.solver_iterations,
+                                               self._control_hz)
+        if (chosen.physics_hz, chosen.solver_iterations) != self._running:
+            self.sim.set_physics(chosen.physics_hz, chosen.solver_iterations)
+            self.substeps = int(round(chosen.physics_hz / self._control_hz))
+            self._running = (chosen.physics_hz, chosen.solver_iterations)
 
     def _command(self, action: np.ndarray) -> np.ndarray:
         """The normalised command the robot is to drive for a checked policy action (the action itself; an env

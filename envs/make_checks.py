@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from clutter_gym.auto_physics import PHYSICS_MODES
 from clutter_gym.util.checks import check_integer, is_number
 
 RENDER_MODES = ("human", "rgb_array")
@@ -44,6 +45,12 @@ def check_env_settings(render_mode: str | None, physics_hz: float, control_hz: f
     check_rates(physics_hz, control_hz, solver_iterations, env_id=env_id, min_physics_hz=min_physics_hz)
     if not (math.isfinite(contact_tolerance) and 0.0 <= contact_tolerance <= 0.05):
         raise ValueError(f"contact_tolerance must be in [0, 0.05] metres, got {contact_tolerance!r}")
+
+
+def check_physics_mode(physics: Any) -> None:
+    """Raise at make time for a ``physics`` that is not one of :data:`clutter_gym.auto_physics.PHYSICS_MODES`."""
+    if not (isinstance(physics, str) and physics in PHYSICS_MODES):
+        raise ValueError(f"physics must be one of {PHYSICS_MODES}, got {physics!r}")
 
 
 def check_numbers(init: Callable[..., None], arguments: Mapping[str, Any]) -> None:

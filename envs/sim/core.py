@@ -108,13 +108,15 @@ class Sim(Actuation, ObstacleBodies, Rendering, Rays):
         self._ground = -1
         self.culler = ViewCuller()
         self.primitives = PrimitiveTable()
-        pb.setPhysicsEngineParameter(
-            fixedTimeStep=1.0 / self.physics_hz,
-            numSolverIterations=self._solver_iterations,
-            deterministicOverlappingPairs=1,
-            physicsClientId=self._cid,
-        )
+        pb.setPhysicsEngineParameter(deterministicOverlappingPairs=1, physicsClientId=self._cid)
+        self.set_physics(self.physics_hz, self._solver_iterations)
         pb.setGravity(0.0, 0.0, -self._gravity, physicsClientId=self._cid)
+
+    def set_physics(self, physics_hz: float, solver_iterations: int) -> None:
+        """Tick at ``physics_hz`` with ``solver_iterations`` from the next :meth:`step` on (kept by :meth:`clear`)."""
+        self.physics_hz, self._solver_iterations = float(physics_hz), int(solver_iterations)
+        pb.setPhysicsEngineParameter(fixedTimeStep=1.0 / self.physics_hz, numSolverIterations=self._solver_iterations,
+                                     physicsClientId=self._cid)
 
     @property
     def needs_rebuild(self) -> bool:
