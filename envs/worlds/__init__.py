@@ -2,10 +2,11 @@
 pool that puts a scene into a Sim."""
 
 from clutter_gym.datatypes import Obstacle
-from clutter_gym.worlds.arena import ClutterArena
-from clutter_gym.worlds.clutter import ClutterSpec, sample_scene
+from clutter_gym.worlds.floor.arena import ClutterArena
+from clutter_gym.worlds.floor.sample import sample_scene
+from clutter_gym.worlds.floor.scene import Scene, parse_scene
+from clutter_gym.worlds.floor.spec import ClutterSpec
 from clutter_gym.worlds.pool import ObstaclePool
-from clutter_gym.worlds.scene import Scene, parse_scene
 from clutter_gym.worlds.tabletop import ReachScene, TableSpec, TabletopArena, sample_reach_scene
 from clutter_gym.worlds.volume import sample_volume_scene
 from clutter_gym.worlds.volume_arena import VolumeArena

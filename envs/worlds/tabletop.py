@@ -17,15 +17,9 @@ import numpy as np
 from clutter_gym.datatypes import Obstacle
 from clutter_gym.sim import Sim
 from clutter_gym.util.checks import check_fraction, check_integer
+from clutter_gym.worlds.parsing import check_scene_keys, parse_numbers, parse_obstacles, scene_from_options
 from clutter_gym.worlds.pool import ObstaclePool
-from clutter_gym.worlds.scene import (
-    check_scene_keys,
-    parse_numbers,
-    parse_obstacles,
-    polyline_distances,
-    scene_from_options,
-    with_masses,
-)
+from clutter_gym.worlds.sampling import polyline_distances, with_masses
 
 TABLE_GAP = 0.005
 TABLE = Obstacle("box", (1.6, 1.8, 0.05), (0.4, 0.0), 0.0, -0.05 - TABLE_GAP)

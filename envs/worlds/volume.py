@@ -17,7 +17,7 @@ Sampling, per attempt:
    least ``min_goal_distance`` apart. No such pair: a new attempt.
 
 After ``PLAIN_ATTEMPTS`` failed attempts the generator keeps a corridor clear, as the floor world's does
-(``worlds/clutter.py``): it draws start, one waypoint and goal first and refuses obstacles (a wall with all its
+(``worlds/floor/sample.py``): it draws start, one waypoint and goal first and refuses obstacles (a wall with all its
 pieces) that come within ``keep`` = r + max(spawn_clearance, h) + h of the polyline through them. The cells the
 polyline crosses then have clearance above r + h / 2 and r + spawn_clearance, so the steps above find start and goal
 in one component, and the density is still met elsewhere (unless the corridor leaves too little room for it).

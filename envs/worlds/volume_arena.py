@@ -10,8 +10,8 @@ import numpy as np
 from clutter_gym.datatypes import Obstacle
 from clutter_gym.sim import Sim
 from clutter_gym.util.camera_view import between, chase_eye, pull_in
+from clutter_gym.worlds.parsing import scene_from_options
 from clutter_gym.worlds.pool import ObstaclePool
-from clutter_gym.worlds.scene import scene_from_options
 from clutter_gym.worlds.volume import sample_volume_scene
 from clutter_gym.worlds.volume_scene import VolumeScene, parse_volume_scene
 from clutter_gym.worlds.volume_spec import VolumeSpec

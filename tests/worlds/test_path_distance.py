@@ -11,9 +11,11 @@ from scipy.sparse.csgraph import dijkstra
 
 from clutter_gym.datatypes import Obstacle
 from clutter_gym.tasks.navigate import SUBGOAL_PLAN_MARGIN
-from clutter_gym.worlds.clutter import ClutterSpec, clearance_field, sample_scene
-from clutter_gym.worlds.path_distance import _MOVES, PathDistance, _dijkstra_from
-from clutter_gym.worlds.scene import Scene
+from clutter_gym.worlds.floor.grid import clearance_field
+from clutter_gym.worlds.floor.path import _MOVES, PathDistance, _dijkstra_from
+from clutter_gym.worlds.floor.sample import sample_scene
+from clutter_gym.worlds.floor.scene import Scene
+from clutter_gym.worlds.floor.spec import ClutterSpec
 
 SPEC = ClutterSpec(arena_size=6.0)
 R = 0.17  # the diffbot's footprint radius

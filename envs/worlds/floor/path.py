@@ -21,9 +21,10 @@ from collections.abc import Iterator
 import numpy as np
 from scipy import ndimage
 
-from clutter_gym.worlds.clutter import ClutterSpec, scene_clearance
+from clutter_gym.worlds.floor.grid import scene_clearance
+from clutter_gym.worlds.floor.scene import Scene
+from clutter_gym.worlds.floor.spec import ClutterSpec
 from clutter_gym.worlds.grid_search import search_grid
-from clutter_gym.worlds.scene import Scene
 
 # Forward moves (di, dj) of the 16-neighbourhood (the other eight are their mirror images), each with
 # the cells its segment passes through, which must be free too. 16 neighbours bound the path-length error in
