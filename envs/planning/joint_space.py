@@ -23,7 +23,7 @@ from clutter_gym.datatypes import Obstacle
 from clutter_gym.planning.path import RESOLUTION
 from clutter_gym.robots.arm_model import ArmModel
 from clutter_gym.robots.panda import panda_model
-from clutter_gym.worlds.tabletop import TABLE
+from clutter_gym.worlds.table.spec import TABLE
 
 #: Goal configurations put the end effector anywhere in this ball around the target (metres): well inside the
 #: env's success radius, and far more IK solutions clear the clutter than at the exact point.

@@ -7,7 +7,10 @@ from clutter_gym.worlds.floor.sample import sample_scene
 from clutter_gym.worlds.floor.scene import Scene, parse_scene
 from clutter_gym.worlds.floor.spec import ClutterSpec
 from clutter_gym.worlds.pool import ObstaclePool
-from clutter_gym.worlds.tabletop import ReachScene, TableSpec, TabletopArena, sample_reach_scene
+from clutter_gym.worlds.table.arena import TabletopArena
+from clutter_gym.worlds.table.sample import sample_reach_scene
+from clutter_gym.worlds.table.scene import ReachScene
+from clutter_gym.worlds.table.spec import TableSpec
 from clutter_gym.worlds.volume import sample_volume_scene
 from clutter_gym.worlds.volume_arena import VolumeArena
 from clutter_gym.worlds.volume_path import VolumePathDistance
