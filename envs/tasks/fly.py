@@ -16,9 +16,9 @@ from gymnasium import spaces
 
 from clutter_gym.datatypes import CollisionReport, RobotState, StepOutcome
 from clutter_gym.tasks.terms import check_weights, clearance_term, control_term, cost_by_cause
-from clutter_gym.worlds.volume_path import VolumePathDistance
-from clutter_gym.worlds.volume_scene import VolumeScene, boundary_distance
-from clutter_gym.worlds.volume_spec import VolumeSpec
+from clutter_gym.worlds.volume.path import VolumePathDistance
+from clutter_gym.worlds.volume.scene import VolumeScene, boundary_distance
+from clutter_gym.worlds.volume.spec import VolumeSpec
 
 
 @dataclass(frozen=True)
@@ -26,7 +26,7 @@ class FlyRewardWeights:
     """Weights of the reward terms (all in [0, 1e4]; the sign of each term is fixed by its meaning).
 
     Attributes:
-        progress: per metre the path distance to the goal (through the volume, ``worlds/volume_path.py``) shrinks
+        progress: per metre the path distance to the goal (through the volume, ``worlds/volume/path.py``) shrinks
             in a step (negative when it grows).
         success: once, on reaching the goal.
         crash: once, on an episode-ending failure: leaving the volume, flipping, or a contact that ends the

@@ -11,11 +11,11 @@ from clutter_gym.worlds.table.arena import TabletopArena
 from clutter_gym.worlds.table.sample import sample_reach_scene
 from clutter_gym.worlds.table.scene import ReachScene
 from clutter_gym.worlds.table.spec import TableSpec
-from clutter_gym.worlds.volume import sample_volume_scene
-from clutter_gym.worlds.volume_arena import VolumeArena
-from clutter_gym.worlds.volume_path import VolumePathDistance
-from clutter_gym.worlds.volume_scene import VolumeScene, parse_volume_scene
-from clutter_gym.worlds.volume_spec import VolumeSpec
+from clutter_gym.worlds.volume.arena import VolumeArena
+from clutter_gym.worlds.volume.path import VolumePathDistance
+from clutter_gym.worlds.volume.sample import sample_volume_scene
+from clutter_gym.worlds.volume.scene import VolumeScene, parse_volume_scene
+from clutter_gym.worlds.volume.spec import VolumeSpec
 
 __all__ = [
     "ClutterArena",

@@ -2,7 +2,7 @@
 
 The field is the length of the shortest path on a graph of cell centres whose every edge is certified collision-free
 for a sphere of the robot's radius r: a straight move of length L between two centres is an edge when both centres
-have clearance above r + L / 2 (the Lipschitz argument of ``worlds/volume_grid.py``: every point of the move lies
+have clearance above r + L / 2 (the Lipschitz argument of ``worlds/volume/grid.py``: every point of the move lies
 within L / 2 of one end). The moves are the 26-neighbourhood and the (1, 2, 0) and (1, 1, 2) steps with their
 permutations and signs (:data:`MOVES`); grid paths over them are at most 5% longer than the straight line in open
 space (26 neighbours alone: 13%). In open space every move is an edge; next to obstacles only the short ones remain,
@@ -31,9 +31,9 @@ import numpy as np
 from scipy import ndimage
 
 from clutter_gym.worlds.grid_search import FROM_SOURCE, search_grid
-from clutter_gym.worlds.volume_grid import cell_index, scene_clearance
-from clutter_gym.worlds.volume_scene import VolumeScene
-from clutter_gym.worlds.volume_spec import VolumeSpec
+from clutter_gym.worlds.volume.grid import cell_index, scene_clearance
+from clutter_gym.worlds.volume.scene import VolumeScene
+from clutter_gym.worlds.volume.spec import VolumeSpec
 
 
 @functools.cache
