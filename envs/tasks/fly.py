@@ -143,7 +143,7 @@ class FlyTask:
         out[3] = min(float(np.linalg.norm(offset)), d)
         if self.subgoal_lookahead <= 0.0:
             return {"goal": out}
-        point = self._path_distance.waypoint(*position.tolist(), self.subgoal_lookahead)
+        point = self._path_distance.waypoint(*position.tolist(), lookahead=self.subgoal_lookahead)
         sub = state.rotation.T @ (np.asarray(point) - position)
         bound = self.subgoal_lookahead
         return {"goal": out, "subgoal": np.clip(sub, -bound, bound).astype(np.float32)}

@@ -142,7 +142,7 @@ class NavigateTask:
             goal = np.append(goal, np.float32(math.atan2(goal[1], goal[2]) / math.pi))
         obs = {"goal": goal}
         if self.subgoal_lookahead > 0.0:
-            point = self._path_distance.waypoint(x, y, self.subgoal_lookahead)
+            point = self._path_distance.waypoint(x, y, lookahead=self.subgoal_lookahead)
             obs["subgoal"] = _polar(point, x, y, state.yaw, self.subgoal_lookahead)
         return obs
 

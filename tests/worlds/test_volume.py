@@ -219,11 +219,11 @@ def test_the_waypoint_is_the_point_that_far_along_the_path():
     for lookahead in (0.05, 0.5, 1.7, 0.5 * arc[-1]):
         k = int(np.searchsorted(arc, lookahead)) - 1
         t = (lookahead - arc[k]) / (arc[k + 1] - arc[k])
-        np.testing.assert_allclose(field.waypoint(*start, lookahead), path[k] + t * (path[k + 1] - path[k]),
+        np.testing.assert_allclose(field.waypoint(*start, lookahead=lookahead), path[k] + t * (path[k + 1] - path[k]),
                                    atol=1e-12)
-    assert field.waypoint(*start, arc[-1] + 1.0) == goal
+    assert field.waypoint(*start, lookahead=arc[-1] + 1.0) == goal
     open_field = VolumePathDistance(VolumeScene((), (0.0, 0.0, 1.0, 0.0), (3.0, 4.0, 1.0)), SPEC, R)
-    gap = math.dist(open_field.waypoint(0.0, 0.0, 1.0, 0.5), (0.3, 0.4, 1.0))
+    gap = math.dist(open_field.waypoint(0.0, 0.0, 1.0, lookahead=0.5), (0.3, 0.4, 1.0))
     assert gap <= float(np.linalg.norm(SPEC.cell_size))
 
 
