@@ -1,4 +1,4 @@
-"""Explicit scenes: exact placement, round trips, pooled bodies, and errors that name the field."""
+"""Explicit floor scenes: exact placement, round trips, pooled bodies, and errors that name the field."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Seeded layouts: density, spawn clearance, determinism, and the reachability guarantee checked independently."""
+"""Seeded floor layouts: density, spawn clearance, determinism, and the reachability guarantee checked independently."""
 
 from __future__ import annotations
 
