@@ -54,9 +54,11 @@ from clutter_gym.robots import DiffDriveRobot
 from clutter_gym.robots.panda import READY, PandaArm
 from clutter_gym.training.figures import plt, save_figure
 from clutter_gym.util.quiet import quiet_c_output
-from clutter_gym.worlds.clutter import ClutterSpec, sample_scene
-from clutter_gym.worlds.pool import arena_walls
-from clutter_gym.worlds.tabletop import TABLE, TableSpec, sample_reach_scene
+from clutter_gym.worlds.floor.arena import arena_walls
+from clutter_gym.worlds.floor.sample import sample_scene
+from clutter_gym.worlds.floor.spec import ClutterSpec
+from clutter_gym.worlds.table.sample import sample_reach_scene
+from clutter_gym.worlds.table.spec import TABLE, TableSpec
 
 RANGE = 0.5  # clearance range, metres (the envs' default)
 NEAR = 0.15  # configurations kept: mesh clearance in (0, NEAR]

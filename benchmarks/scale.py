@@ -26,7 +26,8 @@ from clutter_gym.sensors.lidar import Lidar
 from clutter_gym.sim import CYLINDER_SIDES, Sim
 from clutter_gym.util.quiet import quiet_c_output
 from clutter_gym.util.transforms import quat_to_matrix, yaw_quat
-from clutter_gym.worlds.pool import ObstaclePool, arena_walls
+from clutter_gym.worlds.floor.arena import arena_walls
+from clutter_gym.worlds.pool import ObstaclePool
 
 with quiet_c_output():  # pybullet prints its build banner from C when first imported
     import pybullet as pb

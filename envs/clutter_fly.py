@@ -42,7 +42,7 @@ class ClutterFlyEnv(ClutterEnv):
     docs/quadrotor.md), or any multirotor a spec describes (``robot``), starts hovering in a box-shaped volume with a floor, four walls and by default a ceiling,
     cluttered with vertical poles, boxes on the floor or hanging, horizontal beams and walls with one opening, and
     must fly to a goal point. Every generated volume is seeded and guaranteed reachable for a sphere enclosing the
-    drone (``worlds/volume.py``). The floor, the walls and the ceiling are obstacles like the clutter. FCL measures
+    drone (``worlds/volume/sample.py``). The floor, the walls and the ceiling are obstacles like the clutter. FCL measures
     the exact clearance, pybullet's contact points cross-check it, and swept checks between control steps catch
     contacts that happen between two checks (tunneling); contacts and tunneling are penalised and reported as a
     Safety-Gymnasium style ``info["cost"]``.

@@ -135,7 +135,7 @@ class ClutterNavEnv(ClutterEnv):
 
     ``subgoal_lookahead > 0`` makes the env map-based: the ``subgoal`` entry comes from a path planned on the
     known layout (shortest on a costmap that charges passing within 0.25 m of touching; see
-    ``worlds/path_distance.py``), as a global planner on a map hands waypoints to a local controller. The default
+    ``worlds/floor/path.py``), as a global planner on a map hands waypoints to a local controller. The default
     env is mapless: it knows only the goal's relative position.
 
     Defaults are in the signature.

@@ -1,26 +1,38 @@
-"""The contracts between the env core and its parts (interfaces.py, datatypes.py): what they import, and the
-orders of calls a part must not depend on. mypy holds each part to its protocol in ``python3 tasks.py test``."""
+"""The contracts between the env core and its parts (interfaces.py, datatypes.py, the tasks): what they import, and
+the orders of calls a part must not depend on. mypy holds each part to its protocol in ``python3 tasks.py test``."""
 
 from __future__ import annotations
 
+import ast
+import pkgutil
 import subprocess
 import sys
 
 import numpy as np
 import pytest
 
-ENGINE_FREE = """
-import sys
-import clutter_gym.interfaces, clutter_gym.datatypes
-loaded = sorted(m for m in ("pybullet", "fcl", "clutter_gym.sim", "clutter_gym.collision") if m in sys.modules)
-print(loaded)
-"""
+from clutter_gym import tasks
+
+ENGINES = ("pybullet", "fcl", "clutter_gym.sim", "clutter_gym.collision")
+#: The tasks package and each of its modules: a task reads ground truth and never needs an engine.
+TASK_MODULES = ["clutter_gym.tasks", *(f"clutter_gym.tasks.{m.name}" for m in pkgutil.iter_modules(tasks.__path__))]
+
+
+def engines_loaded_by(*modules: str) -> list[str]:
+    """The modules of :data:`ENGINES` that importing ``modules`` loads, in a fresh interpreter."""
+    code = f"import sys, {', '.join(modules)}\nprint(sorted(m for m in {ENGINES!r} if m in sys.modules))"
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert result.returncode == 0, result.stderr[-2000:]
+    return ast.literal_eval(result.stdout.strip())
 
 
 def test_the_contracts_and_data_types_import_no_engine():
-    result = subprocess.run([sys.executable, "-c", ENGINE_FREE], capture_output=True, text=True, timeout=120)
-    assert result.returncode == 0, result.stderr[-2000:]
-    assert result.stdout.strip() == "[]"
+    assert engines_loaded_by("clutter_gym.interfaces", "clutter_gym.datatypes") == []
+
+
+@pytest.mark.parametrize("module", TASK_MODULES)
+def test_each_task_module_imports_no_engine(module):
+    assert engines_loaded_by(module) == []
 
 
 def test_the_reach_task_gives_the_same_step_whether_evaluate_or_observe_runs_first(make_env):

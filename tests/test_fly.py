@@ -158,7 +158,7 @@ def test_the_subgoal_is_the_waypoint_ahead_on_the_path_in_the_body_frame(make_en
     task, state = env.unwrapped.task, env.unwrapped.robot.state()
     path = task.planned_path(state.position)
     point = np.asarray(state.position) + state.rotation @ obs["subgoal"]
-    np.testing.assert_allclose(point, task._path_distance.waypoint(*state.position, 0.5), atol=1e-6)
+    np.testing.assert_allclose(point, task._path_distance.waypoint(*state.position, lookahead=0.5), atol=1e-6)
     distances = np.linalg.norm(path[:, None, :] - point, axis=2).min()
     assert distances < 0.2  # on the path, within one segment of a listed point (0.2 m cells)
     assert np.linalg.norm(obs["subgoal"]) <= 0.5 + 1e-6

@@ -13,7 +13,9 @@ from helpers import SHELF_SEED
 from clutter_gym.collision.fidelity import COARSE_LEVELS, FIDELITY_LEVELS
 from clutter_gym.datatypes import Obstacle
 from clutter_gym.training.baselines import ProximityFieldReacher, StraightLineReacher
-from clutter_gym.worlds.tabletop import TABLE, TableSpec, point_clearance, sample_reach_scene
+from clutter_gym.worlds.table.sample import sample_reach_scene
+from clutter_gym.worlds.table.scene import point_clearance
+from clutter_gym.worlds.table.spec import TABLE, TableSpec
 
 READY = [0.0, -math.pi / 4, 0.0, -3 * math.pi / 4, 0.0, math.pi / 2, math.pi / 4]
 READY_EE = np.array([0.307, 0.0, 0.485])  # panda_grasptarget at READY

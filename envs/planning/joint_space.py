@@ -1,13 +1,14 @@
 """Motion planning for an arm in joint space on a known layout: clear configurations, goal configurations from
-inverse kinematics, RRT-Connect between them, shortcutting, and a path a policy can be told about.
+inverse kinematics, RRT-Connect between them, shortcutting.
 
 The parts are the textbook ones: goal configurations from position-only inverse kinematics (damped least squares
 on the numpy forward kinematics, from random seeds), RRT-Connect (Kuffner and LaValle, 2000) between the start and
 those goals, random shortcutting. Every configuration is checked with the shapes the env checks contacts with
 (FCL, the ``convex`` level by default): each moving link at least ``margin`` from every obstacle and the table, and
 no self-collision among the pairs the allowed-collision matrix enables; edges are checked every ``RESOLUTION``
-radians of the joint that moves most. The ClutterReach ``subgoal`` observation and the planner reference in
-``clutter_gym.training.joint_planner`` both plan here.
+radians of the joint that moves most. The ClutterReach ``subgoal`` observation (which walks the path as a
+:class:`~clutter_gym.planning.path.JointPath`) and the planner reference in ``clutter_gym.training.joint_planner``
+both plan here.
 """
 
 from __future__ import annotations
@@ -19,17 +20,16 @@ import numpy as np
 from clutter_gym.collision import CollisionChecker, RobotCollisionModel
 from clutter_gym.collision.kinematics import UrdfKinematics
 from clutter_gym.datatypes import Obstacle
+from clutter_gym.planning.path import RESOLUTION
 from clutter_gym.robots.arm_model import ArmModel
 from clutter_gym.robots.panda import panda_model
-from clutter_gym.worlds.tabletop import TABLE
+from clutter_gym.worlds.table.spec import TABLE
 
 #: Goal configurations put the end effector anywhere in this ball around the target (metres): well inside the
 #: env's success radius, and far more IK solutions clear the clutter than at the exact point.
 GOAL_BALL = 0.03
 #: How far the approach configurations back the end effector away from a goal, metres.
 APPROACH = 0.15
-#: Largest joint change between two checked configurations of an edge, radians.
-RESOLUTION = 0.03
 #: Times the planner starts over (new goals, new trees) before it gives up on a layout.
 ATTEMPTS = 2
 
@@ -321,37 +321,3 @@ def time_parameterise(path: np.ndarray, speed: np.ndarray) -> np.ndarray:
         out.extend(a + (b - a) * (np.arange(1, n + 1) / n)[:, None])
     return np.array(out)
 
-
-class JointPath:
-    """A joint-space path walked by arc length: how far along it a configuration is, and the point ahead.
-
-    Args:
-        path: (k, n_joints) configurations, k >= 1.
-    """
-
-    def __init__(self, path: np.ndarray) -> None:
-        path = np.atleast_2d(np.asarray(path, dtype=float))
-        points = [path[:1]]
-        for a, b in zip(path[:-1], path[1:]):
-            n = max(1, int(np.ceil(np.linalg.norm(b - a) / RESOLUTION)))
-            points.append(a + (b - a) * (np.arange(1, n + 1) / n)[:, None])
-        self.points = np.concatenate(points)
-        self.arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(self.points, axis=0), axis=1))])
-        self.index = 0
-
-    @property
-    def length(self) -> float:
-        """Arc length of the path, radians (Euclidean in joint space)."""
-        return float(self.arc[-1])
-
-    def advance(self, q: np.ndarray, window: float) -> None:
-        """Move the path index to the point nearest ``q`` among those up to ``window`` radians of arc ahead;
-        the index never moves back, so a configuration that strays does not restart the path."""
-        ahead = np.searchsorted(self.arc, self.arc[self.index] + window, side="right")
-        d = np.linalg.norm(self.points[self.index:ahead] - q, axis=1)
-        self.index += int(np.argmin(d))
-
-    def waypoint(self, lookahead: float) -> np.ndarray:
-        """The path point ``lookahead`` radians of arc beyond the current index (the end if that is beyond)."""
-        i = np.searchsorted(self.arc, self.arc[self.index] + lookahead, side="left")
-        return self.points[min(i, len(self.points) - 1)]

@@ -10,7 +10,7 @@ import numpy as np
 from clutter_gym.robots.arm import Arm, ArmConfig
 from clutter_gym.robots.arm_model import ArmModel
 from clutter_gym.sim import pybullet_data_file
-from clutter_gym.worlds.tabletop import REACH_RADIUS, SHOULDER  # where ClutterReach draws targets for it
+from clutter_gym.worlds.table.spec import REACH_RADIUS, SHOULDER  # where ClutterReach draws targets for it
 
 ARM_JOINTS = tuple(f"panda_joint{i}" for i in range(1, 8))
 FINGER_JOINTS = ("panda_finger_joint1", "panda_finger_joint2")

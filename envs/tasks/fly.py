@@ -16,9 +16,9 @@ from gymnasium import spaces
 
 from clutter_gym.datatypes import CollisionReport, RobotState, StepOutcome
 from clutter_gym.tasks.terms import check_weights, clearance_term, control_term, cost_by_cause
-from clutter_gym.worlds.volume_path import VolumePathDistance
-from clutter_gym.worlds.volume_scene import VolumeScene, boundary_distance
-from clutter_gym.worlds.volume_spec import VolumeSpec
+from clutter_gym.worlds.volume.path import VolumePathDistance
+from clutter_gym.worlds.volume.scene import VolumeScene, boundary_distance
+from clutter_gym.worlds.volume.spec import VolumeSpec
 
 
 @dataclass(frozen=True)
@@ -26,7 +26,7 @@ class FlyRewardWeights:
     """Weights of the reward terms (all in [0, 1e4]; the sign of each term is fixed by its meaning).
 
     Attributes:
-        progress: per metre the path distance to the goal (through the volume, ``worlds/volume_path.py``) shrinks
+        progress: per metre the path distance to the goal (through the volume, ``worlds/volume/path.py``) shrinks
             in a step (negative when it grows).
         success: once, on reaching the goal.
         crash: once, on an episode-ending failure: leaving the volume, flipping, or a contact that ends the
@@ -143,7 +143,7 @@ class FlyTask:
         out[3] = min(float(np.linalg.norm(offset)), d)
         if self.subgoal_lookahead <= 0.0:
             return {"goal": out}
-        point = self._path_distance.waypoint(*position.tolist(), self.subgoal_lookahead)
+        point = self._path_distance.waypoint(*position.tolist(), lookahead=self.subgoal_lookahead)
         sub = state.rotation.T @ (np.asarray(point) - position)
         bound = self.subgoal_lookahead
         return {"goal": out, "subgoal": np.clip(sub, -bound, bound).astype(np.float32)}

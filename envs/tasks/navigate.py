@@ -14,9 +14,9 @@ from gymnasium import spaces
 
 from clutter_gym.datatypes import CollisionReport, RobotState, StepOutcome
 from clutter_gym.tasks.terms import check_weights, clearance_term, control_term, cost_by_cause
-from clutter_gym.worlds.clutter import ClutterSpec
-from clutter_gym.worlds.path_distance import PathDistance
-from clutter_gym.worlds.scene import Scene
+from clutter_gym.worlds.floor.path import PathDistance
+from clutter_gym.worlds.floor.scene import Scene
+from clutter_gym.worlds.floor.spec import ClutterSpec
 
 MAX_TILT_COS = 0.5  # the base z axis more than 60 degrees from vertical counts as flipped
 #: Clearance beyond the footprint below which the subgoal's planner prefers other ways (its costmap inflation).
@@ -28,7 +28,7 @@ class NavRewardWeights:
     """Weights of the reward terms (all >= 0; the sign of each term is fixed by its meaning).
 
     Attributes:
-        progress: per metre the path distance to the goal (around the clutter, ``worlds/path_distance.py``)
+        progress: per metre the path distance to the goal (around the clutter, ``worlds/floor/path.py``)
             shrinks in a step (negative when it grows).
         success: once, on reaching the goal.
         contact: per step with any robot/obstacle contact.
@@ -142,7 +142,7 @@ class NavigateTask:
             goal = np.append(goal, np.float32(math.atan2(goal[1], goal[2]) / math.pi))
         obs = {"goal": goal}
         if self.subgoal_lookahead > 0.0:
-            point = self._path_distance.waypoint(x, y, self.subgoal_lookahead)
+            point = self._path_distance.waypoint(x, y, lookahead=self.subgoal_lookahead)
             obs["subgoal"] = _polar(point, x, y, state.yaw, self.subgoal_lookahead)
         return obs
 

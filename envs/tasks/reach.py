@@ -12,9 +12,9 @@ import numpy as np
 from gymnasium import spaces
 
 from clutter_gym.datatypes import CollisionReport, RobotState, StepOutcome
-from clutter_gym.planning.joint_space import JointPath
+from clutter_gym.planning.path import JointPath
 from clutter_gym.tasks.terms import check_weights, clearance_term, control_term, cost_by_cause
-from clutter_gym.worlds.tabletop import ReachScene
+from clutter_gym.worlds.table.scene import ReachScene
 
 if TYPE_CHECKING:
     from clutter_gym.planning.joint_space import ArmPlanner

@@ -2,8 +2,8 @@
 
 The graph is implicit: a move from one cell centre to another is an edge when the clearance at both centres, and at
 the centres of the cells its segment passes through, exceeds the move's limit. The floor's field
-(``worlds/path_distance.py``) gives every move the footprint radius as its limit and lists the cells a diagonal or
-knight move crosses; the volume's (``worlds/volume_path.py``) gives a move of length L the limit ``radius + L / 2``
+(``worlds/floor/path.py``) gives every move the footprint radius as its limit and lists the cells a diagonal or
+knight move crosses; the volume's (``worlds/volume/path.py``) gives a move of length L the limit ``radius + L / 2``
 and needs no crossed cells (that module says why). Searching the grid in place, with no edge list, is what makes
 this fast: building the explicit graph for ``scipy.sparse.csgraph`` cost more than searching it.
 

@@ -43,18 +43,6 @@ def inertia(o: Obstacle) -> tuple[float, float, float]:
             o.mass * (sx * sx + sy * sy) / 12.0)
 
 
-
-def arena_walls(arena: float, height: float, thick: float) -> tuple[Obstacle, ...]:
-    """The four walls around the square [-arena/2, arena/2]^2."""
-    half, span = 0.5 * arena, arena + 2 * thick
-    return (
-        Obstacle("box", (span, thick, height), (0.0, half + 0.5 * thick)),
-        Obstacle("box", (span, thick, height), (0.0, -half - 0.5 * thick)),
-        Obstacle("box", (thick, span, height), (half + 0.5 * thick, 0.0)),
-        Obstacle("box", (thick, span, height), (-half - 0.5 * thick, 0.0)),
-    )
-
-
 class ObstaclePool:
     """Static bodies for obstacles (reused across resets) and for fixed structure (walls, a table; built once).
 

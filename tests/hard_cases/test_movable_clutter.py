@@ -19,8 +19,8 @@ from benchmarks.stacking import stack_scene, tilt_degrees
 from clutter_gym.collision.distance import signed_distance
 from clutter_gym.collision.obstacles import obstacle_object
 from clutter_gym.datatypes import Obstacle
+from clutter_gym.worlds.parsing import parse_obstacle
 from clutter_gym.worlds.pool import inertia
-from clutter_gym.worlds.scene import parse_obstacle
 
 ZERO = np.zeros(2)
 

@@ -15,10 +15,10 @@ from clutter_gym.planning.joint_space import (
     GOAL_BALL,
     ArmPlanner,
     ConfigurationChecker,
-    JointPath,
     inverse_kinematics,
     time_parameterise,
 )
+from clutter_gym.planning.path import JointPath
 from clutter_gym.training.joint_planner import JointPlannerReacher
 
 READY = np.array([0.0, -math.pi / 4, 0.0, -3 * math.pi / 4, 0.0, math.pi / 2, math.pi / 4])

@@ -9,10 +9,10 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
 from clutter_gym.worlds.grid_search import FROM_SOURCE, UNREACHED, search_grid
-from clutter_gym.worlds.volume import sample_volume_scene
-from clutter_gym.worlds.volume_grid import scene_clearance
-from clutter_gym.worlds.volume_path import VolumePathDistance, _moves
-from clutter_gym.worlds.volume_spec import VolumeSpec
+from clutter_gym.worlds.volume.grid import scene_clearance
+from clutter_gym.worlds.volume.path import VolumePathDistance, _moves
+from clutter_gym.worlds.volume.sample import sample_volume_scene
+from clutter_gym.worlds.volume.spec import VolumeSpec
 
 R = 0.07  # metres: the default drone's bounding radius, about
 

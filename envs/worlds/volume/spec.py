@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from clutter_gym.util.checks import check_integer, is_number
-from clutter_gym.worlds.scene import MAX_OBSTACLE_HEIGHT
+from clutter_gym.worlds.parsing import MAX_OBSTACLE_HEIGHT
 
 SIZE_RANGE = ((2.0, 30.0), (2.0, 30.0), (1.0, MAX_OBSTACLE_HEIGHT))  # metres per axis; poles span the height
 MAX_DENSITY = 0.25  # fraction of the volume; beyond it few layouts keep a path for a drone-sized sphere

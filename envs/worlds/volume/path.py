@@ -2,7 +2,7 @@
 
 The field is the length of the shortest path on a graph of cell centres whose every edge is certified collision-free
 for a sphere of the robot's radius r: a straight move of length L between two centres is an edge when both centres
-have clearance above r + L / 2 (the Lipschitz argument of ``worlds/volume_grid.py``: every point of the move lies
+have clearance above r + L / 2 (the Lipschitz argument of ``worlds/volume/grid.py``: every point of the move lies
 within L / 2 of one end). The moves are the 26-neighbourhood and the (1, 2, 0) and (1, 1, 2) steps with their
 permutations and signs (:data:`MOVES`); grid paths over them are at most 5% longer than the straight line in open
 space (26 neighbours alone: 13%). In open space every move is an edge; next to obstacles only the short ones remain,
@@ -25,15 +25,14 @@ from __future__ import annotations
 import functools
 import itertools
 import math
-from collections.abc import Iterator
 
 import numpy as np
-from scipy import ndimage
 
-from clutter_gym.worlds.grid_search import FROM_SOURCE, search_grid
-from clutter_gym.worlds.volume_grid import cell_index, scene_clearance
-from clutter_gym.worlds.volume_scene import VolumeScene
-from clutter_gym.worlds.volume_spec import VolumeSpec
+from clutter_gym.worlds.grid_search import search_grid
+from clutter_gym.worlds.path_field import GridPathField
+from clutter_gym.worlds.volume.grid import cell_index, scene_clearance
+from clutter_gym.worlds.volume.scene import VolumeScene
+from clutter_gym.worlds.volume.spec import VolumeSpec
 
 
 @functools.cache
@@ -59,8 +58,10 @@ def _moves(h: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
     return moves, np.linalg.norm(moves * np.array(h), axis=1)
 
 
-class VolumePathDistance:
-    """Path length from a point to the goal, metres, for a sphere of ``robot_radius`` (see the module docstring).
+class VolumePathDistance(GridPathField):
+    """Path length from a point to the goal, metres, for a sphere of ``robot_radius`` (see the module docstring),
+    and the path behind it (:meth:`path`, :meth:`waypoint`), whose first segment is certified only where the value
+    is a bound.
 
     Args:
         scene: the episode's layout (obstacles and goal).
@@ -69,40 +70,27 @@ class VolumePathDistance:
     """
 
     def __init__(self, scene: VolumeScene, spec: VolumeSpec, robot_radius: float) -> None:
+        super().__init__(spec.cell_centres, spec.cell_size, scene.goal)
         self._spec = spec
-        self._centres = spec.cell_centres
-        self._h = spec.cell_size
-        self._axes = tuple(c.tolist() for c in self._centres)
-        self._h_list = self._h.tolist()
+        self._h_list = spec.cell_size.tolist()
         self._r = float(robot_radius)
-        self._goal = tuple(float(v) for v in scene.goal)
         # above r + |p - c| for every centre c around a point p, so the cap never decides a certificate
-        self._clear = scene_clearance(scene, spec, robot_radius + 2.0 * float(self._h.max()))
+        self._clear = scene_clearance(scene, spec, robot_radius + 2.0 * float(spec.cell_size.max()))
         self._clear_flat = self._clear.ravel()
         links, link_lengths = self._goal_links()
         moves, lengths = _moves(tuple(self._h_list))
         self._distance_flat, self._next = search_grid(self._clear, self._r + 0.5 * lengths, moves, lengths, links,
                                                       link_lengths)  # _next: each cell's next cell towards the goal
-        self._distance = self._distance_flat.reshape(self._clear.shape)
+        self._distance = self._distance_flat.reshape(self._shape)
 
-    @property
-    def values(self) -> np.ndarray:
-        """(nx, ny, nz) the field at the cell centres, metres (finite everywhere)."""
-        return self._filled[0]
-
-    @functools.cached_property
-    def _filled(self) -> tuple[np.ndarray, np.ndarray]:
-        """:meth:`_fill_unreachable`, on first use: a robot that never leaves the certified cells never needs it."""
-        return self._fill_unreachable()
-
-    def _around(self, point: tuple[float, float, float]) -> list[tuple[int, float, tuple[float, float, float]]]:
+    def _around(self, point: tuple[float, ...]) -> list[tuple[int, float, tuple[float, float, float]]]:
         """(flat index, distance from ``point`` in metres, centre) of each of the (up to eight distinct) cell centres
         around ``point``; plain Python, as it runs once a step."""
         per_axis = []
         for p, c, h in zip(point, self._axes, self._h_list):
             i = min(max(math.floor((p - c[0]) / h), 0), max(len(c) - 2, 0))
             per_axis.append(sorted({i, min(i + 1, len(c) - 1)}))
-        _, ny, nz = self._clear.shape
+        _, ny, nz = self._shape
         cx, cy, cz = self._axes
         out = []
         for i, j, k in itertools.product(*per_axis):
@@ -116,31 +104,14 @@ class VolumePathDistance:
         around = [(flat, d) for flat, d, _ in self._around(self._goal) if self._clear_flat.item(flat) > self._r + d]
         if around:
             return np.array([f for f, _ in around]), np.array([d for _, d in around])
-        free = np.flatnonzero(self._clear_flat > self._r + 0.5 * float(self._h.max()))
+        free = np.flatnonzero(self._clear_flat > self._r + 0.5 * float(self._spec.cell_size.max()))
         if free.size == 0:
             return np.zeros(0, dtype=int), np.zeros(0)
         gaps = np.linalg.norm(self._cell_centres(free) - np.array(self._goal), axis=1)
         nearest = int(np.argmin(gaps))
         return free[nearest:nearest + 1], gaps[nearest:nearest + 1]
 
-    def _cell_centres(self, flat: np.ndarray) -> np.ndarray:
-        """(k, 3) centres of the cells with flat indices ``flat``, metres."""
-        cells = np.unravel_index(flat, self._clear.shape)
-        return np.stack([c[i] for c, i in zip(self._centres, cells)], axis=1)
-
-    def _fill_unreachable(self) -> tuple[np.ndarray, np.ndarray]:
-        """The field with unreachable cells given the nearest reachable cell's value plus the straight distance
-        to it (the straight distance to the goal when nothing is reachable), and (n,) each cell's nearest reachable
-        cell (itself where reachable; -1 when nothing is)."""
-        reachable = np.isfinite(self._distance)
-        if not reachable.any():
-            centres = self._cell_centres(np.arange(reachable.size))
-            straight = np.linalg.norm(centres - np.array(self._goal), axis=1).reshape(reachable.shape)
-            return straight, np.full(reachable.size, -1)
-        gap, nearest = ndimage.distance_transform_edt(~reachable, sampling=self._h, return_indices=True)
-        return self._distance[tuple(nearest)] + gap, np.ravel_multi_index(tuple(nearest), reachable.shape).ravel()
-
-    def _best_corner(self, point: tuple[float, float, float]) -> tuple[int, float] | None:
+    def _best_corner(self, point: tuple[float, ...]) -> tuple[int, float] | None:
         """How ``point`` joins the graph: (-1, straight distance) when one centre around it certifies the whole
         segment to the goal, else (flat index, D(c) + |p - c|) of the certified centre c around it with the least
         value; None when no centre around it is certified."""
@@ -155,6 +126,14 @@ class VolumePathDistance:
                     best, best_cell = value, flat
         return (best_cell, best) if best_cell >= 0 and math.isfinite(best) else None
 
+    def _entry(self, point: tuple[float, ...]) -> int:
+        """The certified centre around ``point`` that :meth:`_best_corner` picks (-1 where it certifies the straight
+        segment to the goal), else the reachable cell nearest the cell holding ``point``."""
+        best = self._best_corner(point)
+        if best is not None:
+            return best[0]
+        return int(self._filled[1][np.ravel_multi_index(cell_index(point, self._spec), self._shape)])
+
     def __call__(self, x: float, y: float, z: float) -> float:
         """Path length (metres) from (x, y, z), world frame, to the goal."""
         point = (float(x), float(y), float(z))
@@ -164,41 +143,3 @@ class VolumePathDistance:
         i, j, k = cell_index(point, self._spec)
         gap = math.dist(point, (self._axes[0][i], self._axes[1][j], self._axes[2][k]))
         return max(float(self.values[i, j, k]) + gap, math.dist(point, self._goal))
-
-    def path(self, x: float, y: float, z: float) -> np.ndarray:
-        """(k, 3) the path behind the field's value at (x, y, z): the point, the cell centres, the goal (metres).
-
-        Its first segment is certified only where the value is a bound (see the module docstring)."""
-        return np.array(list(self._chain((float(x), float(y), float(z)))))
-
-    def waypoint(self, x: float, y: float, z: float, lookahead: float) -> tuple[float, float, float]:
-        """The point ``lookahead`` metres along :meth:`path` from (x, y, z) (the goal if nearer), metres; walks
-        the path only as far as it needs."""
-        points = self._chain((float(x), float(y), float(z)))
-        previous, travelled = next(points), 0.0
-        for point in points:
-            step = math.dist(previous, point)
-            if travelled + step >= lookahead and step > 0.0:
-                t = (lookahead - travelled) / step
-                return tuple(a + t * (b - a) for a, b in zip(previous, point))
-            travelled += step
-            previous = point
-        return self._goal
-
-    def _chain(self, point: tuple[float, float, float]) -> Iterator[tuple[float, float, float]]:
-        """``point``, then the cell centres of its path (see :meth:`path`), then the goal."""
-        yield point
-        best = self._best_corner(point)
-        if best is not None:
-            cell = best[0]
-        else:
-            cell = int(self._filled[1][np.ravel_multi_index(cell_index(point, self._spec), self._clear.shape)])
-        if cell >= 0:
-            _, ny, nz = self._clear.shape
-            cx, cy, cz = self._axes
-            while cell != FROM_SOURCE:
-                i, rest = divmod(cell, ny * nz)
-                j, k = divmod(rest, nz)
-                yield (cx[i], cy[j], cz[k])
-                cell = int(self._next[cell])
-        yield self._goal

@@ -1,4 +1,4 @@
-"""Explicit scenes: exact placement, round trips, pooled bodies, and errors that name the field."""
+"""Explicit floor scenes: exact placement, round trips, pooled bodies, and errors that name the field."""
 
 from __future__ import annotations
 
@@ -107,7 +107,7 @@ def test_unknown_reset_option_is_named(make_env):
 
 def test_numpy_numbers_and_arrays_are_accepted_in_scenes():
     """A scene built with numpy (float32 heights, array positions, int64 sizes) parses as its plain-number twin."""
-    from clutter_gym.worlds.scene import parse_scene
+    from clutter_gym.worlds.floor.scene import parse_scene
 
     plain = {"obstacles": [{"shape": "box", "size": [0.4, 0.4, 0.5], "position": [1.0, 1.0], "z": 0.0},
                            {"shape": "cylinder", "radius": 0.2, "height": 1.0, "position": [-1.0, 1.0]}],

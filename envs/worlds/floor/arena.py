@@ -11,9 +11,11 @@ import numpy as np
 from clutter_gym.datatypes import Obstacle
 from clutter_gym.sim import Sim
 from clutter_gym.util.camera_view import fitting_distance
-from clutter_gym.worlds.clutter import ClutterSpec, sample_scene
-from clutter_gym.worlds.pool import ObstaclePool, arena_walls
-from clutter_gym.worlds.scene import Scene, parse_scene, scene_from_options
+from clutter_gym.worlds.floor.sample import sample_scene
+from clutter_gym.worlds.floor.scene import Scene, parse_scene
+from clutter_gym.worlds.floor.spec import ClutterSpec
+from clutter_gym.worlds.parsing import scene_from_options
+from clutter_gym.worlds.pool import ObstaclePool
 
 #: The rgb_array view (:meth:`ClutterArena.render_camera`): its angle above the floor, how far inside the frame's
 #: edges it keeps the robot and the goal (a fraction of the half-frame), the nearest it comes (metres), and the
@@ -22,6 +24,17 @@ VIEW_ELEVATION = math.radians(65.0)
 VIEW_INSET = 0.3
 NEAREST_VIEW = 2.5
 VIEW_SIZE = (320, 240)
+
+
+def arena_walls(arena: float, height: float, thick: float) -> tuple[Obstacle, ...]:
+    """The four walls around the square [-arena/2, arena/2]^2."""
+    half, span = 0.5 * arena, arena + 2 * thick
+    return (
+        Obstacle("box", (span, thick, height), (0.0, half + 0.5 * thick)),
+        Obstacle("box", (span, thick, height), (0.0, -half - 0.5 * thick)),
+        Obstacle("box", (thick, span, height), (half + 0.5 * thick, 0.0)),
+        Obstacle("box", (thick, span, height), (-half - 0.5 * thick, 0.0)),
+    )
 
 
 class ClutterArena:

@@ -8,7 +8,7 @@ every point of the segment has d > r: the sphere moved along it touches nothing.
 cells is therefore a collision-free path, and start and goal in one 6-connected free component (``scipy.ndimage.
 label``'s default structure in 3D) are joined by one. The same argument with the move's own length L certifies any
 straight move between two centres whose distances both exceed r + L / 2; the path distance
-(``worlds/volume_path.py``) uses it for the face and body diagonals of the 26-neighbourhood.
+(``worlds/volume/path.py``) uses it for the face and body diagonals of the 26-neighbourhood.
 
 The distances are exact (closed forms of yawed boxes and upright cylinders) and capped: an obstacle only matters
 within ``cap`` of its bounding box, so each is evaluated on the window of cells around it and merged by minimum.
@@ -22,8 +22,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from clutter_gym.datatypes import Obstacle
-from clutter_gym.worlds.volume_scene import VolumeScene
-from clutter_gym.worlds.volume_spec import VolumeSpec
+from clutter_gym.worlds.volume.scene import VolumeScene
+from clutter_gym.worlds.volume.spec import VolumeSpec
 
 
 def free_margin(spec: VolumeSpec) -> float:

@@ -11,9 +11,11 @@ from scipy.sparse.csgraph import dijkstra
 
 from clutter_gym.datatypes import Obstacle
 from clutter_gym.tasks.navigate import SUBGOAL_PLAN_MARGIN
-from clutter_gym.worlds.clutter import ClutterSpec, clearance_field, sample_scene
-from clutter_gym.worlds.path_distance import _MOVES, PathDistance, _dijkstra_from
-from clutter_gym.worlds.scene import Scene
+from clutter_gym.worlds.floor.grid import clearance_field
+from clutter_gym.worlds.floor.path import _MOVES, PathDistance, _dijkstra_from
+from clutter_gym.worlds.floor.sample import sample_scene
+from clutter_gym.worlds.floor.scene import Scene
+from clutter_gym.worlds.floor.spec import ClutterSpec
 
 SPEC = ClutterSpec(arena_size=6.0)
 R = 0.17  # the diffbot's footprint radius
@@ -88,7 +90,16 @@ def test_near_the_goal_the_waypoint_is_the_goal():
     field = PathDistance(Scene((), (0.0, 0.0, 0.0), goal), SPEC, R, plan_margin=0.25)
     assert field.waypoint(1.6, 1.3, lookahead=1.0) == pytest.approx(goal)
     with pytest.raises(RuntimeError, match="plan_margin"):
-        PathDistance(Scene((), (0.0, 0.0, 0.0), goal), SPEC, R).waypoint(0.0, 0.0, 1.0)
+        PathDistance(Scene((), (0.0, 0.0, 0.0), goal), SPEC, R).waypoint(0.0, 0.0, lookahead=1.0)
+
+
+def test_at_no_lookahead_the_waypoint_is_the_point_and_a_point_has_two_coordinates():
+    field = PathDistance(Scene((), (0.0, 0.0, 0.0), (2.0, 1.5)), SPEC, R, plan_margin=0.25)
+    centre = (float(SPEC.cell_centres[30]), float(SPEC.cell_centres[40]))  # its path's first step is 0 m long
+    assert field.path(*centre)[1] == pytest.approx(centre, abs=0.0)
+    assert field.waypoint(*centre, lookahead=0.0) == centre
+    with pytest.raises(ValueError, match="2 coordinates"):
+        field.path(0.0, 0.0, 1.0)
 
 
 def test_the_waypoint_leads_around_a_wall_and_keeps_the_footprint_free():
@@ -122,7 +133,7 @@ def test_the_subgoal_observation_points_at_the_waypoint_in_the_robot_frame():
                          SPEC, R, plan_margin=SUBGOAL_PLAN_MARGIN)
     x, y = env.unwrapped.robot.state().position[:2]
     yaw = env.unwrapped.robot.state().yaw
-    px, py = field.waypoint(x, y, 1.0)
+    px, py = field.waypoint(x, y, lookahead=1.0)
     bearing = math.atan2(py - y, px - x) - yaw
     np.testing.assert_allclose(obs["subgoal"], [math.hypot(px - x, py - y), math.sin(bearing), math.cos(bearing)],
                                atol=1e-5)

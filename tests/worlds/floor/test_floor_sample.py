@@ -1,4 +1,4 @@
-"""Seeded layouts: density, spawn clearance, determinism, and the reachability guarantee checked independently."""
+"""Seeded floor layouts: density, spawn clearance, determinism, and the reachability guarantee checked independently."""
 
 from __future__ import annotations
 
@@ -6,9 +6,10 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-import clutter_gym.worlds.clutter
-from clutter_gym.worlds import ClutterSpec, sample_scene
-from clutter_gym.worlds.clutter import clearance_field
+import clutter_gym.worlds.floor.sample
+from clutter_gym.worlds.floor.grid import clearance_field
+from clutter_gym.worlds.floor.sample import sample_scene
+from clutter_gym.worlds.floor.spec import ClutterSpec
 
 ROBOT_RADIUS = 0.17
 
@@ -40,7 +41,7 @@ def test_goal_is_reachable_on_an_independent_fine_grid(density):
 def test_corridor_layouts_are_reachable_on_an_independent_fine_grid(monkeypatch):
     """The corridor the generator keeps clear at high density (forced from the first attempt here) joins start and
     goal, and the density is still met."""
-    monkeypatch.setattr(clutter_gym.worlds.clutter, "PLAIN_ATTEMPTS", 0)
+    monkeypatch.setattr(clutter_gym.worlds.floor.sample, "PLAIN_ATTEMPTS", 0)
     spec = ClutterSpec(obstacle_density=0.3)
     rng = np.random.default_rng(7)
     step = 0.02

@@ -16,14 +16,14 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Iterator
 
 import numpy as np
-from scipy import ndimage
 
-from clutter_gym.worlds.clutter import ClutterSpec, scene_clearance
+from clutter_gym.worlds.floor.grid import scene_clearance
+from clutter_gym.worlds.floor.scene import Scene
+from clutter_gym.worlds.floor.spec import ClutterSpec
 from clutter_gym.worlds.grid_search import search_grid
-from clutter_gym.worlds.scene import Scene
+from clutter_gym.worlds.path_field import GridPathField
 
 # Forward moves (di, dj) of the 16-neighbourhood (the other eight are their mirror images), each with
 # the cells its segment passes through, which must be free too. 16 neighbours bound the path-length error in
@@ -40,8 +40,9 @@ _MOVES = (
 INFLATION_COST = 4.0
 
 
-class PathDistance:
-    """Path length from a point to the goal, metres (bilinear in the cell-centre values).
+class PathDistance(GridPathField):
+    """Path length from a point to the goal, metres (bilinear in the cell-centre values), and with a
+    ``plan_margin`` the planner's path and the point a given length along it (:meth:`path`, :meth:`waypoint`).
 
     Args:
         scene: the episode's layout (obstacles and goal).
@@ -52,25 +53,28 @@ class PathDistance:
     """
 
     def __init__(self, scene: Scene, spec: ClutterSpec, robot_radius: float, plan_margin: float | None = None) -> None:
-        self._centres = spec.cell_centres
-        self._res = float(self._centres[1] - self._centres[0])
-        self._origin, self._top = float(self._centres[0]), float(len(self._centres) - 1)  # first centre, last index
+        centres = spec.cell_centres
+        self._res = float(centres[1] - centres[0])
+        super().__init__((centres, centres), self._res, scene.goal)
+        self._origin, self._top = float(centres[0]), float(len(centres) - 1)  # first centre, last index
         reach = self._res if plan_margin is None else max(self._res, plan_margin)
         clearance = scene_clearance(scene, spec, cap=robot_radius + reach)
         goal_cell = self._nearest_cell(scene.goal)
-        distance, _ = _dijkstra_from(goal_cell, clearance, robot_radius, self._res)
-        self.values, self._nearest_reachable = _fill_unreachable(distance, self._res)
-        self._goal_cell = goal_cell[0] * len(self._centres) + goal_cell[1]
-        self._goal = scene.goal
-        self._next: np.ndarray | None = None
+        self._distance, _ = _dijkstra_from(goal_cell, clearance, robot_radius, self._res)
+        self._goal_cell = goal_cell[0] * len(centres) + goal_cell[1]
         if plan_margin is not None:
             shortfall = np.clip((robot_radius + plan_margin - clearance) / max(plan_margin, 1e-9), 0.0, 1.0)
             _, self._next = _dijkstra_from(goal_cell, clearance, robot_radius, self._res,
                                            1.0 + INFLATION_COST * shortfall**2)
 
-    def _nearest_cell(self, point: tuple[float, float]) -> tuple[int, int]:
-        n = len(self._centres)
-        return tuple(int(np.clip(round((p - self._centres[0]) / self._res), 0, n - 1)) for p in point)
+    def _nearest_cell(self, point: tuple[float, ...]) -> tuple[int, ...]:
+        n = self._shape[0]
+        return tuple(int(np.clip(round((p - self._origin) / self._res), 0, n - 1)) for p in point)
+
+    def _entry(self, point: tuple[float, ...]) -> int:
+        """The reachable cell nearest the cell holding ``point``: the planned path starts at its centre."""
+        i, j = self._nearest_cell(point)
+        return int(self._filled[1][i * self._shape[1] + j])
 
     def __call__(self, x: float, y: float) -> float:
         top = self._top
@@ -83,45 +87,6 @@ class PathDistance:
                 + (1 - tx) * ty * v[i, j + 1] + tx * ty * v[i + 1, j + 1])
         # The grid path can only be longer than the straight line; near the goal it is coarse, so clamp.
         return max(float(grid), math.hypot(x - self._goal[0], y - self._goal[1]))
-
-
-    def waypoint(self, x: float, y: float, lookahead: float) -> tuple[float, float]:
-        """The point ``lookahead`` metres along the planned path from (x, y) to the goal (the goal if nearer).
-
-        Raises:
-            RuntimeError: the field was made without ``plan_margin``.
-        """
-        points = self._chain(x, y)
-        previous, travelled = next(points), 0.0
-        for point in points:
-            step = math.hypot(point[0] - previous[0], point[1] - previous[1])
-            if travelled + step >= lookahead:
-                t = (lookahead - travelled) / step
-                return (previous[0] + t * (point[0] - previous[0]), previous[1] + t * (point[1] - previous[1]))
-            travelled += step
-            previous = point
-        return (float(self._goal[0]), float(self._goal[1]))
-
-    def path(self, x: float, y: float) -> np.ndarray:
-        """(k, 2) the planned path from (x, y) to the goal, metres.
-
-        Raises:
-            RuntimeError: the field was made without ``plan_margin``.
-        """
-        return np.array(list(self._chain(x, y)))
-
-    def _chain(self, x: float, y: float) -> Iterator[tuple[float, float]]:
-        """(x, y), then the cell centres of the planned path from the reachable cell nearest it, then the goal."""
-        if self._next is None:
-            raise RuntimeError("the planned path needs a PathDistance made with a plan_margin")
-        n = len(self._centres)
-        i, j = self._nearest_cell((x, y))
-        cell = int(self._nearest_reachable[i * n + j])
-        yield (x, y)
-        while cell != self._goal_cell:
-            yield (float(self._centres[cell // n]), float(self._centres[cell % n]))
-            cell = int(self._next[cell])
-        yield (float(self._goal[0]), float(self._goal[1]))
 
 
 def _dijkstra_from(source: tuple[int, int], clearance: np.ndarray, radius: float, res: float,
@@ -152,11 +117,3 @@ def _stencil(res: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         for c, cell in enumerate(through):
             crossed[k, c] = cell
     return (np.array([move for move, _ in both]), res * np.array([math.hypot(*move) for move, _ in both]), crossed)
-
-
-def _fill_unreachable(distance: np.ndarray, res: float) -> tuple[np.ndarray, np.ndarray]:
-    """Unreachable cells get the nearest reachable cell's value plus the straight distance to it; also returns
-    (n * n,) the flat index of each cell's nearest reachable cell (itself where reachable)."""
-    reachable = np.isfinite(distance)
-    gap, (ni, nj) = ndimage.distance_transform_edt(~reachable, return_indices=True)
-    return distance[ni, nj] + gap * res, (ni * distance.shape[1] + nj).ravel()

@@ -1,10 +1,10 @@
 """ClutterFly scenes as plain data: obstacles in a volume, a start pose (x, y, z, yaw) and a goal point (x, y, z);
 the parser of user scenes, whose errors name the field.
 
-The obstacle format is the floor world's (``worlds/scene.py``) unchanged: upright boxes and cylinders with ``z``
+The obstacle format is every world's (``worlds/parsing.py``) unchanged: upright boxes and cylinders with ``z``
 the height of their bottom face, so a horizontal beam is a long thin box lifted by ``z`` and turned by ``yaw``,
 and a wall with an opening is the boxes around the opening. Only start and goal gain a z. Coordinates are metres in
-the world frame of ``worlds/volume_spec.py``.
+the world frame of ``worlds/volume/spec.py``.
 """
 
 from __future__ import annotations
@@ -15,11 +15,11 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from clutter_gym.datatypes import Obstacle
-from clutter_gym.worlds.scene import check_scene_keys, parse_numbers, parse_obstacles
-from clutter_gym.worlds.volume_spec import VolumeSpec
+from clutter_gym.worlds.parsing import check_scene_keys, parse_numbers, parse_obstacles
+from clutter_gym.worlds.volume.spec import VolumeSpec
 
 if TYPE_CHECKING:
-    from clutter_gym.worlds.volume_grid import VolumeGrid
+    from clutter_gym.worlds.volume.grid import VolumeGrid
 
 SCENE_KEYS = ("obstacles", "start", "goal")
 

@@ -1,90 +1,27 @@
-"""Scenes as plain data: obstacles, start and goal; parsing and validation of user-given scenes, with the
-helpers every world's parser and ``choose_scene`` share (``worlds/tabletop.py`` uses them too).
+"""The user-scene parsing every world shares: reset options, scene keys, lists of numbers and obstacles, whose
+errors name the field and its allowed range.
 
-Coordinates are metres in the world frame: the arena is the square [-L/2, L/2]^2 on the floor (z = 0), walled on
-all four sides. Obstacles are upright boxes and cylinders; ``position`` is the centre of the footprint, ``z`` the
-height of the bottom face (0 = on the floor), sizes are full extents. An obstacle with a ``mass`` is movable: it
-starts at that pose, at rest, and the physics moves it when it is pushed; one without stays where it is put.
+The obstacle format is one for every world: upright boxes and cylinders; ``position`` is the centre of the
+footprint, ``z`` the height of the bottom face (0 = on the floor or the table), sizes are full extents, metres and
+radians in the world frame. An obstacle with a ``mass`` is movable: it starts at that pose, at rest, and the physics
+moves it when it is pushed; one without stays where it is put.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import Any, TypeVar
 
 import numpy as np
 
 from clutter_gym.datatypes import Obstacle
 from clutter_gym.util.checks import is_number
 
-if TYPE_CHECKING:
-    from clutter_gym.worlds.clutter import ClearanceGrid
-
 SHAPES = ("box", "cylinder")
 MAX_OBSTACLE_HEIGHT = 5.0  # metres; anything taller only costs render time
 MASS_RANGE = (1e-3, 1e3)  # kg of a movable obstacle: from a gram to a tonne
-L = TypeVar("L")  # a layout: a Scene, or another world's scene type
-
-
-def with_masses(obstacles: Sequence[Obstacle], eligible: Sequence[int], fraction: float,
-                density: float) -> tuple[Obstacle, ...]:
-    """``obstacles`` with the first ``round(fraction * len(eligible))`` of the ``eligible`` ones (indices) made
-    movable at ``density`` kg/m^3 (each mass clipped to :data:`MASS_RANGE`).
-
-    A generated layout lists its obstacles in random order, so the first ones are a random subset, and the
-    layout itself is the same whatever the fraction: no random number is drawn here.
-    """
-    chosen = eligible[:round(fraction * len(eligible))]
-    if not chosen:
-        return tuple(obstacles)
-    out = list(obstacles)
-    for i in chosen:
-        mass = float(min(max(density * out[i].volume, MASS_RANGE[0]), MASS_RANGE[1]))
-        out[i] = dataclasses.replace(out[i], mass=mass)
-    return tuple(out)
-
-
-def polyline_distances(points: np.ndarray, polyline: np.ndarray) -> np.ndarray:
-    """(n,) distance from each of ``points`` (n, 2) to the polyline through ``polyline`` (k, 2), k >= 2."""
-    a, b = polyline[:-1], polyline[1:]
-    ab = b - a
-    t = np.einsum("nsd,sd->ns", points[:, None, :] - a[None], ab) / np.maximum(np.einsum("sd,sd->s", ab, ab), 1e-12)
-    nearest = a[None] + np.clip(t, 0.0, 1.0)[..., None] * ab[None]
-    return np.linalg.norm(points[:, None, :] - nearest, axis=2).min(axis=1)
-
-
-@dataclass(frozen=True)
-class Scene:
-    """One layout: obstacles, robot start (x, y, yaw) and goal (x, y).
-
-    ``clearance_grid`` is not part of the layout (``==``, ``repr`` and :meth:`to_dict` ignore it): the clearance
-    field the generator sampled start and goal on, kept so that the path-distance grid need not compute it again;
-    None for a scene made any other way.
-    """
-
-    obstacles: tuple[Obstacle, ...]
-    start: tuple[float, float, float]
-    goal: tuple[float, float]
-    clearance_grid: ClearanceGrid | None = field(default=None, compare=False, repr=False)
-
-    def to_dict(self) -> dict[str, Any]:
-        """The reset-options format: ``env.reset(options={"scene": scene.to_dict()})`` reproduces it."""
-        return {"obstacles": [o.to_dict() for o in self.obstacles], "start": list(self.start),
-                "goal": list(self.goal)}
-
-    def clearance(self, x: float, y: float, arena_size: float) -> float:
-        """Distance (metres) from point (x, y) to the nearest obstacle footprint or arena wall."""
-        half = 0.5 * arena_size
-        d = min(half - abs(x), half - abs(y))
-        for o in self.obstacles:
-            d = min(d, float(o.distance(np.array(x), np.array(y))))
-        return d
-
-
-# ------------------------------------------------------------------------------------------------ parsing
+L = TypeVar("L")  # a layout: one world's scene type
 RESET_OPTIONS = ("scene",)
 
 
@@ -148,7 +85,8 @@ def _number(value: Any, field: str, lo: float, hi: float, what: str) -> float:
     return out
 
 
-def _inside(point: Sequence[float], field: str, limit: float) -> None:
+def check_inside(point: Sequence[float], field: str, limit: float) -> None:
+    """|x| and |y| of ``point`` within ``limit`` metres; else a ``ValueError`` naming ``field``."""
     if max(abs(point[0]), abs(point[1])) > limit:
         raise ValueError(
             f"{field} must lie inside the arena: |x|, |y| <= {limit:.3f} m, got ({point[0]}, {point[1]})"
@@ -171,7 +109,7 @@ def parse_obstacle(spec: Any, field: str, arena_size: float) -> Obstacle:
     if missing:
         raise ValueError(f"{field} is missing {sorted(missing)}")
     position = parse_numbers(spec["position"], 2, f"{field}.position", "x, y in metres")
-    _inside(position, f"{field}.position", 0.5 * arena_size)
+    check_inside(position, f"{field}.position", 0.5 * arena_size)
     z = float(spec.get("z", 0.0)) if is_number(spec.get("z", 0.0)) else math.nan
     if not 0.0 <= z <= MAX_OBSTACLE_HEIGHT:
         raise ValueError(f"{field}.z (bottom height) must be in [0, {MAX_OBSTACLE_HEIGHT}] m, got {spec.get('z')!r}")
@@ -203,31 +141,3 @@ def parse_obstacles(raw: Any, arena_size: float) -> tuple[Obstacle, ...]:
     if isinstance(raw, (str, bytes, Mapping)) or not isinstance(raw, Sequence):
         raise ValueError(f"scene.obstacles must be a list of obstacle dicts, got {raw!r}")
     return tuple(parse_obstacle(o, f"scene.obstacles[{i}]", arena_size) for i, o in enumerate(raw))
-
-
-def parse_scene(spec: Any, arena_size: float, robot_radius: float) -> Scene:
-    """Validate a user scene (the ``reset(options={"scene": ...})`` format) and turn it into a :class:`Scene`.
-
-    The start must leave the robot's footprint clear of every obstacle and wall; reachability of the goal is
-    the user's choice and is not checked.
-
-    Raises:
-        ValueError: naming the offending field and its allowed range.
-    """
-    spec = check_scene_keys(spec, ("obstacles", "start", "goal"))
-    for key in ("start", "goal"):
-        if key not in spec:
-            raise ValueError(f"scene.{key} is required")
-    obstacles = parse_obstacles(spec.get("obstacles", []), arena_size)
-    start = parse_numbers(spec["start"], 3, "scene.start", "x, y in metres and yaw in radians")
-    goal = parse_numbers(spec["goal"], 2, "scene.goal", "x, y in metres")
-    _inside(start, "scene.start", 0.5 * arena_size - robot_radius)
-    _inside(goal, "scene.goal", 0.5 * arena_size)
-    scene = Scene(obstacles, start, goal)
-    clearance = scene.clearance(start[0], start[1], arena_size)
-    if clearance < robot_radius:
-        raise ValueError(
-            f"scene.start ({start[0]}, {start[1]}) is {clearance:.3f} m from the nearest obstacle or wall; "
-            f"the robot needs at least its footprint radius {robot_radius} m"
-        )
-    return scene

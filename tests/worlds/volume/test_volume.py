@@ -9,15 +9,15 @@ import fcl
 import numpy as np
 import pytest
 
-import clutter_gym.worlds.volume
+import clutter_gym.worlds.volume.sample
 from clutter_gym.datatypes import Obstacle
 from clutter_gym.sim import Sim, pb
-from clutter_gym.worlds.volume import sample_volume_scene, wall_with_opening
-from clutter_gym.worlds.volume_arena import VolumeArena, volume_boundary
-from clutter_gym.worlds.volume_grid import clearance_field
-from clutter_gym.worlds.volume_path import VolumePathDistance
-from clutter_gym.worlds.volume_scene import VolumeScene, parse_volume_scene
-from clutter_gym.worlds.volume_spec import VolumeSpec
+from clutter_gym.worlds.volume.arena import VolumeArena, volume_boundary
+from clutter_gym.worlds.volume.grid import clearance_field
+from clutter_gym.worlds.volume.path import VolumePathDistance
+from clutter_gym.worlds.volume.sample import sample_volume_scene, wall_with_opening
+from clutter_gym.worlds.volume.scene import VolumeScene, parse_volume_scene
+from clutter_gym.worlds.volume.spec import VolumeSpec
 
 R = 0.2  # a drone's bounding radius, metres
 SPEC = VolumeSpec()
@@ -112,7 +112,7 @@ def test_the_grid_path_is_clear_for_the_sphere_under_fcl(density, corridor_first
     a sphere of the drone's radius off every obstacle under FCL at 1 cm steps, and its length is the field's value.
     The densest case keeps the corridor from the first attempt."""
     if corridor_first:
-        monkeypatch.setattr(clutter_gym.worlds.volume, "PLAIN_ATTEMPTS", 0)
+        monkeypatch.setattr(clutter_gym.worlds.volume.sample, "PLAIN_ATTEMPTS", 0)
     spec = VolumeSpec(obstacle_density=density)
     rng = np.random.default_rng(11)
     for _ in range(3):
@@ -129,7 +129,7 @@ def test_a_volume_lower_than_the_corridor_needs_keeps_its_corridor_at_mid_height
     """A 1 m volume (the lowest) is lower than twice the clearance the corridor keeps from the faces, so the corridor
     runs at mid-height; a long narrow one at the highest density found no layout without it (10 seeds of 10 failed).
     The path stays clear for a drone-sized sphere under FCL."""
-    monkeypatch.setattr(clutter_gym.worlds.volume, "PLAIN_ATTEMPTS", 0)
+    monkeypatch.setattr(clutter_gym.worlds.volume.sample, "PLAIN_ATTEMPTS", 0)
     spec = VolumeSpec(size=(2.0, 30.0, 1.0), obstacle_density=0.25, opening_size=(0.4, 0.8), max_attempts=3)
     radius = 0.073  # ClutterFly's bounding radius: a 0.2 m sphere has no room to spawn in 1 m
     rng = np.random.default_rng(5)
@@ -219,11 +219,11 @@ def test_the_waypoint_is_the_point_that_far_along_the_path():
     for lookahead in (0.05, 0.5, 1.7, 0.5 * arc[-1]):
         k = int(np.searchsorted(arc, lookahead)) - 1
         t = (lookahead - arc[k]) / (arc[k + 1] - arc[k])
-        np.testing.assert_allclose(field.waypoint(*start, lookahead), path[k] + t * (path[k + 1] - path[k]),
+        np.testing.assert_allclose(field.waypoint(*start, lookahead=lookahead), path[k] + t * (path[k + 1] - path[k]),
                                    atol=1e-12)
-    assert field.waypoint(*start, arc[-1] + 1.0) == goal
+    assert field.waypoint(*start, lookahead=arc[-1] + 1.0) == goal
     open_field = VolumePathDistance(VolumeScene((), (0.0, 0.0, 1.0, 0.0), (3.0, 4.0, 1.0)), SPEC, R)
-    gap = math.dist(open_field.waypoint(0.0, 0.0, 1.0, 0.5), (0.3, 0.4, 1.0))
+    gap = math.dist(open_field.waypoint(0.0, 0.0, 1.0, lookahead=0.5), (0.3, 0.4, 1.0))
     assert gap <= float(np.linalg.norm(SPEC.cell_size))
 
 

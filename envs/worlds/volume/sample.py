@@ -8,16 +8,16 @@ Sampling, per attempt:
    floor to top with one opening (a door at the floor or a window above it; see :func:`wall_with_opening`). Sizes
    take one of ``size_levels`` evenly spaced values per range, so the body pool covers every layout with a bounded
    set of shapes.
-2. The clearance grid of ``worlds/volume_grid.py``: exact signed distance from each cell centre to the nearest
+2. The clearance grid of ``worlds/volume/grid.py``: exact signed distance from each cell centre to the nearest
    obstacle or face of the volume.
 3. A cell is *free* when its clearance exceeds r + h / 2 (r the robot's radius, h the largest cell edge); by the
-   Lipschitz argument in ``worlds/volume_grid.py`` a 6-connected chain of free cells is a collision-free path for
+   Lipschitz argument in ``worlds/volume/grid.py`` a 6-connected chain of free cells is a collision-free path for
    the sphere, so start and goal in one 6-connected free component (``scipy.ndimage.label``) are reachable.
 4. Start and goal are centres of free cells with clearance above r + ``spawn_clearance``, in one component and at
    least ``min_goal_distance`` apart. No such pair: a new attempt.
 
 After ``PLAIN_ATTEMPTS`` failed attempts the generator keeps a corridor clear, as the floor world's does
-(``worlds/clutter.py``): it draws start, one waypoint and goal first and refuses obstacles (a wall with all its
+(``worlds/floor/sample.py``): it draws start, one waypoint and goal first and refuses obstacles (a wall with all its
 pieces) that come within ``keep`` = r + max(spawn_clearance, h) + h of the polyline through them. The cells the
 polyline crosses then have clearance above r + h / 2 and r + spawn_clearance, so the steps above find start and goal
 in one component, and the density is still met elsewhere (unless the corridor leaves too little room for it).
@@ -31,9 +31,9 @@ import numpy as np
 from scipy import ndimage
 
 from clutter_gym.datatypes import Obstacle
-from clutter_gym.worlds.volume_grid import VolumeGrid, cell_index, clearance_field, free_margin, signed_distance
-from clutter_gym.worlds.volume_scene import VolumeScene
-from clutter_gym.worlds.volume_spec import VolumeSpec
+from clutter_gym.worlds.volume.grid import VolumeGrid, cell_index, clearance_field, free_margin, signed_distance
+from clutter_gym.worlds.volume.scene import VolumeScene
+from clutter_gym.worlds.volume.spec import VolumeSpec
 
 PLAIN_ATTEMPTS = 5  # attempts at unconstrained clutter before the generator keeps a corridor clear
 _BATCH = 32  # obstacles drawn per batch of random numbers
@@ -92,7 +92,7 @@ def _polyline_points(polyline: np.ndarray, step: float) -> np.ndarray:
 
 
 def _obstacle_group(spec: VolumeSpec, kind: int, u: np.ndarray, level: np.ndarray) -> tuple[Obstacle, ...]:
-    """One obstacle (a wall: its pieces) of ``kind`` (index into :data:`~clutter_gym.worlds.volume_spec.SHAPES`)
+    """One obstacle (a wall: its pieces) of ``kind`` (index into :data:`~clutter_gym.worlds.volume.spec.SHAPES`)
     from uniforms ``u`` (6,) in [0, 1) and level indices ``level`` (5,)."""
     values = spec.size_values
     sx, sy, sz = spec.size

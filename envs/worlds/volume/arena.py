@@ -10,11 +10,11 @@ import numpy as np
 from clutter_gym.datatypes import Obstacle
 from clutter_gym.sim import Sim
 from clutter_gym.util.camera_view import between, chase_eye, pull_in
+from clutter_gym.worlds.parsing import scene_from_options
 from clutter_gym.worlds.pool import ObstaclePool
-from clutter_gym.worlds.scene import scene_from_options
-from clutter_gym.worlds.volume import sample_volume_scene
-from clutter_gym.worlds.volume_scene import VolumeScene, parse_volume_scene
-from clutter_gym.worlds.volume_spec import VolumeSpec
+from clutter_gym.worlds.volume.sample import sample_volume_scene
+from clutter_gym.worlds.volume.scene import VolumeScene, parse_volume_scene
+from clutter_gym.worlds.volume.spec import VolumeSpec
 
 BOUNDARY_THICKNESS = 0.1  # metres of the walls and the ceiling, outside the volume
 #: The rgb_array chase camera (:meth:`VolumeArena.render_camera`): metres behind and above the robot, how far towards

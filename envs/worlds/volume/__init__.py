@@ -1,0 +1,2 @@
+"""The volume of ClutterFly-v0: a walled box of air with seeded 3D clutter, its clearance grid and the path distance
+through it."""
