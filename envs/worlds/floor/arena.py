@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -14,8 +13,8 @@ from clutter_gym.util.camera_view import fitting_distance
 from clutter_gym.worlds.floor.sample import sample_scene
 from clutter_gym.worlds.floor.scene import Scene, parse_scene
 from clutter_gym.worlds.floor.spec import ClutterSpec
-from clutter_gym.worlds.parsing import scene_from_options
 from clutter_gym.worlds.pool import ObstaclePool
+from clutter_gym.worlds.pooled_arena import PooledArena
 
 #: The rgb_array view (:meth:`ClutterArena.render_camera`): its angle above the floor, how far inside the frame's
 #: edges it keeps the robot and the goal (a fraction of the half-frame), the nearest it comes (metres), and the
@@ -37,7 +36,7 @@ def arena_walls(arena: float, height: float, thick: float) -> tuple[Obstacle, ..
     )
 
 
-class ClutterArena:
+class ClutterArena(PooledArena[Scene]):
     """Ground plane, four walls and the obstacle pool of one env.
 
     Args:
@@ -48,7 +47,6 @@ class ClutterArena:
     def __init__(self, spec: ClutterSpec, robot_radius: float) -> None:
         self.spec = spec
         self.robot_radius = robot_radius
-        self._pool: ObstaclePool | None = None
 
     def load(self, sim: Sim) -> None:
         """Create the ground and walls (once per env)."""
@@ -60,21 +58,11 @@ class ClutterArena:
     def walls(self) -> tuple[Obstacle, ...]:
         return self._pool.fixed
 
-    @property
-    def pool_size(self) -> int:
-        return self._pool.size
+    def _parse(self, raw: Any) -> Scene:
+        return parse_scene(raw, self.spec.arena_size, self.robot_radius)
 
-    def choose_scene(self, rng: np.random.Generator, options: Mapping[str, Any] | None) -> Scene:
-        """The user's scene from ``options["scene"]`` if given, else a seeded random layout.
-
-        Raises:
-            ValueError: unknown option keys or a malformed scene (the message names the field).
-        """
-        return scene_from_options(
-            options,
-            parse=lambda spec: parse_scene(spec, self.spec.arena_size, self.robot_radius),
-            sample=lambda: sample_scene(rng, self.spec, self.robot_radius),
-        )
+    def _sample(self, rng: np.random.Generator) -> Scene:
+        return sample_scene(rng, self.spec, self.robot_radius)
 
     def render_camera(self, sim: Sim, robot: np.ndarray, goal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(eye, target) of the rgb_array view: from the -y side, :data:`VIEW_ELEVATION` above the floor, aimed
@@ -87,8 +75,3 @@ class ClutterArena:
         points = np.array([robot, goal], dtype=float)
         distance = fitting_distance(points, centre, direction, NEAREST_VIEW, farthest, *VIEW_SIZE, VIEW_INSET)
         return centre + distance * direction, centre
-
-    def place(self, scene: Scene) -> tuple[tuple[Obstacle, ...], list[int]]:
-        """Move pooled bodies into ``scene``; returns every obstacle (walls included) and its body ids."""
-        bodies = self._pool.place(scene.obstacles)
-        return scene.obstacles + self.walls, bodies + self._pool.fixed_bodies

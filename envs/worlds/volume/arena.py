@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -10,8 +9,8 @@ import numpy as np
 from clutter_gym.datatypes import Obstacle
 from clutter_gym.sim import Sim
 from clutter_gym.util.camera_view import between, chase_eye, pull_in
-from clutter_gym.worlds.parsing import scene_from_options
 from clutter_gym.worlds.pool import ObstaclePool
+from clutter_gym.worlds.pooled_arena import PooledArena
 from clutter_gym.worlds.volume.sample import sample_volume_scene
 from clutter_gym.worlds.volume.scene import VolumeScene, parse_volume_scene
 from clutter_gym.worlds.volume.spec import VolumeSpec
@@ -48,7 +47,7 @@ def floor_slab(spec: VolumeSpec) -> tuple[Obstacle, ...]:
     return (Obstacle("box", (sx + 2 * t, sy + 2 * t, t), (0.0, 0.0), 0.0, -t),)
 
 
-class VolumeArena:
+class VolumeArena(PooledArena[VolumeScene]):
     """Floor, boundary and the obstacle pool of one env (the ``Arena`` contract of ``clutter_gym.interfaces``).
 
     Args:
@@ -63,7 +62,6 @@ class VolumeArena:
         self.spec = spec
         self.robot_radius = robot_radius
         self.floor_obstacle = bool(floor_obstacle)
-        self._pool: ObstaclePool | None = None
         self._ground = -1
 
     def load(self, sim: Sim) -> None:
@@ -71,28 +69,16 @@ class VolumeArena:
         self._ground = sim.add_ground(visual_size=max(self.spec.size[:2]) + 2.0)
         self._pool = ObstaclePool(sim, volume_boundary(self.spec))
 
-    @property
-    def pool_size(self) -> int:
-        """Obstacle bodies in the world (placed and parked)."""
-        return self._pool.size
+    def _parse(self, raw: Any) -> VolumeScene:
+        return parse_volume_scene(raw, self.spec, self.robot_radius)
 
-    def choose_scene(self, rng: np.random.Generator, options: Mapping[str, Any] | None) -> VolumeScene:
-        """The user's scene from ``options["scene"]`` if given, else a layout drawn from ``rng``.
-
-        Raises:
-            ValueError: unknown option keys or a malformed scene (the message names the field).
-        """
-        return scene_from_options(
-            options,
-            parse=lambda raw: parse_volume_scene(raw, self.spec, self.robot_radius),
-            sample=lambda: sample_volume_scene(rng, self.spec, self.robot_radius),
-        )
+    def _sample(self, rng: np.random.Generator) -> VolumeScene:
+        return sample_volume_scene(rng, self.spec, self.robot_radius)
 
     def place(self, scene: VolumeScene) -> tuple[tuple[Obstacle, ...], list[int]]:
         """Move pooled bodies into ``scene``; returns every obstacle (the boundary included, and the floor with
         ``floor_obstacle``) and its body ids."""
-        bodies = self._pool.place(scene.obstacles)
-        obstacles, bodies = scene.obstacles + self._pool.fixed, bodies + self._pool.fixed_bodies
+        obstacles, bodies = super().place(scene)
         if self.floor_obstacle:
             return obstacles + floor_slab(self.spec), [*bodies, self._ground]
         return obstacles, bodies
