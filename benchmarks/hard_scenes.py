@@ -1,6 +1,6 @@
 """The scenes and runs of the hard cases in tests/hard_cases/ that have a figure to measure: a base standing still,
 full command into a corner and into a gap, the camera's far plane, the IMU through an impact, a box pushed into a
-wall, tabletop clutter at rest. The tests assert on what these return; ``benchmarks.hard_cases`` prints short
+wall, tabletop clutter at rest. The tests assert on what these return; ``benchmarks.hard_cases.catalogue`` prints short
 versions of the same runs beside their steps/s.
 
 Every run returns its figures (metres, radians, m/s, m/s^2) and the env steps/s of its timed steps.
@@ -15,7 +15,7 @@ import gymnasium as gym
 import numpy as np
 
 import clutter_gym  # noqa: F401  (registers the envs)
-from benchmarks.stacking import tilt_degrees
+from benchmarks.hard_cases.stacking import tilt_degrees
 from clutter_gym.sensors import SEGMENTATION_CLASSES
 
 CONTROL_HZ = 20.0  # ClutterNav-v0 and ClutterReach-v0 control steps per second

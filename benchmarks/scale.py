@@ -2,7 +2,7 @@
 the origin or moved by an offset, and scenes of millimetre obstacles around the robot. The envs have no
 world-offset option, so every obstacle, the arena walls and the robot pose move by the offset (the floor is an
 infinite plane). What was measured with them, and why each tolerance is what it is, is in
-tests/hard_cases/test_scale.py; ``benchmarks.hard_cases`` prints short versions of those figures.
+tests/hard_cases/test_scale.py; ``benchmarks.hard_cases.catalogue`` prints short versions of those figures.
 
 Lengths are metres; tolerances named ``*_ULPS`` count units in the last place of the offset (:func:`ulps`).
 """

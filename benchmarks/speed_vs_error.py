@@ -25,19 +25,10 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 
-from benchmarks import (
-    aero_cost,
-    camera_renderer,
-    camera_resolution,
-    collision_fidelity,
-    cylinder_rays,
-    lidar_resolution,
-    noise_cost,
-    physics_rate,
-    throughput,
-)
 from benchmarks.choice import Choice, Row, plot_choice
+from benchmarks.fidelity import camera_renderer, camera_resolution, collision_fidelity, cylinder_rays, lidar_resolution
 from benchmarks.harness import table_header
+from benchmarks.speed import aero_cost, noise_cost, physics_rate, throughput
 from clutter_gym.noise.profiles import PROFILE_NAMES
 from clutter_gym.util.atomic import write_text_atomically
 
@@ -62,8 +53,9 @@ def fidelity_choices(quick: bool, seed: int) -> list[Choice]:
         bullet = cf.pybullet_table(panda, panda_cases, panda_res)
     n = sum(len(c["q"]) for c in panda_cases)
     method = (f"{n} configurations per robot whose `mesh` clearance is in (0, {cf.NEAR}] m, in seeded scenes "
-              f"(`python -m benchmarks.collision_fidelity` has the full tables). Speed: one environment clearance "
-              f"query (`model.sync` + `checker.clearance`, range {cf.RANGE} m). Error: mean |min clearance - mesh|.")
+              f"(`python -m benchmarks.fidelity.collision_fidelity` has the full tables). Speed: one environment "
+              f"clearance query (`model.sync` + `checker.clearance`, range {cf.RANGE} m). Error: mean |min clearance - "
+              f"mesh|.")
 
     def rows(res: dict, default: str) -> list[Row]:
         out = []
@@ -233,7 +225,7 @@ def aero_choice(quick: bool) -> Choice:
               f"flight's largest as extra columns). Speed: steps per CPU-second of `env.step` over the same flights, "
               f"median of alternating rounds. Hover lift: the open-loop vertical acceleration of one control step of "
               f"the hover command from rest, as a share of g, at the low start and at the lowest height the scene "
-              f"generator spawns at ({spawn:.1f} m), less that without `aero`. `python -m benchmarks.aero_cost` "
+              f"generator spawns at ({spawn:.1f} m), less that without `aero`. `python -m benchmarks.speed.aero_cost` "
               f"prints the table alone.")
     at = {r["label"]: {f.name: r[f"{f.name}_mm"] for f in flights} for r in measured}
     no_drag, no_ground = at[ground["label"]], at[drag["label"]]  # the rows that leave drag, ground effect out
@@ -263,7 +255,8 @@ def headline(quick: bool, seed: int) -> list[str]:
     resets = 1e3 * throughput.reset_times(env, 100 if quick else 500, warmup=200)
     env.close()
     lines = [f"ClutterNav-v0 at its defaults (64-beam LIDAR, IMU, FCL clearance, contacts and swept checks), "
-             f"scripted navigator, {rounds} alternating blocks of 1,000 steps (`python -m benchmarks.throughput`):",
+             f"scripted navigator, {rounds} alternating blocks of 1,000 steps "
+             f"(`python -m benchmarks.speed.throughput`):",
              "", f"- {nav['env']:,.0f} steps/s, {nav['ratio']:.2f}x the time of the raw pybullet work a step needs "
              f"(motors, physics, state reads, rays: {nav['floor']:,.0f} steps/s);"]
     if "peer" in nav:
@@ -330,12 +323,13 @@ def main() -> None:
         plot_choice(choice, PLOTS / f"{choice.key}.png")
         lines += markdown(choice)
     lines += ["## Other benchmarks", "",
-              "Not in this report because they answer other questions or run long: `benchmarks.camera_throughput` "
-              "(the RGB-D env against gym-pybullet-drones), `benchmarks.vec_throughput` (vector envs), "
-              "`benchmarks.memory` (memory over many resets), `benchmarks.contact_agreement` and "
-              "`benchmarks.fcl_accuracy` (FCL against pybullet and closed forms), `benchmarks.learning` (PPO curves). "
-              "Their results are in [benchmarks.md](benchmarks.md); those of `benchmarks.large_scenes` (resets and "
-              "steps with up to 10,000 obstacles) in [design-notes.md](design-notes.md#large-scenes).", "",
+              "Not in this report because they answer other questions or run long: "
+              "`benchmarks.speed.camera_throughput` (the RGB-D env against gym-pybullet-drones), "
+              "`benchmarks.speed.vec_throughput` (vector envs), `benchmarks.hard_cases.memory` (memory over many "
+              "resets), `benchmarks.fidelity.contact_agreement` and `benchmarks.fidelity.fcl_accuracy` (FCL against "
+              "pybullet and closed forms), `benchmarks.learning.main_job` (PPO curves). Their results are in "
+              "[benchmarks.md](benchmarks.md); those of `benchmarks.hard_cases.large_scenes` (resets and steps with up "
+              "to 10,000 obstacles) in [design-notes.md](design-notes.md#large-scenes).", "",
               f"Total wall time: {time.perf_counter() - t0:.0f} s."]
     write_text_atomically(DOCS / "speed-vs-error.md", "\n".join(lines) + "\n")
     print("\n".join(lines))

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from benchmarks import aero_cost
+from benchmarks.speed import aero_cost
 from clutter_gym.robots import QuadrotorConfig
 from clutter_gym.robots.aero import ground_effect_gain
 

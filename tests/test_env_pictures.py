@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
-from benchmarks.env_pictures import LABEL_PX, SHOTS, labelled_strip
+from benchmarks.pictures.env_pictures import LABEL_PX, SHOTS, labelled_strip
 
 PICTURE = Path(__file__).resolve().parents[1] / "docs" / "images" / "envs.png"
 

@@ -41,7 +41,7 @@ def run_child(code: str) -> subprocess.CompletedProcess:
 @pytest.mark.parametrize("solver", ["GST_LIBCCD", "GST_INDEP"])
 def test_fcl_accuracy_measures_touching_tilted_boxes_without_aborting(solver):
     result = run_child(f"""
-        from benchmarks.fcl_accuracy import clearances
+        from benchmarks.fidelity.fcl_accuracy import clearances
         d = clearances(fcl.Box(0.2, 0.2, 0.2), poses, [obstacle], fcl.GJKSolverType.{solver})
         assert d.shape == (2, 1) and np.all(np.abs(d) <= reach), d
         print("checked")
@@ -54,7 +54,7 @@ def test_collision_fidelity_brute_force_measures_touching_tilted_boxes_without_a
     urdf.write_text('<robot name="box"><link name="part"><collision><geometry><box size="0.2 0.2 0.2"/></geometry>'
                     '</collision></link></robot>\n')
     result = run_child(f"""
-        from benchmarks.collision_fidelity import brute_force
+        from benchmarks.fidelity.collision_fidelity import brute_force
         from clutter_gym.collision import RobotCollisionModel
         model = RobotCollisionModel.from_urdf({str(urdf)!r}, "primitive", ("part",), self_collision=False)
         for rotation, position in poses:

@@ -1,10 +1,11 @@
-"""benchmarks.fly_harsh for one episode a cell: its columns are harsh's parts, and a cell flies the flyer it names."""
+"""benchmarks.learning.fly_harsh for one episode a cell: its columns are harsh's parts, and a cell flies the flyer
+it names."""
 
 from __future__ import annotations
 
 from dataclasses import asdict
 
-from benchmarks.fly_harsh import COLUMNS, ROWS, cell
+from benchmarks.learning.fly_harsh import COLUMNS, ROWS, cell
 from clutter_gym.noise.profiles import resolve_noise
 
 

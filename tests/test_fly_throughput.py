@@ -1,4 +1,4 @@
-"""benchmarks.fly_throughput and its HoverAviary KIN peer, run for a few steps: no timing is asserted."""
+"""benchmarks.speed.fly_throughput and its HoverAviary KIN peer, run for a few steps: no timing is asserted."""
 
 from __future__ import annotations
 
@@ -7,8 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from benchmarks.fly_floor import FlyFloor
-from benchmarks.fly_throughput import (
+from benchmarks.peers.hover import CALLS_PER_RESET, CALLS_PER_STEP, KIN_SHAPE, HoverKinPeer, count_pybullet_calls
+from benchmarks.speed.fly_floor import FlyFloor
+from benchmarks.speed.fly_throughput import (
     FLOOR,
     FLY,
     IMU,
@@ -24,7 +25,6 @@ from benchmarks.fly_throughput import (
     report,
     time_scans,
 )
-from benchmarks.peers.hover import CALLS_PER_RESET, CALLS_PER_STEP, KIN_SHAPE, HoverKinPeer, count_pybullet_calls
 
 
 @pytest.fixture

@@ -1,5 +1,5 @@
-"""``python -m benchmarks.hard_cases``: a cheap case's row is finite and within its bound, and a case name that is
-not in the registry is refused with the names that are."""
+"""``python -m benchmarks.hard_cases.catalogue``: a cheap case's row is finite and within its bound, and a case
+name that is not in the registry is refused with the names that are."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import math
 
 import pytest
 
-from benchmarks.hard_cases import CASES, main, run_case
+from benchmarks.hard_cases.catalogue import CASES, main, run_case
 
 
 @pytest.mark.parametrize("name", ["mass-1kg-on-1t", "scale-drive"])

@@ -5,7 +5,7 @@ from __future__ import annotations
 import gymnasium as gym
 import pytest
 
-from benchmarks.contact_agreement import measure
+from benchmarks.fidelity.contact_agreement import measure
 from clutter_gym.training.baselines import PotentialFieldNavigator
 
 pytestmark = pytest.mark.slow

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from benchmarks.camera_resolution import resample
 from benchmarks.choice import Choice, Row, plot_choice
+from benchmarks.fidelity.camera_resolution import resample
 
 
 def choice(rate: bool, rows: list[Row]) -> Choice:

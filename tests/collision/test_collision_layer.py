@@ -9,7 +9,7 @@ import fcl
 import numpy as np
 import pytest
 
-from benchmarks.contact_agreement import panda_depth_errors
+from benchmarks.fidelity.contact_agreement import panda_depth_errors
 from clutter_gym.collision import (
     FIDELITY_LEVELS,
     CollisionChecker,

@@ -2,10 +2,10 @@
 from the env's own parts (Sim, obstacle pool, FCL checker, LIDAR); millimetre obstacles; the largest arena.
 
 The envs have no world-offset option, so the translated scenes are built by construction (``benchmarks/scale.py``,
-which ``benchmarks.hard_cases`` shares): every obstacle, the arena walls and the robot pose move by the offset (the
-floor is an infinite plane). Measured on 200 seeded robot poses in a 6 m arena (plus three hand-placed ones: 5 mm
-into a box, touching a box face, clear), translated minus untranslated, metres
-(np.spacing: 1.1e-13 at 1e3, 1.8e-12 at 1e4):
+which ``benchmarks.hard_cases.catalogue`` shares): every obstacle, the arena walls and the robot pose move by the
+offset (the floor is an infinite plane). Measured on 200 seeded robot poses in a 6 m arena (plus three hand-placed
+ones: 5 mm into a box, touching a box face, clear), translated minus untranslated, metres (np.spacing: 1.1e-13 at
+1e3, 1.8e-12 at 1e4):
 
 * FCL, sphere shapes (closed-form routines): distance <= 3.2e-13 at 1e3 and 2.7e-12 at 1e4 (2.8 and 1.5 ulp), witness
   points <= 3.1e-12, the same nearest obstacle -> ``EXACT_ULPS`` = 20 ulp of the offset (1.8e-11 at 1e4).
