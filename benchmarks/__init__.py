@@ -15,6 +15,6 @@ its ``bench`` extra installed::
 
 At the top: ``speed_vs_error``, the report ``python3 tasks.py bench`` runs, which gathers the speed-against-error
 sections of the others into docs/speed-vs-error.md; ``harness``, what the timing scripts share (random-walk actions,
-step timers, alternating rounds, table headers); ``choice``, the report's rows, Pareto fronts and plots; and, until
-they move into the installed package, ``hard_scenes`` and ``scale``, the scenes and runs of tests/hard_cases/.
+step timers, alternating rounds, table headers); ``choice``, the report's rows, Pareto fronts and plots. The scenes
+and runs that tests/hard_cases/ holds the hard cases to are in the installed package, ``clutter_gym.hard_cases``.
 """

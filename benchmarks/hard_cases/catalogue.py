@@ -2,11 +2,11 @@
 to, and the steps/s while it was measured.
 
 Each case is a short version of the run its test or benchmark makes (fewer seconds, offsets or poses; ``--quick``
-shorter still), through the same functions: ``benchmarks.hard_scenes``, ``scale``, ``stacking``, ``tunneling``,
-``large_scenes``, ``contact_agreement`` and ``physics_rate``. The rate column says what it counts: env steps/s,
-physics ticks/s, or checker queries/s where a case places the robot instead of stepping; it was measured on
-whatever else the machine was doing, so compare it within one run only. A bound of "none" is a figure no test
-holds (a known failure at the defaults, or one the catalogue only reports).
+shorter still), through the same functions: the scenes and runs of :mod:`clutter_gym.hard_cases`, the ``stacking``,
+``tunneling`` and ``large_scenes`` benchmarks next to this one, and ``benchmarks.speed.physics_rate``. The rate
+column says what it counts: env steps/s, physics ticks/s, or checker queries/s where a case places the robot instead
+of stepping; it was measured on whatever else the machine was doing, so compare it within one run only. A bound of
+"none" is a figure no test holds (a known failure at the defaults, or one the catalogue only reports).
 
     python -m benchmarks.hard_cases.catalogue [--quick] [--case NAME]
 """
@@ -23,11 +23,15 @@ from dataclasses import dataclass
 import gymnasium as gym
 import numpy as np
 
-from benchmarks import hard_scenes, scale
-from benchmarks.fidelity import contact_agreement
-from benchmarks.hard_cases import large_scenes, stacking, tunneling
+from benchmarks.hard_cases import large_scenes, stacking
+from benchmarks.hard_cases.tunneling import OFFSETS, summary
 from benchmarks.harness import table_header
 from benchmarks.speed import physics_rate
+from clutter_gym.hard_cases import movable_clutter, scale, sensor_edges, tunneling
+from clutter_gym.hard_cases.penetration_depth import panda_depth_errors
+from clutter_gym.hard_cases.standstill import standstill_drift
+from clutter_gym.hard_cases.stepping import CONTROL_HZ
+from clutter_gym.hard_cases.wedging import wedge
 from clutter_gym.sensors.lidar import Lidar, LidarConfig
 
 ENV_STEPS, TICKS, QUERIES = "env steps/s", "physics ticks/s", "checker queries/s"
@@ -98,7 +102,7 @@ def standstill(quick: bool) -> Row:
         [(yaw, before) for yaw in (0.52, 0.79, 1.31) for before in ((0.0, 0.0), (0.5, 0.7))]
     env = gym.make("ClutterNav-v0", noise="none", max_episode_steps=10_000)
     try:
-        results = [hard_scenes.standstill_drift(env, yaw, before, seconds) for yaw, before in runs]
+        results = [standstill_drift(env, yaw, before, seconds) for yaw, before in runs]
     finally:
         env.close()
     moved, turned = max(r[0] for r in results), max(r[1] for r in results)
@@ -109,9 +113,9 @@ def standstill(quick: bool) -> Row:
 
 # ------------------------------------------------------------------------------------------------ wedging
 def wedging(name: str, quick: bool) -> Row:
-    """Deepest penetration of full command into a trap (:data:`hard_scenes.WEDGES`); mm."""
+    """Deepest penetration of full command into a trap (:data:`clutter_gym.hard_cases.wedging.WEDGES`); mm."""
     seconds = 20.0 if quick else 60.0
-    run = hard_scenes.wedge(name, seconds)
+    run = wedge(name, seconds)
     return Row(f"wedging-{name}", 1e3 * run.penetration, "mm", 1.0, "test_wedging.py", run.steps_per_s, ENV_STEPS,
                f"defaults, noise none; {seconds:g} s full command",
                f"final speed {run.final_speed:.1g} m/s, {run.mismatched} contact/cost mismatches")
@@ -129,14 +133,14 @@ def tunnel_starts(settings: tunneling.Settings, offsets: int) -> list[float]:
 def tunnel_row(name: str, runs: list[tunneling.Run], bound: float | None, source: str, rate: float,
                rate_unit: str, settings: str) -> Row:
     """Passes the audit missed (passes neither a contact nor a swept hit flagged)."""
-    s = tunneling.summary(name, f"{TUNNEL_SPEED:g}", TUNNEL_WALL, runs, [])
+    s = summary(name, f"{TUNNEL_SPEED:g}", TUNNEL_WALL, runs, [])
     return Row(name, s["passes"] - s["passes_flagged"], "missed passes", bound, source, rate, rate_unit, settings,
                f"{s['passes']}/{s['runs']} runs passed, {s['passes_flagged']} flagged")
 
 
 def tunneling_free(shape: str, rigid: bool, quick: bool) -> Row:
     """A free ``shape`` at 20 m/s at a 1 cm wall from several offsets, pybullet alone, audited."""
-    offsets = tunneling.OFFSETS if quick else 4 * tunneling.OFFSETS
+    offsets = OFFSETS if quick else 4 * OFFSETS
     nav = tunneling.make_nav_env()
     settings = tunneling.Settings.of(nav)
     nav.close()
@@ -155,7 +159,7 @@ def tunneling_free(shape: str, rigid: bool, quick: bool) -> Row:
 
 def tunneling_nav(quick: bool) -> Row:
     """The nav robot launched at 20 m/s into a 1 cm wall from several offsets."""
-    offsets = tunneling.OFFSETS if quick else 4 * tunneling.OFFSETS
+    offsets = OFFSETS if quick else 4 * OFFSETS
     nav = tunneling.make_nav_env()
     try:
         settings = tunneling.Settings.of(nav)
@@ -173,7 +177,7 @@ def tunneling_nav(quick: bool) -> Row:
 def movable_settle(quick: bool) -> Row:
     """Largest move of settled tabletop clutter with the arm at rest; mm."""
     seconds = 10.0 if quick else 30.0
-    moved, tilt, _, rate = hard_scenes.tabletop_creep(seconds)
+    moved, tilt, _, rate = movable_clutter.tabletop_creep(seconds)
     return Row("movable-settle", 1e3 * moved, "mm", 0.1, "test_movable_clutter.py", rate, ENV_STEPS,
                f"ClutterReach-v0, movable_obstacles 1, seed 2; {seconds:g} s after 0.5 s to settle",
                f"tilt {tilt:.2g} deg")
@@ -183,10 +187,10 @@ def movable_push(quick: bool) -> Row:
     """How far a pushed 1 kg box rests inside the wall it was driven into (its last second); mm."""
     env = gym.make("ClutterNav-v0", max_linear_speed=1.0)
     try:
-        _, positions, rate = hard_scenes.push_box(env, 6.0)
+        _, positions, rate = movable_clutter.push_box(env, 6.0)
     finally:
         env.close()
-    inside = positions[:, 0] + hard_scenes.PUSH_BOX_HALF - hard_scenes.PUSH_WALL_FACE
+    inside = positions[:, 0] + movable_clutter.PUSH_BOX_HALF - movable_clutter.PUSH_WALL_FACE
     return Row("movable-push", 1e3 * max(0.0, float(inside[-20:].max())), "mm", 1.0, "test_movable_clutter.py",
                rate, ENV_STEPS, "ClutterNav-v0, max_linear_speed 1; 1 kg box driven into a wall, 6 s",
                f"{1e3 * float(inside.max()):.1f} mm in at the impact, 10 mm allowed")
@@ -315,7 +319,7 @@ def camera_far(quick: bool) -> Row:
     """Depth of the arena wall with the camera's far plane at 1000 m against the closed form, worst pixel of the
     frame at reset; mm. The rate is of the steps after it, at zero command."""
     steps = 10 if quick else 50
-    first, settled, pixels, rate = hard_scenes.wall_depth_error(1000.0, steps)
+    first, settled, pixels, rate = sensor_edges.wall_depth_error(1000.0, steps)
     return Row("camera-far", 1e3 * first, "mm", 0.1, "test_sensor_edges.py", rate, f"{ENV_STEPS} (camera on)",
                f"84x64 depth camera, camera_far 1000 m; the reset frame, then {steps} steps at rest",
                f"{pixels} wall pixels; {1e3 * settled:.2f} mm once the base has settled 10 um, not in the closed form")
@@ -325,9 +329,9 @@ def imu_impact(quick: bool) -> Row:
     """Peak IMU acceleration through a stop from full speed against the mean deceleration over one control period
     (0.5 m/s in 0.05 s = 10 m/s^2); %."""
     with nav_maker() as make:
-        readings, contacts, rate = hard_scenes.imu_impact(make)
+        readings, contacts, rate = sensor_edges.imu_impact(make)
     peak = float(np.abs(readings[:, 0]).max())
-    expected = 0.5 * hard_scenes.CONTROL_HZ
+    expected = 0.5 * CONTROL_HZ
     return Row("imu-impact", 100 * abs(peak - expected) / expected, "%", 5.0, "test_sensor_edges.py", rate,
                f"{ENV_STEPS} (IMU only)", "noise none; full command into the wall from 0.3 m, 2 s",
                f"peak {peak:.2f} m/s^2, {contacts} steps in contact")
@@ -337,7 +341,7 @@ def imu_impact(quick: bool) -> Row:
 def penetration_depth(quick: bool) -> Row:
     """Contact depth against the signed distance on full-speed Panda steps, worst contact; m."""
     steps = 800 if quick else 3200
-    worst, contacts, deep, rate = contact_agreement.panda_depth_errors(steps)
+    worst, contacts, deep, rate = panda_depth_errors(steps)
     return Row("penetration-depth", worst, "m", 1e-9, "test_collision_layer.py", rate, ENV_STEPS,
                f"ClutterReach-v0, 10 obstacles, seed 0; {steps} full-speed random steps",
                f"{contacts} contacts, {deep} deeper than 1 mm")
@@ -348,7 +352,7 @@ def physics_rate_wall(physics_hz: float, iterations: int, quick: bool) -> Row:
     mm."""
     began = time.perf_counter()
     depth = physics_rate.wall_penetration_mm(physics_hz, iterations)
-    rate = 3.0 * hard_scenes.CONTROL_HZ / (time.perf_counter() - began)
+    rate = 3.0 * CONTROL_HZ / (time.perf_counter() - began)
     return Row(f"physics-rate-{physics_hz:.0f}", depth, "mm", None, "none: reported in speed-vs-error.md", rate,
                f"{ENV_STEPS} (no sensors; make and reset included)",
                f"{physics_hz:.0f} Hz, {iterations} iterations; 3 s full speed into a wall")

@@ -12,13 +12,12 @@ from __future__ import annotations
 
 import argparse
 import multiprocessing
-import os
 import time
 
 import gymnasium as gym
 import numpy as np
 
-import clutter_gym  # noqa: F401  (registers the envs)
+from clutter_gym.hard_cases.memory import new_sizes_scene, resident_mib
 
 RUNS = {
     "ClutterReach-v0, generated layouts": ("ClutterReach-v0", False),
@@ -26,19 +25,6 @@ RUNS = {
     "ClutterNav-v0, 5 new cylinder sizes per user scene": ("ClutterNav-v0", True),
 }
 CHECKPOINTS = 10
-
-
-def resident_mib() -> float:
-    """Resident memory of this process in MiB (Linux: /proc/self/statm)."""
-    with open("/proc/self/statm") as f:
-        return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2**20
-
-
-def new_sizes_scene(rng: np.random.Generator) -> dict:
-    """A ClutterNav scene of five cylinders of sizes no earlier scene had (in the reset-options format)."""
-    obstacles = [{"shape": "cylinder", "radius": float(rng.uniform(0.1, 0.3)), "height": 0.5,
-                  "position": [float(rng.uniform(0.5, 1.5)), float(rng.uniform(-1.5, 1.5))]} for _ in range(5)]
-    return {"obstacles": obstacles, "start": [-2.0, 0.0, 0.0], "goal": [2.5, 0.0]}
 
 
 def run(env_id: str, user_scenes: bool, resets: int, queue: multiprocessing.Queue) -> None:

@@ -2,9 +2,10 @@
 in ClutterNav-v0 at several physics rates and solver iteration counts, with the robot at rest, against the time
 it costs.
 
-A stack of ``n`` boxes (0.3 x 0.3 x 0.2 m, 2 kg each) is placed exactly touching, as a user scene puts it. Bullet's
-sequential-impulse solver needs more iterations the taller the stack (an impulse crosses one contact per
-iteration), so short stacks hold at settings where tall ones creep or fall. Printed per setting: the largest
+A stack of ``n`` boxes (0.3 x 0.3 x 0.2 m, 2 kg each: ``clutter_gym.hard_cases.movable_clutter.stack_scene``) is
+placed exactly touching, as a user scene puts it. Bullet's sequential-impulse solver needs more iterations the
+taller the stack (an impulse crosses one contact per iteration), so short stacks hold at settings where tall ones
+creep or fall. Printed per setting: the largest
 horizontal drift of any box and its largest tilt over the 30 s, how far the top box sank, and steps/s. The mass
 ratios hold two boxes for 10 s: a heavy box on a light one is the solver's hard case (the light box's contacts
 must carry a thousand times its weight), a light one on a heavy one its easy case.
@@ -20,31 +21,14 @@ import time
 import gymnasium as gym
 import numpy as np
 
-import clutter_gym  # noqa: F401
 from benchmarks.harness import table_header
+from clutter_gym.hard_cases.movable_clutter import stack_scene, tilt_degrees
 
-BOX = (0.3, 0.3, 0.2)  # metres
-MASS = 2.0  # kg
 #: (physics_hz, solver iterations)
 SETTINGS = ((120.0, 10), (120.0, 50), (240.0, 50), (240.0, 100), (480.0, 100), (480.0, 200), (960.0, 100))
 
 
 RATIOS = ((1.0, 1e3), (1.0, 1e2), (1e3, 1.0))  # (bottom, top) kg
-
-
-def stack_scene(n: int, masses: tuple[float, ...] = (), x: float = 1.5) -> dict:
-    """A ClutterNav scene with ``n`` boxes stacked at (x, 0), the robot at the origin; ``masses`` bottom first
-    (default :data:`MASS` each)."""
-    masses = masses or (MASS,) * n
-    boxes = [{"shape": "box", "size": list(BOX), "position": [x, 0.0], "z": BOX[2] * k, "mass": masses[k]}
-             for k in range(n)]
-    return {"obstacles": boxes, "start": [0.0, 0.0, 0.0], "goal": [-2.0, 0.0]}
-
-
-def tilt_degrees(start: np.ndarray, end: np.ndarray) -> np.ndarray:
-    """(k,) rotation angle between rotation matrices ``start`` and ``end`` (k, 3, 3), degrees."""
-    cos = (np.einsum("kij,kij->k", start, end) - 1.0) / 2.0
-    return np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
 
 
 def hold(n: int, physics_hz: float, iterations: int, seconds: float, masses: tuple[float, ...] = ()

@@ -15,9 +15,16 @@ import sys
 import numpy as np
 import pytest
 
-from benchmarks.hard_cases.long_runs import count_nonfinite, cycles_run, growth_per, random_steps, resets_run, steps_run
 from clutter_gym import ENV_IDS
 from clutter_gym.collision import FIDELITY_LEVELS
+from clutter_gym.hard_cases.long_runs import (
+    count_nonfinite,
+    cycles_run,
+    growth_per,
+    random_steps,
+    resets_run,
+    steps_run,
+)
 from clutter_gym.noise.profiles import PROFILE_NAMES
 
 linux_only = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc/self/statm")

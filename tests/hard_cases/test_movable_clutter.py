@@ -3,7 +3,7 @@
 What correct means: a movable obstacle at rest stays where it was put; a pushed one moves and stops at what is in
 its way without passing into it; the collision checker measures it where the physics has it; nothing goes NaN
 at masses from a gram to a tonne or at a 1:1000 ratio in contact; a seed gives the same trajectory. Stacks are
-held at the settings ``benchmarks/hard_cases/stacking.py`` shows they need.
+held at the settings ``python -m benchmarks.hard_cases.stacking`` shows they need.
 """
 
 from __future__ import annotations
@@ -14,11 +14,18 @@ import numpy as np
 import pytest
 from helpers import empty_scene
 
-from benchmarks.hard_cases.stacking import stack_scene, tilt_degrees
-from benchmarks.hard_scenes import PUSH_BOX_HALF, PUSH_WALL_FACE, movable_poses, push_box, tabletop_creep
 from clutter_gym.collision.distance import signed_distance
 from clutter_gym.collision.obstacles import obstacle_object
 from clutter_gym.datatypes import Obstacle
+from clutter_gym.hard_cases.movable_clutter import (
+    PUSH_BOX_HALF,
+    PUSH_WALL_FACE,
+    movable_poses,
+    push_box,
+    stack_scene,
+    tabletop_creep,
+    tilt_degrees,
+)
 from clutter_gym.worlds.pool import inertia
 from clutter_gym.worlds.scene import parse_obstacle
 

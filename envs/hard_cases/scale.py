@@ -2,7 +2,7 @@
 the origin or moved by an offset, and scenes of millimetre obstacles around the robot. The envs have no
 world-offset option, so every obstacle, the arena walls and the robot pose move by the offset (the floor is an
 infinite plane). What was measured with them, and why each tolerance is what it is, is in
-tests/hard_cases/test_scale.py; ``benchmarks.hard_cases.catalogue`` prints short versions of those figures.
+tests/hard_cases/test_scale.py; ``python -m benchmarks.hard_cases.catalogue`` prints short versions of those figures.
 
 Lengths are metres; tolerances named ``*_ULPS`` count units in the last place of the offset (:func:`ulps`).
 """
@@ -23,13 +23,9 @@ from clutter_gym.datatypes import LinkStates, Obstacle, RobotState
 from clutter_gym.robots import DiffDriveRobot
 from clutter_gym.robots.diffdrive import TRACKED_LINKS, DiffDriveConfig
 from clutter_gym.sensors.lidar import Lidar
-from clutter_gym.sim import CYLINDER_SIDES, Sim
-from clutter_gym.util.quiet import quiet_c_output
+from clutter_gym.sim import CYLINDER_SIDES, Sim, pb
 from clutter_gym.util.transforms import quat_to_matrix, yaw_quat
 from clutter_gym.worlds.pool import ObstaclePool, arena_walls
-
-with quiet_c_output():  # pybullet prints its build banner from C when first imported
-    import pybullet as pb
 
 CHASSIS_RADIUS = DiffDriveConfig().footprint_radius  # the chassis cylinder encloses every other link from above
 
