@@ -1,11 +1,8 @@
-"""The speed-against-error report's pieces: Pareto fronts for rates and times, plots, depth resampling."""
+"""The speed-against-error report's pieces: Pareto fronts for rates and times, plots."""
 
 from __future__ import annotations
 
-import numpy as np
-
 from benchmarks.choice import Choice, Row, plot_choice
-from benchmarks.fidelity.camera_resolution import resample
 
 
 def choice(rate: bool, rows: list[Row]) -> Choice:
@@ -33,10 +30,3 @@ def test_plot_writes_a_png(tmp_path):
     rows = [Row("a", 1.0, 0.0, True), Row("b", 100.0, 5.0, False), Row("ref", 3.0, 2.0, False, selectable=False)]
     path = plot_choice(choice(False, rows), tmp_path / "c.png")
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-
-
-def test_resample_samples_pixel_centres():
-    depth = np.arange(16.0).reshape(4, 4)
-    assert np.array_equal(resample(depth, 4), depth)
-    assert np.array_equal(resample(depth, 2), depth[np.ix_([1, 3], [1, 3])])
-    assert np.array_equal(resample(depth, 8), np.repeat(np.repeat(depth, 2, axis=0), 2, axis=1))
