@@ -8,7 +8,7 @@ column says what it counts: env steps/s, physics ticks/s, or checker queries/s w
 of stepping; it was measured on whatever else the machine was doing, so compare it within one run only. A bound of
 "none" is a figure no test holds (a known failure at the defaults, or one the catalogue only reports).
 
-    python -m benchmarks.hard_cases.catalogue [--quick] [--case NAME]
+    python -m benchmarks.hard_cases.catalogue [--quick] [--case NAME ...]
 """
 
 from __future__ import annotations
@@ -398,26 +398,19 @@ def run_case(name: str, quick: bool) -> tuple[Row, float]:
     return row, time.perf_counter() - began
 
 
-def parse(argv: list[str] | None) -> argparse.Namespace:
+def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="shorter runs (fewer seconds, offsets, poses)")
-    parser.add_argument("--case", choices=list(CASES), metavar="NAME",
-                        help="run one case: " + ", ".join(CASES))
-    return parser.parse_args(argv)
-
-
-def main(argv: list[str] | None = None) -> list[Row]:
-    args = parse(argv)
-    names = [args.case] if args.case else list(CASES)
+    parser.add_argument("--case", nargs="+", choices=list(CASES), default=list(CASES), metavar="NAME",
+                        help="run only these cases, of: " + ", ".join(CASES))
+    args = parser.parse_args()
     print(table_header("case", "error figure", "bound it is tested against", "steps/s", "settings"), flush=True)
-    rows, seconds, began = [], {}, time.perf_counter()
-    for name in names:
+    seconds, began = {}, time.perf_counter()
+    for name in args.case:
         row, seconds[name] = run_case(name, args.quick)
-        rows.append(row)
         print(row.markdown(), flush=True)
-    print(f"\n{len(rows)} cases in {time.perf_counter() - began:.0f} s{' (--quick)' if args.quick else ''}: "
+    print(f"\n{len(seconds)} cases in {time.perf_counter() - began:.0f} s{' (--quick)' if args.quick else ''}: "
           + ", ".join(f"{name} {s:.1f} s" for name, s in seconds.items()))
-    return rows
 
 
 if __name__ == "__main__":
