@@ -4,9 +4,11 @@ each part of ``harsh`` on its own and all of it.
 
 The parts: the command's two-step delay, Gaussian noise on the command, and the per-episode dynamics (mass and motor
 strength within +-20 %, friction, restitution). Each cell flies the same held-out layouts (episode ``i`` reset with
-seed ``EVAL_SEED + i``) and reports success / collision episodes with 95% Wilson intervals.
+seed ``EVAL_SEED + i``) and reports success / collision episodes with 95% Wilson intervals. Writes the table to
+``OUT/fly_harsh.md`` and, to ``OUT/fly_harsh.json``, what each column flew under, each row's settings and every
+episode of every cell.
 
-    python -m benchmarks.learning.fly_harsh [--episodes 100] [--out out/fly_harsh] [--workers 2]
+    python -m benchmarks.learning.fly_harsh [--episodes 100] [--out out/fly_harsh] [--workers 2] [--columns NAME ...]
 """
 
 from __future__ import annotations
@@ -63,13 +65,16 @@ def main() -> None:
     parser.add_argument("--episodes", type=int, default=100)
     parser.add_argument("--out", default="out/fly_harsh")
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="processes running cells")
+    parser.add_argument("--columns", nargs="+", choices=list(COLUMNS), default=list(COLUMNS), metavar="NAME",
+                        help="fly only these columns, of: " + ", ".join(f'"{c}"' for c in COLUMNS))
     args = parser.parse_args()
-    lines = ["| flyer on the subgoal | " + " | ".join(f"`{c}`" for c in COLUMNS) + " |",
-             "|---|" + "---|" * len(COLUMNS)]
+    columns = {column: noise for column, noise in COLUMNS.items() if column in args.columns}
+    lines = ["| flyer on the subgoal | " + " | ".join(f"`{c}`" for c in columns) + " |",
+             "|---|" + "---|" * len(columns)]
     with ProcessPoolExecutor(args.workers) as pool:
         futures = {(name, column): pool.submit(cell, reads_ratio, gain, noise, args.episodes)
-                   for name, reads_ratio, gain in ROWS for column, noise in COLUMNS.items()}
-        results = {name: {column: futures[name, column].result() for column in COLUMNS} for name, _, _ in ROWS}
+                   for name, reads_ratio, gain in ROWS for column, noise in columns.items()}
+        results = {name: {column: futures[name, column].result() for column in columns} for name, _, _ in ROWS}
     for name, _, _ in ROWS:
         lines.append(f"| {name} | " + " | ".join(cell_text(rows) for rows in results[name].values()) + " |")
     lines.append(f"\nClutterFly-v0 at its default density. Success / collision episodes, {args.episodes} episodes per "
@@ -77,7 +82,9 @@ def main() -> None:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     write_text_atomically(out / "fly_harsh.md", "\n".join(lines) + "\n")
-    write_text_atomically(out / "fly_harsh.json", json.dumps(results, indent=1))
+    settings = {name: {"thrust_estimate": reads_ratio, "attitude_gain": gain} for name, reads_ratio, gain in ROWS}
+    write_text_atomically(out / "fly_harsh.json",
+                          json.dumps({"columns": columns, "rows": settings, "cells": results}, indent=1))
     print("\n".join(lines))
 
 
