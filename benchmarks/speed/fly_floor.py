@@ -81,6 +81,14 @@ class FlyFloor:
             previous = end + 1
         return wall, cpu, len(ends)
 
+    def retraced(self) -> bool:
+        """Whether the twin's base (position, rotation, velocity) is the recorder's to the bit: the replay flew the
+        recorded flight."""
+        flown, replayed = self.recorder.unwrapped.robot.state(), self.twin.unwrapped.robot.state()
+        return all(np.array_equal(a, b) for a, b in ((flown.position, replayed.position),
+                                                     (flown.rotation, replayed.rotation),
+                                                     (flown.linear_velocity, replayed.linear_velocity)))
+
     def close(self) -> None:
         self.recorder.close()
         self.twin.close()

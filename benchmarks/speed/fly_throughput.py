@@ -15,8 +15,9 @@ audit every step); with a 16-channel x 64-ray LIDAR cast every control step (30 
 "none" profile: no noise is added, the scan is held between updates); with an 84x84 depth camera rendered every
 control step, ray cast (the default) and by TinyRenderer; and the RGB peer. Then the ratios against the issue's
 2x targets, what a camera frame costs either way, the IMU-only step against the raw pybullet work it needs
-(``benchmarks.speed.fly_floor``, replayed on a twin of that env in the same rounds), what the LIDAR's rays cost, and a
-per-phase profile of the IMU-only step from a stopwatched copy of that env, run as one more block per round.
+(``benchmarks.speed.fly_floor``, replayed on a twin of that env in the same rounds), what the LIDAR's rays cost,
+whether the comparison held (the ClutterFly-v0 variants flew one flight, the floor's twin retraced it to the bit),
+and a per-phase profile of the IMU-only step from a stopwatched copy of that env, run as one more block per round.
 
     python -m benchmarks.speed.fly_throughput [--steps 400] [--rounds 6]    # about 2 minutes on 2 shared cores
 """
@@ -174,6 +175,13 @@ def measure(workloads: dict[str, tuple[Any, tuple[int, ...]]], steps: int, round
     figures = alternating_rounds(measures, rounds)
     figures.pop("profile", None)
     return figures
+
+
+def one_flight(workloads: dict[str, tuple[Any, tuple[int, ...]]]) -> bool:
+    """Whether the ClutterFly-v0 variants' robots are where the IMU-only one is, to the bit: they flew one flight
+    (:func:`action_rng`)."""
+    positions = [workloads[label][0].unwrapped.robot.state().position for label in FLY]
+    return all(np.array_equal(p, positions[0]) for p in positions)
 
 
 def median(blocks: list[Block], key: str) -> float:
@@ -382,6 +390,9 @@ def main() -> None:
         scans = {label: time_scans(workloads[label][0]) for label in (LIDAR30, LIDAR10)}
         profile, floor = StepProfile(args.seed), FlyFloor(args.seed)
         blocks = measure(workloads, args.steps, args.rounds, args.seed, profile, floor)
+        for timers in scans.values():  # the rounds' scans only: the call counts below step the envs again
+            timers.active = False
+        same_flight, retraced = one_flight(workloads), floor.retraced()
         step_s, phases = profile.result()
         for label, (env, shape) in workloads.items():  # after the rounds, not to change their trajectories
             calls[label] = pybullet_calls_per_step(env, shape, rng, 30)
@@ -394,6 +405,8 @@ def main() -> None:
     print(f"{args.rounds} alternating rounds of {args.steps} uniform-random-action steps per workload, resets "
           f"counted; medians over blocks\n")
     print(report(blocks, calls, scans))
+    print(f"Checks: the ClutterFly-v0 variants {'flew' if same_flight else 'did NOT fly'} one flight; the floor's twin "
+          f"{'retraced' if retraced else 'did NOT retrace'} the recorded flight to the bit.")
     print(f"\nWhere a ClutterFly-v0 (IMU only) step goes: a seventh workload in the same rounds, stopwatches around "
           f"each part (process CPU time, resets excluded; {profile.steps:,} steps)\n")
     print(profile_report(step_s, phases))
