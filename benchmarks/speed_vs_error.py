@@ -11,6 +11,7 @@ Writes ``docs/speed-vs-error.md`` and one plot per choice in ``docs/speed-vs-err
 
     python -m benchmarks.speed_vs_error            # or: python3 tasks.py bench (about 3 min on 2 cores)
     python -m benchmarks.speed_vs_error --quick    # fewer samples (under a minute)
+    python -m benchmarks.speed_vs_error --sections lidar-rays aero --out out/report    # some sections, elsewhere
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ import contextlib
 import io
 import platform
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import gymnasium as gym
@@ -33,7 +35,7 @@ from clutter_gym.noise.profiles import PROFILE_NAMES
 from clutter_gym.util.atomic import write_text_atomically
 
 DOCS = Path(__file__).resolve().parents[1] / "docs"
-PLOTS = DOCS / "speed-vs-error"
+HEADLINE = "headline"  # the section that opens the report: the default step against its floor and a peer
 REACH_DEFAULT, NAV_DEFAULT = "convex", "primitive"  # ClutterReach-v0's and ClutterNav-v0's collision_fidelity
 NAV_MARGIN_MM = 100.0  # ClutterNav-v0's clearance_margin
 
@@ -288,39 +290,51 @@ def _cell(value: float) -> str:
     return f"{value:,.1f}" if abs(value) < 100 else f"{value:,.0f}"
 
 
+def sections(quick: bool, seed: int) -> dict[str, Callable[[], list[Choice]]]:
+    """The report's sections after the headline, by name: what measures each one's choices."""
+    return {
+        "fidelity": lambda: fidelity_choices(quick, seed),
+        "physics": lambda: [physics_choice()],
+        "lidar-rays": lambda: [lidar_choice(quick, seed)],
+        "cylinders": lambda: [cylinder_choice()],
+        "camera-size": lambda: [camera_choice(quick, seed)],
+        "camera-renderer": lambda: [renderer_choice(quick, seed)],
+        "noise": lambda: [noise_choice(quick, seed)],
+        "aero": lambda: [aero_choice(quick)],
+    }
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="fewer samples per section (under a minute)")
     parser.add_argument("--seed", type=int, default=0)
+    names = [HEADLINE, *sections(False, 0)]
+    parser.add_argument("--sections", nargs="+", choices=names, default=names, metavar="NAME",
+                        help="measure only these sections, of: " + ", ".join(names))
+    parser.add_argument("--out", type=Path, default=DOCS,
+                        help="folder of speed-vs-error.md and its plots (speed-vs-error/); default docs/")
     args = parser.parse_args()
     t0 = time.perf_counter()
-    sections = [
-        ("collision fidelity", lambda: fidelity_choices(args.quick, args.seed)),
-        ("physics", lambda: [physics_choice()]),
-        ("LIDAR rays", lambda: [lidar_choice(args.quick, args.seed)]),
-        ("cylinders", lambda: [cylinder_choice()]),
-        ("camera size", lambda: [camera_choice(args.quick, args.seed)]),
-        ("camera renderer", lambda: [renderer_choice(args.quick, args.seed)]),
-        ("noise profiles", lambda: [noise_choice(args.quick, args.seed)]),
-        ("aerodynamics", lambda: [aero_choice(args.quick)]),
-    ]
     choices: list[Choice] = []
-    for name, measure in sections:
-        t = time.perf_counter()
-        choices += measure()
-        print(f"{name}: {time.perf_counter() - t:.0f} s", flush=True)
-    top = headline(args.quick, args.seed)
-    command = f"python -m benchmarks.speed_vs_error{' --quick' if args.quick else ''}"
+    for name, measure in sections(args.quick, args.seed).items():
+        if name in args.sections:
+            t = time.perf_counter()
+            choices += measure()
+            print(f"{name}: {time.perf_counter() - t:.0f} s", flush=True)
+    options = (" --quick" if args.quick else "") + \
+        ("" if args.sections == names else " --sections " + " ".join(args.sections))
     lines = ["# Speed against error", "",
-             f"Written by `python3 tasks.py bench` (`{command}`, seed {args.seed}) on {platform.machine()} with "
-             f"{platform.python_implementation()} {platform.python_version()}. Every speed figure is measured in "
-             "one process beside the error it costs; "
+             f"Written by `python3 tasks.py bench` (`python -m benchmarks.speed_vs_error{options}`, seed {args.seed}) "
+             f"on {platform.machine()} with {platform.python_implementation()} {platform.python_version()}. Every "
+             "speed figure is measured in one process beside the error it costs; "
              "compare ratios, as absolute times follow the machine. A choice's Pareto front is the settings no other "
-             "is both faster and more accurate than.", "",
-             "## The default step against its floor and a peer", "", *top, ""]
-    PLOTS.mkdir(parents=True, exist_ok=True)
+             "is both faster and more accurate than.", ""]
+    if HEADLINE in args.sections:
+        lines += ["## The default step against its floor and a peer", "", *headline(args.quick, args.seed), ""]
+    plots = args.out / "speed-vs-error"
+    plots.mkdir(parents=True, exist_ok=True)
     for choice in choices:
-        plot_choice(choice, PLOTS / f"{choice.key}.png")
+        plot_choice(choice, plots / f"{choice.key}.png")
         lines += markdown(choice)
     lines += ["## Other benchmarks", "",
               "Not in this report because they answer other questions or run long: "
@@ -331,7 +345,7 @@ def main() -> None:
               "[benchmarks.md](benchmarks.md); those of `benchmarks.hard_cases.large_scenes` (resets and steps with up "
               "to 10,000 obstacles) in [design-notes.md](design-notes.md#large-scenes).", "",
               f"Total wall time: {time.perf_counter() - t0:.0f} s."]
-    write_text_atomically(DOCS / "speed-vs-error.md", "\n".join(lines) + "\n")
+    write_text_atomically(args.out / "speed-vs-error.md", "\n".join(lines) + "\n")
     print("\n".join(lines))
 
 

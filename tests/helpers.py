@@ -32,3 +32,14 @@ def markdown_rows(text: str) -> list[list[str]]:
     """The cells of every markdown table row in ``text`` (header rows included, separator rows left out)."""
     return [[cell.strip() for cell in line.strip()[1:-1].split(" | ")] for line in text.splitlines()
             if line.startswith("| ")]
+
+
+def report_tables(report: str) -> dict[str, list[list[str]]]:
+    """Each ``## section`` of a markdown report that holds a table: its title, and the rows of its first table
+    (header first)."""
+    tables = {}
+    for section in report.split("\n## ")[1:]:
+        title, _, body = section.partition("\n")
+        if "\n| " in body:
+            tables[title] = markdown_rows(body[body.index("\n| ") + 1:].split("\n\n", 1)[0])
+    return tables
