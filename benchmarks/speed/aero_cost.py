@@ -75,9 +75,8 @@ def make_env(aero: tuple[str, ...]) -> gym.Env:
     return gym.make("ClutterFly-v0", sensors=(), aero=aero, success_radius=SUCCESS_RADIUS, max_episode_steps=10_000)
 
 
-def fly(env: gym.Env, flight: Flight, steps: int | None = None) -> tuple[np.ndarray, float]:
-    """The base positions after each step of ``flight`` (``steps`` of them, default the flight's), and the CPU
-    seconds spent in ``env.step``.
+def fly(env: gym.Env, flight: Flight) -> tuple[np.ndarray, float]:
+    """The base positions after each step of ``flight``, and the CPU seconds spent in ``env.step``.
 
     Raises:
         RuntimeError: the episode ended, or the drone touched something (the floor): the flights would not compare
@@ -86,7 +85,7 @@ def fly(env: gym.Env, flight: Flight, steps: int | None = None) -> tuple[np.ndar
     obs, _ = env.reset(options={"scene": flight.scene()})
     flyer = CascadedFlyer.for_env(env, "goal", max_speed=flight.max_speed)
     robot, seconds = env.unwrapped.robot, 0.0
-    path = np.empty((steps or flight.steps, 3))
+    path = np.empty((flight.steps, 3))
     for i in range(len(path)):
         action = flyer(obs)
         t0 = time.process_time()
@@ -117,24 +116,22 @@ def lowest_spawn_height(env: gym.Env) -> float:
     return float(heights[heights > task.robot_radius + task.spec.spawn_clearance].min())
 
 
-def rows(rounds: int = 8, steps: tuple[int, ...] | None = None) -> list[dict]:
+def rows(rounds: int = 8) -> list[dict]:
     """Per setting (in :data:`SETTINGS` order): ``aero``, ``label``, ``rate`` (median steps per CPU-second),
     ``error_mm`` (largest distance from the reference over both flights), ``mean_mm`` (mean over both flights'
     steps), ``<flight>_mm`` (largest per flight), ``lift_low`` and ``lift_spawn`` (the hover lift the setting adds to
     that without ``aero``, a share of gravity, at the low flight's start and at :func:`lowest_spawn_height`, whose
-    value is ``spawn_height``), ``default`` and
-    ``reference``. ``steps`` overrides the flights' step counts (one per flight)."""
-    counts = steps or tuple(f.steps for f in FLIGHTS)
+    value is ``spawn_height``), ``default`` and ``reference``."""
     envs = {aero: make_env(aero) for aero in SETTINGS}
     paths: dict[tuple[str, ...], list[np.ndarray]] = {}
 
     def measure(aero: tuple[str, ...]) -> float:
-        flown = [fly(envs[aero], flight, n) for flight, n in zip(FLIGHTS, counts)]
+        flown = [fly(envs[aero], flight) for flight in FLIGHTS]
         if aero not in paths:
             paths[aero] = [p for p, _ in flown]
         elif not all(np.array_equal(p, q) for (p, _), q in zip(flown, paths[aero])):
             raise RuntimeError(f"aero={aero} flew a different path in a later round: the timings would differ")
-        return sum(counts) / sum(s for _, s in flown)
+        return sum(f.steps for f in FLIGHTS) / sum(s for _, s in flown)
 
     rates = alternating_rounds({aero: (lambda aero=aero: measure(aero)) for aero in SETTINGS}, rounds)
     spawn = lowest_spawn_height(envs[DEFAULT])
