@@ -109,10 +109,10 @@ def run_block(env, actions: np.ndarray) -> Block:
     return Block(len(actions), step_wall, reset_wall, step_cpu, reset_cpu, resets)
 
 
-def make_workloads(labels=None, seed: int = 0) -> dict[str, tuple[Any, tuple[int, ...]]]:
-    """The workloads named by ``labels`` (all by default), built and reset with ``seed``: label -> (env, shape)."""
+def make_workloads(seed: int = 0) -> dict[str, tuple[Any, tuple[int, ...]]]:
+    """Every workload, built and reset with ``seed``: label -> (env, shape)."""
     out = {}
-    for label in labels or WORKLOADS:
+    for label in WORKLOADS:
         factory, shape = WORKLOADS[label]
         env = factory()
         if isinstance(env, gym.Env):
@@ -292,16 +292,6 @@ class StepProfile:
 
     def close(self) -> None:
         self.env.close()
-
-
-def phase_profile(steps: int, seed: int = 0) -> tuple[float, dict[str, tuple[float, float]]]:
-    """``StepProfile.result`` after ``steps`` steps of a fresh profiled env."""
-    profile = StepProfile(seed)
-    try:
-        profile.run(steps)
-        return profile.result()
-    finally:
-        profile.close()
 
 
 # -- report -------------------------------------------------------------------------------------------------------
