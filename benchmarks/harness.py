@@ -14,7 +14,6 @@ import gymnasium as gym
 import numpy as np
 
 from clutter_gym.datatypes import RobotState
-from clutter_gym.training.baselines import PotentialFieldNavigator
 from clutter_gym.util.quiet import quiet_c_output
 
 with quiet_c_output():  # pybullet prints its build banner on import
@@ -74,6 +73,9 @@ class EnvRunner:
 def navigator_states(env: gym.Env, steps: int, seed: int) -> Iterator[RobotState]:
     """Drive ClutterNav-v0 ``env`` with the scripted navigator from ``seed`` (resetting where episodes end) and
     yield the robot's state after each of ``steps`` steps: poses among clutter, as a policy meets them."""
+    # imported here: clutter_gym.training imports torch, which the scripts that drive no navigator need not load
+    from clutter_gym.training.baselines import PotentialFieldNavigator
+
     obs, _ = env.reset(seed=seed)
     navigator = PotentialFieldNavigator.for_env(env)
     for _ in range(steps):

@@ -11,6 +11,7 @@ Writes ``docs/speed-vs-error.md`` and one plot per choice in ``docs/speed-vs-err
 
     python -m benchmarks.speed_vs_error            # or: python3 tasks.py bench (about 3 min on 2 cores)
     python -m benchmarks.speed_vs_error --quick    # fewer samples (under a minute)
+    python -m benchmarks.speed_vs_error --sections lidar-rays aero --out out/report    # some sections, elsewhere
 """
 
 from __future__ import annotations
@@ -20,29 +21,21 @@ import contextlib
 import io
 import platform
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
 
-from benchmarks import (
-    aero_cost,
-    camera_renderer,
-    camera_resolution,
-    collision_fidelity,
-    cylinder_rays,
-    lidar_resolution,
-    noise_cost,
-    physics_rate,
-    throughput,
-)
 from benchmarks.choice import Choice, Row, plot_choice
+from benchmarks.fidelity import camera_renderer, camera_resolution, collision_fidelity, cylinder_rays, lidar_resolution
 from benchmarks.harness import table_header
+from benchmarks.speed import aero_cost, noise_cost, physics_rate, throughput
 from clutter_gym.noise.profiles import PROFILE_NAMES
 from clutter_gym.util.atomic import write_text_atomically
 
 DOCS = Path(__file__).resolve().parents[1] / "docs"
-PLOTS = DOCS / "speed-vs-error"
+HEADLINE = "headline"  # the section that opens the report: the default step against its floor and a peer
 REACH_DEFAULT, NAV_DEFAULT = "convex", "primitive"  # ClutterReach-v0's and ClutterNav-v0's collision_fidelity
 NAV_MARGIN_MM = 100.0  # ClutterNav-v0's clearance_margin
 
@@ -62,8 +55,9 @@ def fidelity_choices(quick: bool, seed: int) -> list[Choice]:
         bullet = cf.pybullet_table(panda, panda_cases, panda_res)
     n = sum(len(c["q"]) for c in panda_cases)
     method = (f"{n} configurations per robot whose `mesh` clearance is in (0, {cf.NEAR}] m, in seeded scenes "
-              f"(`python -m benchmarks.collision_fidelity` has the full tables). Speed: one environment clearance "
-              f"query (`model.sync` + `checker.clearance`, range {cf.RANGE} m). Error: mean |min clearance - mesh|.")
+              f"(`python -m benchmarks.fidelity.collision_fidelity` has the full tables). Speed: one environment "
+              f"clearance query (`model.sync` + `checker.clearance`, range {cf.RANGE} m). Error: mean |min clearance - "
+              f"mesh|.")
 
     def rows(res: dict, default: str) -> list[Row]:
         out = []
@@ -233,7 +227,7 @@ def aero_choice(quick: bool) -> Choice:
               f"flight's largest as extra columns). Speed: steps per CPU-second of `env.step` over the same flights, "
               f"median of alternating rounds. Hover lift: the open-loop vertical acceleration of one control step of "
               f"the hover command from rest, as a share of g, at the low start and at the lowest height the scene "
-              f"generator spawns at ({spawn:.1f} m), less that without `aero`. `python -m benchmarks.aero_cost` "
+              f"generator spawns at ({spawn:.1f} m), less that without `aero`. `python -m benchmarks.speed.aero_cost` "
               f"prints the table alone.")
     at = {r["label"]: {f.name: r[f"{f.name}_mm"] for f in flights} for r in measured}
     no_drag, no_ground = at[ground["label"]], at[drag["label"]]  # the rows that leave drag, ground effect out
@@ -263,7 +257,8 @@ def headline(quick: bool, seed: int) -> list[str]:
     resets = 1e3 * throughput.reset_times(env, 100 if quick else 500, warmup=200)
     env.close()
     lines = [f"ClutterNav-v0 at its defaults (64-beam LIDAR, IMU, FCL clearance, contacts and swept checks), "
-             f"scripted navigator, {rounds} alternating blocks of 1,000 steps (`python -m benchmarks.throughput`):",
+             f"scripted navigator, {rounds} alternating blocks of 1,000 steps "
+             f"(`python -m benchmarks.speed.throughput`):",
              "", f"- {nav['env']:,.0f} steps/s, {nav['ratio']:.2f}x the time of the raw pybullet work a step needs "
              f"(motors, physics, state reads, rays: {nav['floor']:,.0f} steps/s);"]
     if "peer" in nav:
@@ -295,49 +290,62 @@ def _cell(value: float) -> str:
     return f"{value:,.1f}" if abs(value) < 100 else f"{value:,.0f}"
 
 
+def sections(quick: bool, seed: int) -> dict[str, Callable[[], list[Choice]]]:
+    """The report's sections after the headline, by name: what measures each one's choices."""
+    return {
+        "fidelity": lambda: fidelity_choices(quick, seed),
+        "physics": lambda: [physics_choice()],
+        "lidar-rays": lambda: [lidar_choice(quick, seed)],
+        "cylinders": lambda: [cylinder_choice()],
+        "camera-size": lambda: [camera_choice(quick, seed)],
+        "camera-renderer": lambda: [renderer_choice(quick, seed)],
+        "noise": lambda: [noise_choice(quick, seed)],
+        "aero": lambda: [aero_choice(quick)],
+    }
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="fewer samples per section (under a minute)")
     parser.add_argument("--seed", type=int, default=0)
+    names = [HEADLINE, *sections(False, 0)]
+    parser.add_argument("--sections", nargs="+", choices=names, default=names, metavar="NAME",
+                        help="measure only these sections, of: " + ", ".join(names))
+    parser.add_argument("--out", type=Path, default=DOCS,
+                        help="folder of speed-vs-error.md and its plots (speed-vs-error/); default docs/")
     args = parser.parse_args()
     t0 = time.perf_counter()
-    sections = [
-        ("collision fidelity", lambda: fidelity_choices(args.quick, args.seed)),
-        ("physics", lambda: [physics_choice()]),
-        ("LIDAR rays", lambda: [lidar_choice(args.quick, args.seed)]),
-        ("cylinders", lambda: [cylinder_choice()]),
-        ("camera size", lambda: [camera_choice(args.quick, args.seed)]),
-        ("camera renderer", lambda: [renderer_choice(args.quick, args.seed)]),
-        ("noise profiles", lambda: [noise_choice(args.quick, args.seed)]),
-        ("aerodynamics", lambda: [aero_choice(args.quick)]),
-    ]
     choices: list[Choice] = []
-    for name, measure in sections:
-        t = time.perf_counter()
-        choices += measure()
-        print(f"{name}: {time.perf_counter() - t:.0f} s", flush=True)
-    top = headline(args.quick, args.seed)
-    command = f"python -m benchmarks.speed_vs_error{' --quick' if args.quick else ''}"
+    for name, measure in sections(args.quick, args.seed).items():
+        if name in args.sections:
+            t = time.perf_counter()
+            choices += measure()
+            print(f"{name}: {time.perf_counter() - t:.0f} s", flush=True)
+    options = (" --quick" if args.quick else "") + \
+        ("" if args.sections == names else " --sections " + " ".join(args.sections))
     lines = ["# Speed against error", "",
-             f"Written by `python3 tasks.py bench` (`{command}`, seed {args.seed}) on {platform.machine()} with "
-             f"{platform.python_implementation()} {platform.python_version()}. Every speed figure is measured in "
-             "one process beside the error it costs; "
+             f"Written by `python3 tasks.py bench` (`python -m benchmarks.speed_vs_error{options}`, seed {args.seed}) "
+             f"on {platform.machine()} with {platform.python_implementation()} {platform.python_version()}. Every "
+             "speed figure is measured in one process beside the error it costs; "
              "compare ratios, as absolute times follow the machine. A choice's Pareto front is the settings no other "
-             "is both faster and more accurate than.", "",
-             "## The default step against its floor and a peer", "", *top, ""]
-    PLOTS.mkdir(parents=True, exist_ok=True)
+             "is both faster and more accurate than.", ""]
+    if HEADLINE in args.sections:
+        lines += ["## The default step against its floor and a peer", "", *headline(args.quick, args.seed), ""]
+    plots = args.out / "speed-vs-error"
+    plots.mkdir(parents=True, exist_ok=True)
     for choice in choices:
-        plot_choice(choice, PLOTS / f"{choice.key}.png")
+        plot_choice(choice, plots / f"{choice.key}.png")
         lines += markdown(choice)
     lines += ["## Other benchmarks", "",
-              "Not in this report because they answer other questions or run long: `benchmarks.camera_throughput` "
-              "(the RGB-D env against gym-pybullet-drones), `benchmarks.vec_throughput` (vector envs), "
-              "`benchmarks.memory` (memory over many resets), `benchmarks.contact_agreement` and "
-              "`benchmarks.fcl_accuracy` (FCL against pybullet and closed forms), `benchmarks.learning` (PPO curves). "
-              "Their results are in [benchmarks.md](benchmarks.md); those of `benchmarks.large_scenes` (resets and "
-              "steps with up to 10,000 obstacles) in [design-notes.md](design-notes.md#large-scenes).", "",
+              "Not in this report because they answer other questions or run long: "
+              "`benchmarks.speed.camera_throughput` (the RGB-D env against gym-pybullet-drones), "
+              "`benchmarks.speed.vec_throughput` (vector envs), `benchmarks.hard_cases.memory` (memory over many "
+              "resets), `benchmarks.fidelity.contact_agreement` and `benchmarks.fidelity.fcl_accuracy` (FCL against "
+              "pybullet and closed forms), `benchmarks.learning.main_job` (PPO curves). Their results are in "
+              "[benchmarks.md](benchmarks.md); those of `benchmarks.hard_cases.large_scenes` (resets and steps with up "
+              "to 10,000 obstacles) in [design-notes.md](design-notes.md#large-scenes).", "",
               f"Total wall time: {time.perf_counter() - t0:.0f} s."]
-    write_text_atomically(DOCS / "speed-vs-error.md", "\n".join(lines) + "\n")
+    write_text_atomically(args.out / "speed-vs-error.md", "\n".join(lines) + "\n")
     print("\n".join(lines))
 
 

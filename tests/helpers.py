@@ -6,6 +6,11 @@ which pytest loads by itself and which is never imported.
 
 from __future__ import annotations
 
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
 CHASSIS_RADIUS = 0.17  # diffbot.urdf: the chassis cylinder encloses every other link seen from above
 SHELF_SEED = 1_000_000  # the first ClutterReach evaluation layout: its target is inside the shelf, no straight line
 # reaches it
@@ -14,3 +19,27 @@ SHELF_SEED = 1_000_000  # the first ClutterReach evaluation layout: its target i
 def empty_scene(start=(0.0, 0.0, 0.0), goal=(2.5, 2.5), obstacles=()) -> dict:
     """A ClutterNav scene in the reset-options format: no obstacles unless given."""
     return {"obstacles": list(obstacles), "start": list(start), "goal": list(goal)}
+
+
+def run_benchmark(module: str, *args: str, timeout: float = 300.0) -> subprocess.CompletedProcess:
+    """``python -m module args`` from the repository root, as a user runs a benchmark: tests run benchmarks in a
+    process of their own rather than import them. Its exit code, stdout and stderr (text)."""
+    return subprocess.run([sys.executable, "-m", module, *args], capture_output=True, text=True, timeout=timeout,
+                          cwd=ROOT)
+
+
+def markdown_rows(text: str) -> list[list[str]]:
+    """The cells of every markdown table row in ``text`` (header rows included, separator rows left out)."""
+    return [[cell.strip() for cell in line.strip()[1:-1].split(" | ")] for line in text.splitlines()
+            if line.startswith("| ")]
+
+
+def report_tables(report: str) -> dict[str, list[list[str]]]:
+    """Each ``## section`` of a markdown report that holds a table: its title, and the rows of its first table
+    (header first)."""
+    tables = {}
+    for section in report.split("\n## ")[1:]:
+        title, _, body = section.partition("\n")
+        if "\n| " in body:
+            tables[title] = markdown_rows(body[body.index("\n| ") + 1:].split("\n\n", 1)[0])
+    return tables

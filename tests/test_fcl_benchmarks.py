@@ -3,9 +3,11 @@ measures and survive the poses where FCL's raw signed query aborts the process.
 
 FCL 0.7's EPA throws a C++ ``std::logic_error`` that python-fcl does not translate when two faces touch with a tiny
 tilt, which ends the whole process; ``clutter_gym.collision.distance.signed_distance`` asks ``fcl.collide`` first
-(tests/hard_cases/test_degenerate_meshes.py). The poses below are two of the 800 seeded touching poses of that test
-that abort the raw query (``enable_signed_distance``); each benchmark function runs on them in a child process, so
-an abort fails this test instead of ending the run.
+(tests/hard_cases/test_degenerate_meshes.py). ``benchmarks.fidelity.fcl_accuracy`` asks it with each of FCL's GJK
+solvers, and the brute force of ``benchmarks.fidelity.collision_fidelity`` for a robot model's shapes with their
+solids; no benchmark asks FCL's raw signed query itself. The poses below are two of the 800 seeded touching poses of
+that test that abort the raw query (``enable_signed_distance``); the guarded query is asked both ways on them in a
+child process, so an abort fails this test instead of ending the run.
 """
 
 from __future__ import annotations
@@ -39,27 +41,38 @@ def run_child(code: str) -> subprocess.CompletedProcess:
 
 
 @pytest.mark.parametrize("solver", ["GST_LIBCCD", "GST_INDEP"])
-def test_fcl_accuracy_measures_touching_tilted_boxes_without_aborting(solver):
+def test_each_gjk_solver_measures_touching_tilted_boxes_without_aborting(solver):
+    """As ``fcl_accuracy`` asks: a shape at each pose against an obstacle, with the solver it compares."""
     result = run_child(f"""
-        from benchmarks.fcl_accuracy import clearances
-        d = clearances(fcl.Box(0.2, 0.2, 0.2), poses, [obstacle], fcl.GJKSolverType.{solver})
-        assert d.shape == (2, 1) and np.all(np.abs(d) <= reach), d
-        print("checked")
-    """)
-    assert result.returncode == 0 and "checked" in result.stdout, (result.returncode, result.stderr[-2000:])
-
-
-def test_collision_fidelity_brute_force_measures_touching_tilted_boxes_without_aborting(tmp_path):
-    urdf = tmp_path / "box.urdf"
-    urdf.write_text('<robot name="box"><link name="part"><collision><geometry><box size="0.2 0.2 0.2"/></geometry>'
-                    '</collision></link></robot>\n')
-    result = run_child(f"""
-        from benchmarks.collision_fidelity import brute_force
-        from clutter_gym.collision import RobotCollisionModel
-        model = RobotCollisionModel.from_urdf({str(urdf)!r}, "primitive", ("part",), self_collision=False)
+        from clutter_gym.collision.distance import signed_distance
         for rotation, position in poses:
-            d = brute_force(model, [0], [obstacle], position[None], rotation[None])
+            box = fcl.CollisionObject(fcl.Box(0.2, 0.2, 0.2), fcl.Transform(rotation, position))
+            d = signed_distance(box, obstacle, solver=fcl.GJKSolverType.{solver})[0]
             assert abs(d) <= reach, d
         print("checked")
     """)
     assert result.returncode == 0 and "checked" in result.stdout, (result.returncode, result.stderr[-2000:])
+
+
+def test_a_robot_models_shape_measures_touching_tilted_boxes_without_aborting(tmp_path):
+    """As ``collision_fidelity``'s brute force asks: a robot model's shape, its solid answering in overlap."""
+    urdf = tmp_path / "box.urdf"
+    urdf.write_text('<robot name="box"><link name="part"><collision><geometry><box size="0.2 0.2 0.2"/></geometry>'
+                    '</collision></link></robot>\n')
+    result = run_child(f"""
+        from clutter_gym.collision import RobotCollisionModel
+        from clutter_gym.collision.distance import signed_distance
+        model = RobotCollisionModel.from_urdf({str(urdf)!r}, "primitive", ("part",), self_collision=False)
+        for rotation, position in poses:
+            model.sync(position[None], rotation[None])
+            d = signed_distance(model.objects[0], obstacle, model.solid_objects[0])[0]
+            assert abs(d) <= reach, d
+        print("checked")
+    """)
+    assert result.returncode == 0 and "checked" in result.stdout, (result.returncode, result.stderr[-2000:])
+
+
+def test_no_benchmark_asks_fcls_raw_signed_query():
+    raw = [path.relative_to(ROOT).as_posix() for path in sorted((ROOT / "benchmarks").rglob("*.py"))
+           if "enable_signed_distance" in path.read_text(encoding="utf-8")]
+    assert not raw, f"ask clutter_gym.collision.distance.signed_distance instead: {raw}"

@@ -1,128 +1,96 @@
-"""benchmarks.fly_throughput and its HoverAviary KIN peer, run for a few steps: no timing is asserted."""
+"""``python -m benchmarks.speed.fly_throughput`` for two short rounds and ``python -m benchmarks.peers.hover`` (the
+facts its HoverAviary KIN peer reproduces), run as a user runs them: no timing is asserted."""
 
 from __future__ import annotations
 
 import math
+import re
 
-import numpy as np
 import pytest
+from helpers import markdown_rows, run_benchmark
 
-from benchmarks.fly_floor import FlyFloor
-from benchmarks.fly_throughput import (
-    FLOOR,
-    FLY,
-    IMU,
-    KIN_PEER,
-    LIDAR10,
-    LIDAR30,
-    PHASES,
-    WORKLOADS,
-    make_workloads,
-    measure,
-    phase_profile,
-    pybullet_calls_per_step,
-    report,
-    time_scans,
-)
-from benchmarks.peers.hover import CALLS_PER_RESET, CALLS_PER_STEP, KIN_SHAPE, HoverKinPeer, count_pybullet_calls
+#: seed 5's random actions end an IMU-only episode at step 39: the rounds' 60 steps replay a reset on the floor
+FLIGHT = ("--steps", "30", "--rounds", "2", "--seed", "5")
+WORKLOADS = 7
 
 
-@pytest.fixture
+@pytest.fixture(scope="module")
 def peer():
-    env = HoverKinPeer()
-    yield env
-    env.close()
+    run = run_benchmark("benchmarks.peers.hover")
+    assert run.returncode == 0, run.stderr[-3000:]
+    return run.stdout
+
+
+@pytest.fixture(scope="module")
+def bench():
+    run = run_benchmark("benchmarks.speed.fly_throughput", *FLIGHT)
+    assert run.returncode == 0, run.stderr[-3000:]
+    return run.stdout
 
 
 def test_peer_observation_has_gym_pybullet_drones_kin_shape(peer):
     """12 kinematic values and 15 buffered 4-value actions (half a second at 30 Hz), for one drone."""
-    assert KIN_SHAPE == (1, 72)
-    obs, info = peer.reset(seed=0)
-    assert obs.shape == peer.observation_space.shape == KIN_SHAPE and info == {"answer": 42}
-    action = np.full((1, 4), 0.5, dtype=np.float32)
-    obs, reward, terminated, truncated, _ = peer.step(action)
-    assert obs.shape == KIN_SHAPE and np.all(np.isfinite(obs))
-    assert np.array_equal(obs[0, -4:], action[0])  # the newest action is the buffer's last entry
-    assert 0.0 <= reward <= 2.0 and not terminated and not truncated
+    assert "observation: shape (1, 72) (upstream's (1, 72)), space (1, 72); info {'answer': 42}" in peer
+    step = re.search(r"the newest action is the observation's last 4 values: True; finite: True; reward (\S+), "
+                     r"terminated False, truncated False", peer)
+    assert step and 0.0 <= float(step.group(1)) <= 2.0, peer
 
 
 def test_peer_makes_the_upstream_pybullet_calls(peer):
     """Per step 8 ticks of 4 rotor forces, the yaw torque and stepSimulation, then one kinematics read."""
-    peer.reset(seed=0)
-    calls = count_pybullet_calls(lambda: peer.step(np.zeros((1, 4), dtype=np.float32)))
-    assert calls == {"applyExternalForce": 32, "applyExternalTorque": 8, "stepSimulation": 8,
-                     "getBasePositionAndOrientation": 1, "getEulerFromQuaternion": 1, "getBaseVelocity": 1}
-    assert sum(calls.values()) == CALLS_PER_STEP == 51
-    assert sum(count_pybullet_calls(lambda: peer.reset()).values()) == CALLS_PER_RESET
+    calls = re.search(r"pybullet calls per step: 51 \(upstream's 51\): (.*); per reset: 11 \(upstream's 11\)", peer)
+    assert calls, peer
+    assert dict((name, int(n)) for name, n in (c.split() for c in calls.group(1).split(", "))) == {
+        "applyExternalForce": 32, "applyExternalTorque": 8, "stepSimulation": 8, "getBasePositionAndOrientation": 1,
+        "getEulerFromQuaternion": 1, "getBaseVelocity": 1}
 
 
 def test_peer_truncation_rules(peer):
     """Hover RPMs hold the drone still until the 8 s limit (the step whose counter before it passes 1,920 ticks);
     a roll command ends the episode on the 0.4 rad tilt rule long before."""
-    peer.reset(seed=0)
-    steps, truncated = 0, False
-    while not truncated:
-        obs, _, terminated, truncated, _ = peer.step(np.zeros((1, 4), dtype=np.float32))
-        steps += 1
-        assert not terminated
-    assert steps == 242 and abs(obs[0, 2] - 0.1125) < 1e-3
-    peer.reset()
-    roll = np.array([[-1.0, -1.0, 1.0, 1.0]], dtype=np.float32)  # right rotors slow, left fast: roll right
-    for steps in range(1, 100):
-        obs, _, _, truncated, _ = peer.step(roll)
-        if truncated:
-            break
-    assert truncated and steps < 60 and abs(obs[0, 3]) > 0.4
+    hover = re.search(r"hover RPMs .*: truncated after (\d+) steps, terminated before: False; z (\S+) m", peer)
+    assert hover and int(hover.group(1)) == 242 and abs(float(hover.group(2)) - 0.1125) < 1e-3, peer
+    roll = re.search(r"roll command .*: truncated after (\d+) steps, terminated before: False; .* roll (\S+) rad", peer)
+    assert roll and int(roll.group(1)) < 60 and abs(float(roll.group(2))) > 0.4, peer
 
 
-def test_every_workload_gives_finite_positive_rates():
-    workloads = make_workloads()
-    assert list(workloads) == list(WORKLOADS)
-    floor = FlyFloor(0)
-    try:
-        calls = {label: pybullet_calls_per_step(env, shape, np.random.default_rng(0), 2)
-                 for label, (env, shape) in workloads.items()}
-        scans = {label: time_scans(workloads[label][0]) for label in (LIDAR30, LIDAR10)}
-        blocks = measure(workloads, steps=3, rounds=2, floor=floor)
-        # one action stream for every ClutterFly-v0 variant: the same flight, whatever the sensors
-        positions = [workloads[label][0].unwrapped.robot.state().position for label in FLY]
-        assert all(np.array_equal(p, positions[0]) for p in positions)
-    finally:
-        for env, _ in workloads.values():
-            env.close()
-        floor.close()
-    assert calls[KIN_PEER] == CALLS_PER_STEP and calls[IMU] > 0
-    for label, bs in blocks.items():
-        assert len(bs) == 2, label
-        for b in bs:
-            for rate in (b.rate, b.cpu_rate, b.cpu_step_rate):
-                assert math.isfinite(rate) and rate > 0.0, (label, b)
-    assert scans[LIDAR30].calls["scan"] == 6  # a 30 Hz LIDAR scans on every one of the 2 x 3 steps
-    assert 1 <= scans[LIDAR10].calls["scan"] <= 6 and scans[LIDAR30].seconds["scan"] > 0.0
-    text = report(blocks, calls, scans)
-    assert text.count("\n| ") == len(WORKLOADS) and "Kinematic:" in text and "Camera:" in text
-    assert FLOOR in blocks and "Floor:" in text
+def workload_rows(bench: str) -> dict[str, list[str]]:
+    table = bench.split("\n\n")[1]
+    return {cells[0]: cells[1:] for cells in markdown_rows(table)[1:]}
 
 
-def test_the_floor_replays_the_recorded_flight_exactly():
-    """The twin, given the recorder's forces tick by tick and reset where its episodes ended, retraces its flight:
-    the same scenes, the same physics, the same final state to the bit."""
-    floor = FlyFloor(0)
-    try:
-        wall, cpu, resets = floor.run(np.random.default_rng(3).uniform(-1.0, 1.0, (300, 4)).astype(np.float32))
-        flown, replayed = floor.recorder.unwrapped.robot.state(), floor.twin.unwrapped.robot.state()
-    finally:
-        floor.close()
-    assert resets >= 1 and wall > 0.0 and cpu > 0.0
-    for a, b in ((flown.position, replayed.position), (flown.rotation, replayed.rotation),
-                 (flown.linear_velocity, replayed.linear_velocity)):
-        np.testing.assert_array_equal(a, b)
+def test_every_workload_gives_finite_positive_rates(bench):
+    rows = workload_rows(bench)
+    assert len(rows) == WORKLOADS
+    for label, cells in rows.items():
+        for rate in cells[:3]:  # wall-clock, per CPU-s, per CPU-s in step() alone
+            assert math.isfinite(float(rate.replace(",", ""))) and float(rate.replace(",", "")) > 0.0, (label, cells)
+    assert rows["peer: HoverAviary KIN (rebuilt)"][5] == "51.0"  # pybullet calls per step: the peer's upstream 51
+    assert float(rows["ClutterFly-v0, IMU only"][5]) > 0.0
+    assert all(line in bench for line in ("\nKinematic:", "\nCamera:", "\nFloor:"))
 
 
-def test_phase_profile_accounts_for_the_step():
-    step_s, phases = phase_profile(steps=4)
-    assert step_s > 0.0
-    top = [phases[name][0] for name, indent in PHASES if indent == 0]
-    assert all(s > 0.0 for s in top)
-    assert sum(top) <= step_s
-    assert phases[PHASES[0][0]][1] == 8 and phases[PHASES[1][0]][1] == 8  # 8 physics ticks a step
+def test_the_lidar_is_cast_at_its_rate(bench):
+    """A 30 Hz LIDAR scans on every control step (and once more at a reset), a 10 Hz one on some."""
+    found = re.findall(r"\+ LIDAR 16x64 at (\d+) Hz: .* The rays: ([\d.]+) scans a step at ([\d,]+) us", bench)
+    scans = {hz: (float(per_step), float(us.replace(",", ""))) for hz, per_step, us in found}
+    assert 1.0 <= scans["30"][0] <= 1.05 and scans["30"][1] > 0.0, scans
+    assert 0.0 < scans["10"][0] < 1.0, scans
+
+
+def test_the_variants_fly_one_flight_and_the_floor_replays_it_across_a_reset(bench):
+    """Every ClutterFly-v0 variant draws one action stream, so they fly the same flight and differ only in their
+    sensors; the floor's twin, given the recorder's forces tick by tick and reset where its episodes ended, retraces
+    the flight to the bit."""
+    assert float(workload_rows(bench)["ClutterFly-v0, IMU only"][3]) > 0.0  # resets per 1,000 steps: one was replayed
+    assert "Checks: the ClutterFly-v0 variants flew one flight; the floor's twin retraced the recorded flight" in bench
+
+
+def test_phase_profile_accounts_for_the_step(bench):
+    profile = markdown_rows(bench.split("Where a ClutterFly-v0 (IMU only) step goes")[1])[1:]
+    total = float(profile[-1][1].replace(",", ""))
+    top = [cells for cells in profile[:-2] if not cells[0].startswith("&nbsp;")]
+    assert total > 0.0 and all(float(cells[1].replace(",", "")) > 0.0 for cells in top)
+    rest = profile[-2]
+    assert rest[0].startswith("rest") and float(rest[1].replace(",", "")) >= 0.0  # the top phases fit in the step
+    assert top[0][3] == "8" and top[1][3] == "8"  # 8 physics ticks a step

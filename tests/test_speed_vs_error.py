@@ -1,42 +1,63 @@
-"""The speed-against-error report's pieces: Pareto fronts for rates and times, plots, depth resampling."""
+"""The speed-against-error report (``python -m benchmarks.speed_vs_error``), run as a user runs it on two sections
+(conftest's ``speed_vs_error_report``): each table's Pareto front is the settings no other is both at least as fast
+as and at least as accurate as (and better in one), where speed is a time (the LIDAR's scan: lower is faster) or a
+rate (the aerodynamics' steps per CPU-second: higher is faster); each choice has its plot.
+
+The report prints three significant figures, so a row is judged only where its printed figures settle it: a row
+another beats on both beyond their rounding is off the front, and a row no other could match on both is on it."""
 
 from __future__ import annotations
 
-import numpy as np
+import math
 
-from benchmarks.camera_resolution import resample
-from benchmarks.choice import Choice, Row, plot_choice
+import pytest
+from helpers import report_tables
 
-
-def choice(rate: bool, rows: list[Row]) -> Choice:
-    return Choice("k", "title", "`x`", "speed", rate, "error", rows, "method", "why")
+SECTIONS = {"LIDAR ray count": ("lidar-rays", False), "Aerodynamics (ClutterFly-v0)": ("aero", True)}
 
 
-def test_pareto_front_of_times_keeps_only_undominated_rows():
-    rows = [Row("fast, rough", 1.0, 10.0, False), Row("slow, exact", 10.0, 0.0, True),
-            Row("dominated", 5.0, 12.0, False), Row("middle", 3.0, 4.0, False),
-            Row("reference", 0.5, 0.0, False, selectable=False)]
-    assert choice(False, rows).pareto() == {"fast, rough", "slow, exact", "middle"}
+def printed(cell: str) -> tuple[float, float]:
+    """A figure as the report prints it, and half a unit of its last printed digit."""
+    value = float(cell.replace(",", ""))
+    if value == 0.0:
+        return 0.0, 0.0
+    if abs(value) < 1:  # three significant figures
+        return value, 0.5 * 10 ** (math.floor(math.log10(abs(value))) - 2)
+    return value, 0.05 if "." in cell else 0.5
 
 
-def test_pareto_front_of_rates_prefers_higher_rates():
-    rows = [Row("a", 100.0, 1.0, True), Row("b", 200.0, 1.0, False), Row("c", 50.0, 0.5, False)]
-    assert choice(True, rows).pareto() == {"b", "c"}
+@pytest.fixture(scope="module")
+def tables(speed_vs_error_report):
+    return report_tables((speed_vs_error_report / "speed-vs-error.md").read_text(encoding="utf-8"))
 
 
-def test_equal_rows_do_not_dominate_each_other():
-    rows = [Row("a", 1.0, 1.0, True), Row("b", 1.0, 1.0, False)]
-    assert choice(False, rows).pareto() == {"a", "b"}
+@pytest.mark.parametrize("title", SECTIONS)
+def test_the_front_is_the_rows_no_other_beats_on_speed_and_error(tables, title):
+    _, rate = SECTIONS[title]
+    header, *rows = tables[title]
+    assert header[-1] == "Pareto front"
+    sign = 1.0 if rate else -1.0  # faster is larger once a time is negated
+    figures = []
+    for cells in rows:
+        (speed, speed_err), (error, error_err) = printed(cells[1]), printed(cells[2])
+        figures.append(((sign * speed - speed_err, sign * speed + speed_err), (error - error_err, error + error_err)))
+    decided = 0
+    for i, ((fast_lo, fast_hi), (err_lo, err_hi)) in enumerate(figures):
+        others = [f for j, f in enumerate(figures) if j != i]
+        beaten = any(o_fast[0] >= fast_hi and o_err[1] <= err_lo and (o_fast[0] > fast_hi or o_err[1] < err_lo)
+                     for o_fast, o_err in others)
+        matchable = any(o_fast[1] >= fast_lo and o_err[0] <= err_hi for o_fast, o_err in others)
+        if beaten:
+            assert rows[i][-1] == "", rows[i]
+        elif not matchable:
+            assert rows[i][-1] == "yes", rows[i]
+        decided += beaten or not matchable
+    assert decided >= len(rows) / 2, rows  # the rounding leaves most rows judged
 
 
-def test_plot_writes_a_png(tmp_path):
-    rows = [Row("a", 1.0, 0.0, True), Row("b", 100.0, 5.0, False), Row("ref", 3.0, 2.0, False, selectable=False)]
-    path = plot_choice(choice(False, rows), tmp_path / "c.png")
-    assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-
-
-def test_resample_samples_pixel_centres():
-    depth = np.arange(16.0).reshape(4, 4)
-    assert np.array_equal(resample(depth, 4), depth)
-    assert np.array_equal(resample(depth, 2), depth[np.ix_([1, 3], [1, 3])])
-    assert np.array_equal(resample(depth, 8), np.repeat(np.repeat(depth, 2, axis=0), 2, axis=1))
+@pytest.mark.parametrize("title", SECTIONS)
+def test_every_choice_has_its_plot(speed_vs_error_report, title):
+    key, _ = SECTIONS[title]
+    plot = speed_vs_error_report / "speed-vs-error" / f"{key}.png"
+    assert plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert f"(speed-vs-error/{key}.png)" in (speed_vs_error_report / "speed-vs-error.md").read_text(encoding="utf-8")

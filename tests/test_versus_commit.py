@@ -1,4 +1,4 @@
-"""``python -m benchmarks.versus_commit``, the route for timing a change against the commit before it in one
+"""``python -m benchmarks.speed.versus_commit``, the route for timing a change against the commit before it in one
 process, run for a few blocks against HEAD: no timing is asserted, only that it builds the commit's package, makes
 both envs and reports."""
 
@@ -22,7 +22,7 @@ IN_GIT = shutil.which("git") is not None and subprocess.run(
 @pytest.mark.skipif(not IN_GIT, reason="not a git checkout: no commit to compare with")
 def test_it_builds_the_commit_and_reports_both_figures_and_the_trajectory_check():
     result = subprocess.run(
-        [sys.executable, "-m", "benchmarks.versus_commit", "--commit", "HEAD", "--rounds", "2", "--steps", "20",
+        [sys.executable, "-m", "benchmarks.speed.versus_commit", "--commit", "HEAD", "--rounds", "2", "--steps", "20",
          "--resets", "3", "--trajectory-steps", "40"],
         capture_output=True, text=True, timeout=600, cwd=ROOT)
     assert result.returncode == 0, result.stderr[-3000:]

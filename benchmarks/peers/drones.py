@@ -68,8 +68,8 @@ What could not be reproduced, and the stand-ins
 * The peer's Python around the calls (gymnasium's passive checker, the action deque, the info dict) is
   reproduced only where it is numpy work of the same kind; the deque and the wrappers are not.
 
-``python -m benchmarks.drones_peer`` times this workload alone (figures measured here in its docstring);
-``python -m benchmarks.camera_throughput`` times it against ClutterNav-v0 with a camera.
+``python -m benchmarks.peers.drones_peer`` times this workload alone (figures measured here in its docstring);
+``python -m benchmarks.speed.camera_throughput`` times it against ClutterNav-v0 with a camera.
 """
 
 from __future__ import annotations

@@ -41,6 +41,10 @@ pybullet calls (counted from the upstream step and reset as read; ``count_pybull
 Per env step: 8 x (4 ``applyExternalForce`` + 1 ``applyExternalTorque`` + 1 ``stepSimulation``) + 3 kinematics
 reads = 51, the same 51 calls in the same order here (``CALLS_PER_STEP``). Per reset: 11 (``CALLS_PER_RESET``).
 
+``python -m benchmarks.peers.hover`` prints these facts as measured on the rebuild: the observation and info, the
+newest action's place in the observation, the pybullet calls per step and per reset, and when a hover and a roll
+command are truncated.
+
 What could not be reproduced, and the stand-ins
 -----------------------------------------------
 * The drone's visual mesh ``cf2.dae``: pybullet parses a URDF's visual meshes even in a DIRECT client, so the
@@ -56,6 +60,7 @@ What could not be reproduced, and the stand-ins
 
 from __future__ import annotations
 
+import argparse
 import math
 import os
 import shutil
@@ -221,3 +226,45 @@ def count_pybullet_calls(fn: Callable[[], object]) -> Counter:
     finally:
         sys.setprofile(previous)
     return calls
+
+
+def facts(peer: HoverKinPeer) -> list[str]:
+    """The facts of the module docstring, measured on ``peer``, one line each."""
+    obs, info = peer.reset(seed=0)
+    action = np.full((1, 4), 0.5, dtype=np.float32)
+    after, reward, terminated, truncated, _ = peer.step(action)
+    lines = [f"observation: shape {obs.shape} (upstream's {KIN_SHAPE}), space {peer.observation_space.shape}; info "
+             f"{info}",
+             f"one step of {action[0].tolist()}: the newest action is the observation's last 4 values: "
+             f"{np.array_equal(after[0, -4:], action[0])}; finite: {bool(np.all(np.isfinite(after)))}; reward "
+             f"{reward:.4f}, terminated {terminated}, truncated {truncated}"]
+    peer.reset(seed=0)
+    step = count_pybullet_calls(lambda: peer.step(np.zeros((1, 4), dtype=np.float32)))
+    reset = count_pybullet_calls(peer.reset)
+    lines.append(f"pybullet calls per step: {sum(step.values())} (upstream's {CALLS_PER_STEP}): "
+                 f"{', '.join(f'{n} {c}' for n, c in step.items())}; per reset: {sum(reset.values())} (upstream's "
+                 f"{CALLS_PER_RESET})")
+    for name, command in (("hover RPMs", (0.0, 0.0, 0.0, 0.0)), ("roll command", (-1.0, -1.0, 1.0, 1.0))):
+        peer.reset(seed=0)
+        ended = False
+        for steps in range(1, 10_000):
+            obs, _, terminated, truncated, _ = peer.step(np.array([command], dtype=np.float32))
+            ended = ended or terminated
+            if truncated:
+                break
+        lines.append(f"{name} {list(command)}: truncated after {steps} steps, terminated before: {ended}; z "
+                     f"{obs[0, 2]:.4f} m, roll {obs[0, 3]:.3f} rad")
+    return lines
+
+
+def main() -> None:
+    argparse.ArgumentParser(description="Print the facts the rebuilt peer reproduces, measured on it.").parse_args()
+    peer = HoverKinPeer()
+    try:
+        print("\n".join(facts(peer)))
+    finally:
+        peer.close()
+
+
+if __name__ == "__main__":
+    main()

@@ -28,7 +28,7 @@ def test_fcl_clearance_equals_the_2d_closed_form(make_env):
         if not 0.01 <= clearance < 1.0:
             continue
         _, info = env.reset(options={"scene": empty_scene(start=(x, y, rng.uniform(-3, 3)), obstacles=CLUTTER)})
-        # GJK's error here is <= 4e-5 m below 1 m of clearance (benchmarks/fcl_accuracy.py, 5000 placements);
+        # GJK's error here is <= 4e-5 m below 1 m of clearance (benchmarks/fidelity/fcl_accuracy.py, 5000 placements);
         # beyond a metre it can reach millimetres, which no reward term looks at.
         assert info["min_clearance"] == pytest.approx(clearance, abs=5e-5)
         checked += 1

@@ -8,7 +8,6 @@ import json
 import numpy as np
 import pytest
 
-from benchmarks.contact_agreement import panda_depth_errors
 from clutter_gym.collision import (
     FIDELITY_LEVELS,
     CollisionChecker,
@@ -22,6 +21,7 @@ from clutter_gym.collision import (
 from clutter_gym.collision import acm as acm_module
 from clutter_gym.collision.fidelity import fitted_primitive
 from clutter_gym.datatypes import LinkStates, Obstacle, RobotState
+from clutter_gym.hard_cases.penetration_depth import panda_depth_errors
 from clutter_gym.robots import DiffDriveRobot, PandaArm
 from clutter_gym.robots.panda import READY
 

@@ -1,5 +1,5 @@
-"""Long runs (``python -m benchmarks.long_runs``): random steps in every env, profile and fidelity level stay finite;
-resets and make/close cycles hold memory and reset time flat.
+"""Long runs (``python -m benchmarks.hard_cases.long_runs``): random steps in every env, profile and fidelity level
+stay finite; resets and make/close cycles hold memory and reset time flat.
 
 The default run checks the pieces on short stretches; the ``slow`` ones run a scaled-down long run (48 cells of
 random steps, 5,000 resets, 100 make/close cycles). Bounds: no non-finite value at all; memory growth per reset
@@ -15,9 +15,16 @@ import sys
 import numpy as np
 import pytest
 
-from benchmarks.long_runs import count_nonfinite, cycles_run, growth_per, random_steps, resets_run, steps_run
 from clutter_gym import ENV_IDS
 from clutter_gym.collision import FIDELITY_LEVELS
+from clutter_gym.hard_cases.long_runs import (
+    count_nonfinite,
+    cycles_run,
+    growth_per,
+    random_steps,
+    resets_run,
+    steps_run,
+)
 from clutter_gym.noise.profiles import PROFILE_NAMES
 
 linux_only = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc/self/statm")

@@ -3,7 +3,7 @@
 What correct means: a movable obstacle at rest stays where it was put; a pushed one moves and stops at what is in
 its way without passing into it; the collision checker measures it where the physics has it; nothing goes NaN
 at masses from a gram to a tonne or at a 1:1000 ratio in contact; a seed gives the same trajectory. Stacks are
-held at the settings ``benchmarks/stacking.py`` shows they need.
+held at the settings ``python -m benchmarks.hard_cases.stacking`` shows they need.
 """
 
 from __future__ import annotations
@@ -14,11 +14,18 @@ import numpy as np
 import pytest
 from helpers import empty_scene
 
-from benchmarks.hard_scenes import PUSH_BOX_HALF, PUSH_WALL_FACE, movable_poses, push_box, tabletop_creep
-from benchmarks.stacking import stack_scene, tilt_degrees
 from clutter_gym.collision.distance import signed_distance
 from clutter_gym.collision.obstacles import obstacle_object
 from clutter_gym.datatypes import Obstacle
+from clutter_gym.hard_cases.movable_clutter import (
+    PUSH_BOX_HALF,
+    PUSH_WALL_FACE,
+    movable_poses,
+    push_box,
+    stack_scene,
+    tabletop_creep,
+    tilt_degrees,
+)
 from clutter_gym.worlds.parsing import parse_obstacle
 from clutter_gym.worlds.pool import inertia
 
@@ -140,10 +147,10 @@ def test_extreme_masses_and_ratios_in_contact_stay_finite_and_put(masses, physic
     """Two boxes, one on the other, at a gram, a tonne, and 1:1000 either way up: 10 s with no NaN, the bottom
     box within a millimetre of where it was put and the top one sinking no more than 2 mm into it. A tonne on a
     kilogram needs 960 Hz and 200 iterations: at the defaults the light box squirts out from under the heavy one
-    (``python -m benchmarks.stacking`` has the table)."""
+    (``python -m benchmarks.hard_cases.stacking`` has the table)."""
     boxes = [{"shape": "box", "size": [0.3, 0.3, 0.2], "position": [1.5, 0.0], "z": 0.2 * k, "mass": m}
              for k, m in enumerate(masses)]
-    env = gym.make("ClutterNav-v0", sensors=(), physics_hz=physics_hz, solver_iterations=iterations)
+    env = gym.make("ClutterNav-v0", sensors=(), physics_hz=physics_hz, solver_iterations=iterations, physics="fixed")
     env.reset(seed=0, options={"scene": empty_scene(obstacles=boxes)})
     start, _ = movable_poses(env)
     for _ in range(200):
@@ -158,9 +165,9 @@ def test_extreme_masses_and_ratios_in_contact_stay_finite_and_put(masses, physic
 
 
 def test_a_short_stack_holds_at_the_settings_it_needs():
-    """Five boxes, 30 s, at 240 Hz and 100 solver iterations (``python -m benchmarks.stacking`` has the table):
-    within a millimetre and a degree."""
-    env = gym.make("ClutterNav-v0", sensors=(), physics_hz=240.0, solver_iterations=100)
+    """Five boxes, 30 s, at 240 Hz and 100 solver iterations (``python -m benchmarks.hard_cases.stacking`` has the
+    table): within a millimetre and a degree."""
+    env = gym.make("ClutterNav-v0", sensors=(), physics_hz=240.0, solver_iterations=100, physics="fixed")
     env.reset(seed=0, options={"scene": stack_scene(5)})
     start, start_rotation = movable_poses(env)
     for _ in range(600):

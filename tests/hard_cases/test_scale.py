@@ -1,11 +1,11 @@
 """Scale and translation: the same scene at the origin and translated by (1e3, 1e3, 0) and (1e4, 1e4, 0) m, built
 from the env's own parts (Sim, obstacle pool, FCL checker, LIDAR); millimetre obstacles; the largest arena.
 
-The envs have no world-offset option, so the translated scenes are built by construction (``benchmarks/scale.py``,
-which ``benchmarks.hard_cases`` shares): every obstacle, the arena walls and the robot pose move by the offset (the
-floor is an infinite plane). Measured on 200 seeded robot poses in a 6 m arena (plus three hand-placed ones: 5 mm
-into a box, touching a box face, clear), translated minus untranslated, metres
-(np.spacing: 1.1e-13 at 1e3, 1.8e-12 at 1e4):
+The envs have no world-offset option, so the translated scenes are built by construction
+(:mod:`clutter_gym.hard_cases.scale`, which ``benchmarks.hard_cases.catalogue`` shares): every obstacle, the arena
+walls and the robot pose move by the offset (the floor is an infinite plane). Measured on 200 seeded robot poses in
+a 6 m arena (plus three hand-placed ones: 5 mm into a box, touching a box face, clear), translated minus
+untranslated, metres (np.spacing: 1.1e-13 at 1e3, 1.8e-12 at 1e4):
 
 * FCL, sphere shapes (closed-form routines): distance <= 3.2e-13 at 1e3 and 2.7e-12 at 1e4 (2.8 and 1.5 ulp), witness
   points <= 3.1e-12, the same nearest obstacle -> ``EXACT_ULPS`` = 20 ulp of the offset (1.8e-11 at 1e4).
@@ -51,7 +51,8 @@ import numpy as np
 import pytest
 from helpers import CHASSIS_RADIUS, empty_scene
 
-from benchmarks.scale import (
+from clutter_gym.collision.kinematics import UrdfKinematics
+from clutter_gym.hard_cases.scale import (
     CASTER_RADIUS,
     CONTACT_ULPS,
     EPA_TOL,
@@ -76,7 +77,6 @@ from benchmarks.scale import (
     read_placed,
     ulps,
 )
-from clutter_gym.collision.kinematics import UrdfKinematics
 from clutter_gym.robots.diffdrive import TRACKED_LINKS
 from clutter_gym.sensors.lidar import Lidar, LidarConfig
 from clutter_gym.sim import Sim, pb

@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 from helpers import empty_scene
 
-from benchmarks.hard_scenes import STILL, base_pose, standstill_drift
+from clutter_gym.hard_cases.standstill import base_pose, standstill_drift
+from clutter_gym.hard_cases.stepping import STILL
 
 
 @pytest.fixture(scope="module")

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import pytest
 
-from benchmarks.hard_scenes import WEDGES, wedge
+from clutter_gym.hard_cases.wedging import WEDGES, wedge
 
 
 @pytest.mark.parametrize("name", WEDGES)

@@ -1,0 +1,66 @@
+"""Training curves of several runs side by side: validation success and collision rates, the rolling training
+success rate, and PPO's action std and explained variance from each run's TensorBoard file.
+
+    python -m benchmarks.learning.run_curves --run "mapless=out/mapless" --run "field residual=out/residual" \
+        --out docs/learning_sensors.png
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+from clutter_gym.training.figures import plt, save_figure
+from clutter_gym.training.report import rolling_rate
+from clutter_gym.training.run_dir import RunDir
+
+
+def scalars(run: Path, tag: str) -> tuple[np.ndarray, np.ndarray]:
+    """(steps, values) of one TensorBoard scalar of a run (empty when it was not logged)."""
+    from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+
+    steps, values = [], []
+    for path in sorted((run / "tb").rglob("events.*")):
+        acc = EventAccumulator(str(path), size_guidance={"scalars": 0})
+        acc.Reload()
+        if tag in acc.Tags()["scalars"]:
+            steps += [e.step for e in acc.Scalars(tag)]
+            values += [e.value for e in acc.Scalars(tag)]
+    return np.array(steps), np.array(values)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--run", action="append", required=True, metavar="NAME=RUN_DIR")
+    parser.add_argument("--out", required=True, help="the PNG to write")
+    args = parser.parse_args()
+    fig, axes = plt.subplots(1, 4, figsize=(16, 3.6))
+    for spec in args.run:
+        name, _, folder = spec.partition("=")
+        run = RunDir(folder)
+        validations = run.read_validations()
+        line, = axes[0].plot([r["step"] for r in validations], [r["success"] for r in validations], marker="o",
+                             label=name)
+        axes[0].plot([r["step"] for r in validations], [r["collision"] for r in validations], ls=":",
+                     color=line.get_color())
+        episodes = run.read_episodes()
+        if episodes:
+            axes[1].plot([r["timestep"] for r in episodes], rolling_rate(np.array([r["success"] for r in episodes])),
+                         color=line.get_color())
+        for ax, tag in ((axes[2], "train/std"), (axes[3], "train/explained_variance")):
+            steps, values = scalars(Path(folder), tag)
+            ax.plot(steps, values, color=line.get_color())
+    titles = ("validation success (solid), collisions (dotted)", "training success, rolling",
+              "action std", "explained variance")
+    for ax, title in zip(axes, titles):
+        ax.set_title(title, fontsize=9)
+        ax.set_xlabel("env steps")
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=7)
+    print(save_figure(fig, Path(args.out)))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,146 @@
+"""Samples per second of the main job's ClutterNav-v0 envs: one env alone against vector envs over worker processes.
+
+Target (issue 12): two workers step at least 1.8x one env alone on a 2-core machine. Every configuration
+steps the main job's env settings (subgoal, terminate on collision; ``--bare``: the env's defaults) with random-walk
+actions, so that episodes end and reset as often as early in training. Two free-running processes, one env each,
+show what two cores can give at most; the vector envs step in lockstep (every vector step waits for every worker).
+``WorkerVecEnv`` (the training tooling's) and the envs' own vector env, ``gym.make_vec``'s default for them
+(``clutter_gym.vector.BlockVectorEnv``), step one block of envs in this process and the other in one worker
+process; Gymnasium's ``AsyncVectorEnv`` gives every env a process of its own.
+Configurations run in alternating rounds (machine noise hits them alike); figures are medians over rounds. The
+last line is the training loop itself: PPO with the main job's settings (rollouts, updates, observation
+normalisation), in samples per second of wall time.
+
+    python -m benchmarks.speed.vec_throughput [--rounds 3] [--steps 2000] [--ppo-steps 16384] [--bare]
+"""
+
+from __future__ import annotations
+
+import argparse
+import functools
+import multiprocessing as mp
+import os
+import statistics
+import time
+
+import gymnasium as gym
+import numpy as np
+import torch
+from stable_baselines3.common.vec_env import SubprocVecEnv, VecEnv
+
+from benchmarks.harness import alternating_rounds, smooth_actions, table_header
+from clutter_gym.training.config import config_for
+from clutter_gym.training.train import build_model
+from clutter_gym.training.vec_env import env_workers, make_env, training_env
+from clutter_gym.training.worker_vec_env import WorkerVecEnv
+
+
+def one_env(factory, steps: int, seed: int) -> float:
+    env, walk = factory(), smooth_actions(np.random.default_rng(seed), steps)
+    env.reset(seed=seed)
+    t0 = time.perf_counter()
+    for action in walk:
+        _, _, terminated, truncated, _ = env.step(action)
+        if terminated or truncated:
+            env.reset()
+    rate = steps / (time.perf_counter() - t0)
+    env.close()
+    return rate
+
+
+def _one_env_into(queue, factory, steps: int, seed: int) -> None:
+    queue.put(one_env(factory, steps, seed))
+
+
+def free_running(factory, steps: int, seed: int) -> float:
+    """Two processes, one env each, never waiting for each other: the most two cores can give."""
+    ctx = mp.get_context("forkserver")
+    queue = ctx.Queue()
+    processes = [ctx.Process(target=_one_env_into, args=(queue, factory, steps // 2, seed + k)) for k in range(2)]
+    for p in processes:
+        p.start()
+    rates = [queue.get() for _ in processes]
+    for p in processes:
+        p.join()
+    return sum(rates)
+
+
+def vector(venv: VecEnv | gym.vector.VectorEnv, steps: int, seed: int) -> float:
+    """Samples/s of ``venv`` (SB3's or Gymnasium's) over about ``steps`` samples (the vector's start-up and first
+    reset untimed)."""
+    vector_steps = max(1, steps // venv.num_envs)
+    rng = np.random.default_rng(seed)
+    walks = np.stack([smooth_actions(rng, vector_steps) for _ in range(venv.num_envs)], axis=1).astype(np.float32)
+    if isinstance(venv, VecEnv):
+        venv.seed(seed)
+        venv.reset()
+    else:
+        venv.reset(seed=seed)
+    t0 = time.perf_counter()
+    for actions in walks:
+        venv.step(actions)
+    rate = vector_steps * venv.num_envs / (time.perf_counter() - t0)
+    venv.close()
+    return rate
+
+
+def training_loop(samples: int, seed: int) -> tuple[float, int, int]:
+    """Samples/s of PPO.learn with the main job's settings; returns (rate, n_envs, env workers)."""
+    torch.set_num_threads(1)  # as train() does
+    config = config_for("ClutterNav-v0", {"seed": seed})
+    venv = training_env(config, seed=seed)
+    model = build_model(config, venv)
+    t0 = time.perf_counter()
+    model.learn(total_timesteps=samples)
+    rate = model.num_timesteps / (time.perf_counter() - t0)
+    venv.close()
+    return rate, config.n_envs, env_workers(config)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--steps", type=int, default=2000, help="samples per configuration per round")
+    parser.add_argument("--ppo-steps", type=int, default=16384, help="samples of the training-loop measurement")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--bare", action="store_true", help="step ClutterNav-v0's defaults, not the main job's")
+    args = parser.parse_args()
+
+    config = config_for("ClutterNav-v0", {})
+    factory = functools.partial(make_env, config.env_id, {} if args.bare else config.make_kwargs())
+    configurations = {
+        "one env, one process": lambda: one_env(factory, args.steps, args.seed),
+        "two processes, one env each, free-running (the ceiling)": lambda: free_running(factory, args.steps,
+                                                                                      args.seed),
+        "SB3 SubprocVecEnv, 2 envs (a process each)": lambda: vector(SubprocVecEnv([factory] * 2), args.steps,
+                                                                    args.seed),
+        "SB3 SubprocVecEnv, 8 envs (a process each)": lambda: vector(SubprocVecEnv([factory] * 8), args.steps,
+                                                                    args.seed),
+    }
+    for per_worker in (1, 4, 8, 16):
+        configurations[f"WorkerVecEnv, 2 workers (this process + 1) x {per_worker} envs"] = functools.partial(
+            lambda k: vector(WorkerVecEnv([factory] * (2 * k), workers=2), args.steps, args.seed), per_worker)
+    kwargs = {} if args.bare else config.make_kwargs()
+    configurations["Gymnasium AsyncVectorEnv, 2 envs (a process each)"] = lambda: vector(
+        gym.make_vec(config.env_id, num_envs=2, vectorization_mode="async", **kwargs), args.steps, args.seed)
+    for per_worker in (1, 4, 8, 16):
+        configurations[f"gym.make_vec default (BlockVectorEnv), 2 workers x {per_worker} envs"] = functools.partial(
+            lambda k: vector(gym.make_vec(config.env_id, num_envs=2 * k, workers=2, **kwargs), args.steps, args.seed),
+            per_worker)
+    rates = alternating_rounds(configurations, args.rounds)
+    base = statistics.median(rates["one env, one process"])
+
+    settings = "its default settings" if args.bare else "the main job's env settings"
+    print(f"ClutterNav-v0 with {settings}, {os.cpu_count()} cores, random-walk actions, "
+          f"{args.steps} samples per configuration, median of {args.rounds} alternating rounds\n")
+    print(table_header("configuration", "samples/s", "vs one env"))
+    for name, values in rates.items():
+        median = statistics.median(values)
+        print(f"| {name} | {median:,.0f} | {median / base:.2f}x |", flush=True)
+    rate, n_envs, workers = training_loop(args.ppo_steps, args.seed)
+    print(f"| training loop: PPO, main job settings ({n_envs} envs over {workers} workers), "
+          f"{args.ppo_steps:,} samples | {rate:,.0f} | {rate / base:.2f}x |")
+
+
+if __name__ == "__main__":
+    main()
