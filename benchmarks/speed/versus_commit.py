@@ -1,5 +1,6 @@
 """An env of this working tree against the same env of an earlier commit, in one process: step and reset times in
-alternating blocks, and whether the two give the same seeded trajectory.
+alternating blocks, the collision check alone on the same recorded states, and whether the two give the same seeded
+trajectory.
 
 Timing old and new code in separate runs compares the machine's moods as much as the code (on a shared 2-core
 machine the same run's reset median moved between 4.4 and 7.4 ms). Here the commit's package is built into a
@@ -87,6 +88,29 @@ def same_trajectory(envs: dict[str, gym.Env], steps: int, seed: int) -> str:
     return f"identical ({steps} steps)"
 
 
+def recorded_states(envs: dict[str, gym.Env], actions: np.ndarray, seed: int) -> list:
+    """The robot states of one episode of ``actions`` in the new env (both envs reset with ``seed``, so both
+    checkers hold that episode's scene), for timing the two collision checkers on the same states."""
+    for env in envs.values():
+        env.reset(seed=seed)
+    states = []
+    for action in actions:
+        _, _, terminated, truncated, _ = envs["new"].step(action)
+        if terminated or truncated:
+            break
+        states.append(envs["new"].unwrapped.robot.state())
+    return states
+
+
+def check_block(env: gym.Env, states: list) -> float:
+    """Mean seconds of the env's collision check (``checker.check``) over ``states``, swept audit included."""
+    checker = env.unwrapped.checker
+    t0 = time.perf_counter()
+    for state in states:
+        checker.check(state)
+    return (time.perf_counter() - t0) / len(states)
+
+
 def reset_block(env: gym.Env, n: int) -> float:
     """Median seconds of ``n`` resets."""
     times = []
@@ -121,12 +145,15 @@ def main() -> None:
                                    args.rounds)
         resets = alternating_rounds({k: (lambda e=e: reset_block(e, args.resets)) for k, e in envs.items()},
                                     args.rounds)
+        states = recorded_states(envs, actions, seed=2)
+        checks = alternating_rounds({k: (lambda e=e: check_block(e, states)) for k, e in envs.items()}, args.rounds)
         for env in envs.values():
             env.close()
     print(f"{args.env} {kwargs or ''}: this tree against {args.commit}, {args.rounds} alternating rounds; "
           f"seeded trajectories {trajectory}\n")
     print(table_header("figure", args.commit, "this tree", f"{args.commit} ÷ this tree, median (range)"))
-    for label, figures, unit, scale in (("step", steps, "µs", 1e6), ("reset", resets, "ms", 1e3)):
+    for label, figures, unit, scale in (("step", steps, "µs", 1e6), ("reset", resets, "ms", 1e3),
+                                        (f"check ({len(states)} states)", checks, "µs", 1e6)):
         base, new = np.array(figures["base"]), np.array(figures["new"])
         ratio = base / new
         print(f"| {label} | {np.median(base) * scale:.1f} {unit} | {np.median(new) * scale:.1f} {unit} | "

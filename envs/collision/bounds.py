@@ -71,6 +71,15 @@ class ObstacleBounds:
         gap = np.linalg.norm(self.centres - centre, axis=1) - self.enclosing
         return np.flatnonzero(gap <= reach)
 
+    def signed_distance_to(self, points: np.ndarray, obstacles: np.ndarray) -> np.ndarray:
+        """(P, len(obstacles)) :meth:`signed_distance` from each point to the obstacles with these indices, in their
+        order."""
+        columns = self._column[obstacles]
+        order = np.argsort(columns)
+        out = np.empty((len(points), len(obstacles)))
+        out[:, order] = self.signed_distance(points, columns[order])
+        return out
+
     def signed_distance(self, points: np.ndarray, columns: np.ndarray | None = None) -> np.ndarray:
         """(P, columns) signed distance from each point (P, 3) to each obstacle, exact for boxes and cylinders.
 

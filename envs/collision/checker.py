@@ -35,6 +35,8 @@ from clutter_gym.collision.robot_model import RobotCollisionModel
 from clutter_gym.collision.sweep import ScrewMotion, time_of_impact
 from clutter_gym.datatypes import CollisionReport, Contact, Obstacle, RobotState
 
+#: Times along a swept shape's motion at which its enclosing ball is measured before the exact sweep (0 and 1 included)
+BALL_SAMPLES = 9
 #: Clearance reported when there is nothing to measure against (an empty scene without walls), metres.
 NO_OBSTACLE_CLEARANCE = 1e3
 #: scenes with at most this many obstacles bound every pair; larger ones first keep those near the robot. The bounds
@@ -92,6 +94,7 @@ class CollisionChecker:
         self._limits_array = clearance_range + model.padding[self._moving]  # unpadded range per moving shape
         self._moving_padding = model.padding[self._moving][:, None]
         self._radii = np.array([s.radius for s in model.shapes])  # about each shape's origin
+        self._ball_offsets = np.array([s.bounding_ball[0] for s in model.shapes], dtype=float).reshape(-1, 3)
         #: (moving shapes, 1) radii of their enclosing balls, widened by the slack (:meth:`_lower_bounds`)
         self._slack_radii = (model.ball_radius[self._moving] + BOUND_SLACK)[:, None]
         lazy = model.lazy[self._moving]  # spheres of a sphere set: their lower bounds are their exact distances
@@ -396,16 +399,39 @@ class CollisionChecker:
             grown[rows] = travel
             candidates, bound = self._lower_bounds(grow=grown)
             reach = bound[rows]
+        near = reach <= tol
+        if not near.any():
+            return 0
+        # No point of a shape leaves the cones of radius travel * t about its start and travel * (1 - t) about its
+        # end, so the sweep stays farther from an obstacle than (start bound + end bound - travel) / 2: only pairs
+        # whose bounds at both ends leave that within the tolerance are swept (an approach that ends clear is not).
+        start_centres = model.ball_centres_at(previous[0], previous[1])[moving[rows]]
+        start = self._bounds.signed_distance_to(start_centres, candidates) - self._slack_radii[rows]
+        near &= start + reach <= 2.0 * tol
         touching_now = self._touching  # the pairs within the tolerance now (the contacts, found before the sweep)
         hits = 0
-        motions: dict[int, ScrewMotion] = {}
-        for row, k in zip(*np.nonzero(reach <= tol)):
-            i, j = int(moving[rows[row]]), int(candidates[k])
-            if (i, j) in touching_before or (i, j) in touching_now:
-                continue  # leaving a contact, or ending in one: the end-of-step check reports that
-            if i not in motions:
-                motions[i] = ScrewMotion(previous[1][i], previous[0][i], now[1][i], now[0][i])
-            if time_of_impact(self._sweepers[i], self._radii[i], motions[i], self._obstacles[j],
-                              tol + model.padding[i]) is not None:
-                hits += 1
+        for row in np.flatnonzero(near.any(axis=1)):
+            i = int(moving[rows[row]])
+            # leaving a contact, or ending in one, is no tunneling: the end-of-step check reports that
+            obstacles = [j for j in candidates[near[row]].tolist()
+                         if (i, j) not in touching_before and (i, j) not in touching_now]
+            if not obstacles:
+                continue
+            motion = ScrewMotion(previous[1][i], previous[0][i], now[1][i], now[0][i])
+            reach_i = tol + model.padding[i]
+            for j in self._ball_sweep_survivors(i, motion, obstacles, reach_i):
+                if time_of_impact(self._sweepers[i], self._radii[i], motion, self._obstacles[j], reach_i) is not None:
+                    hits += 1
         return hits
+
+    def _ball_sweep_survivors(self, shape: int, motion: ScrewMotion, obstacles: list[int], reach: float) -> list[int]:
+        """The ``obstacles`` that the enclosing ball of ``shape`` may come within ``reach`` of on ``motion``: its
+        centre's exact distance to each at :data:`BALL_SAMPLES` times, and between two samples the cones of the path
+        length between them (half of it beyond the mean of the two distances). The rest need no sweep."""
+        offset = self._ball_offsets[shape]
+        centres = motion.path(offset, BALL_SAMPLES)
+        gap = self._bounds.signed_distance_to(centres, np.array(obstacles)) - (self.model.ball_radius[shape]
+                                                                              + BOUND_SLACK)
+        segment = motion.travel(float(np.linalg.norm(offset))) / (BALL_SAMPLES - 1)
+        lowest = (0.5 * (gap[:-1] + gap[1:] - segment)).min(axis=0)
+        return [j for j, d in zip(obstacles, lowest.tolist()) if d <= reach]

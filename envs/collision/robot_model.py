@@ -186,9 +186,14 @@ class RobotCollisionModel:
 
     def ball_centres(self) -> np.ndarray:
         """(n, 3) world centres of the shapes' enclosing balls (radii :attr:`ball_radius`) at the synced poses."""
+        return self.ball_centres_at(self.position, self.rotation)
+
+    def ball_centres_at(self, position: np.ndarray, rotation: np.ndarray) -> np.ndarray:
+        """(n, 3) world centres of the shapes' enclosing balls with the shapes at ``position`` (n, 3) and
+        ``rotation`` (n, 3, 3)."""
         if self._ball_offset is None:
-            return self.position
-        return self.position + np.einsum("nij,nj->ni", self.rotation, self._ball_offset)
+            return position
+        return position + np.einsum("nij,nj->ni", rotation, self._ball_offset)
 
     def self_collision(self) -> tuple[str, str] | None:
         """The first enabled link pair in collision (unpadded shapes), or None. With ``confirm_shapes``, the
