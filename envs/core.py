@@ -108,7 +108,6 @@ class ClutterEnv(gym.Env):
         self._auto_physics = physics == "auto"
         self.physics = PhysicsChoice(sim.physics_hz, solver_iterations, "the env's settings (physics='fixed')")
         self._base_physics = self.physics
-        self._running = (sim.physics_hz, int(solver_iterations))  # what the Sim ticks at now
         # a TickedRobot (interfaces.py) acts before every physics tick; others once per action
         self._before_tick = cast(TickedRobot, robot).before_tick if getattr(robot, "ticked", False) else None
         self._build_world()
@@ -254,10 +253,9 @@ class ClutterEnv(gym.Env):
         base = self._base_physics
         self.physics = chosen = choose_physics(scene.obstacles, base.physics_hz, base.solver_iterations,
                                                self._control_hz)
-        if (chosen.physics_hz, chosen.solver_iterations) != self._running:
+        if (chosen.physics_hz, chosen.solver_iterations) != (self.sim.physics_hz, self.sim.solver_iterations):
             self.sim.set_physics(chosen.physics_hz, chosen.solver_iterations)
             self.substeps = int(round(chosen.physics_hz / self._control_hz))
-            self._running = (chosen.physics_hz, chosen.solver_iterations)
 
     def _command(self, action: np.ndarray) -> np.ndarray:
         """The normalised command the robot is to drive for a checked policy action (the action itself; an env

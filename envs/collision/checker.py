@@ -385,7 +385,6 @@ class CollisionChecker:
         if previous is None or not self._obstacles or not np.isfinite(self.swept_speed):
             return 0
         moving = self._moving
-        # rotation adds at most angle * radius to the travel of any point of the shape
         travel = shape_travel(now[0], now[1], previous[0], previous[1], self._radii, moving)
         rows = np.flatnonzero(travel > self.swept_speed * self.dt)
         if rows.size == 0:

@@ -84,7 +84,7 @@ class Sim(Actuation, ObstacleBodies, Rendering, Rays):
         self._finalizer = weakref.finalize(self, _disconnect, self._cid)
         self._finalizer.atexit = False
         self.physics_hz = float(physics_hz)
-        self._solver_iterations = int(solver_iterations)
+        self.solver_iterations = int(solver_iterations)
         self._gravity = float(gravity)
         self._renderer = pb.ER_TINY_RENDERER
         self.visuals = visuals
@@ -109,13 +109,13 @@ class Sim(Actuation, ObstacleBodies, Rendering, Rays):
         self.culler = ViewCuller()
         self.primitives = PrimitiveTable()
         pb.setPhysicsEngineParameter(deterministicOverlappingPairs=1, physicsClientId=self._cid)
-        self.set_physics(self.physics_hz, self._solver_iterations)
+        self.set_physics(self.physics_hz, self.solver_iterations)
         pb.setGravity(0.0, 0.0, -self._gravity, physicsClientId=self._cid)
 
     def set_physics(self, physics_hz: float, solver_iterations: int) -> None:
         """Tick at ``physics_hz`` with ``solver_iterations`` from the next :meth:`step` on (kept by :meth:`clear`)."""
-        self.physics_hz, self._solver_iterations = float(physics_hz), int(solver_iterations)
-        pb.setPhysicsEngineParameter(fixedTimeStep=1.0 / self.physics_hz, numSolverIterations=self._solver_iterations,
+        self.physics_hz, self.solver_iterations = float(physics_hz), int(solver_iterations)
+        pb.setPhysicsEngineParameter(fixedTimeStep=1.0 / self.physics_hz, numSolverIterations=self.solver_iterations,
                                      physicsClientId=self._cid)
 
     @property
