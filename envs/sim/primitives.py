@@ -3,6 +3,10 @@
 What the ray-cast camera (:mod:`clutter_gym.sim.ray_casting`) draws: every obstacle body, the drawn ground and the
 markers, as exact shapes; and what the exact LIDAR caster hits: the solid ones (obstacles, shown or parked), the
 ground being its plane. Robots loaded from URDF files are not in it.
+
+A large scene keeps its far static obstacles out of the physics world (``worlds/near_field.py``); the sensors still
+see them as the table's *backdrop*: rows with no body, shown while their obstacle has none, reported with the id
+:data:`BACKDROP_ID`.
 """
 
 from __future__ import annotations
@@ -14,6 +18,8 @@ import numpy as np
 from clutter_gym.sim.ray_casting import BOX, CYLINDER
 
 _KINDS = {"box": BOX, "cylinder": CYLINDER}
+#: The id :meth:`PrimitiveTable.arrays` gives backdrop rows: an obstacle that has no body now.
+BACKDROP_ID = -2
 
 
 class PrimitiveTable:
@@ -29,6 +35,10 @@ class PrimitiveTable:
         self._shown: tuple[tuple[np.ndarray, ...], dict[int, int]] | None = None
         self._solid: tuple[tuple[np.ndarray, ...], dict[int, int]] | None = None
         self._moved: set[int] = set()
+        # the backdrop: (kinds, centres, rotations, halves) of shapes without a body, and which of them are shown
+        self._backdrop: tuple[np.ndarray, ...] | None = None
+        self._backdrop_shown = np.zeros(0, dtype=bool)
+        self._joined: dict[str, tuple[np.ndarray, ...]] = {}  # "shown"/"solid" tables with the shown backdrop rows
 
     def __contains__(self, body: int) -> bool:
         return body in self._rows
@@ -48,6 +58,34 @@ class PrimitiveTable:
         self._rows[body] = (_KINDS[kind], np.array(halves, dtype=float), np.array(offset, dtype=float), solid)
         self._poses[body] = (tuple(position), np.eye(3))
         self._shown = self._solid = None
+        self._joined.clear()
+
+    def set_backdrop(self, kinds: Sequence[str], centres: np.ndarray, rotations: np.ndarray, halves: np.ndarray
+                     ) -> None:
+        """Replace the backdrop with these solid shapes, none of them shown yet (:meth:`show_backdrop`).
+
+        Args:
+            kinds: "box" or "cylinder" per shape.
+            centres, rotations, halves: (n, 3), (n, 3, 3) and (n, 3), as :meth:`add` and :meth:`move` take them.
+        """
+        self._backdrop = (np.array([_KINDS[k] for k in kinds], dtype=np.int64).reshape(-1),
+                          np.array(centres, dtype=float).reshape(-1, 3),
+                          np.array(rotations, dtype=float).reshape(-1, 3, 3),
+                          np.array(halves, dtype=float).reshape(-1, 3))
+        self._backdrop_shown = np.zeros(len(self._backdrop[0]), dtype=bool)
+        self._joined.clear()
+
+    def show_backdrop(self, shown: np.ndarray) -> None:
+        """Which backdrop rows rays and the camera see: a boolean per row of :meth:`set_backdrop`."""
+        if self._backdrop is None or len(shown) != len(self._backdrop_shown):
+            raise ValueError(f"need one flag per backdrop row ({len(self._backdrop_shown)}), got {len(shown)}")
+        self._backdrop_shown = np.array(shown, dtype=bool)
+        self._joined.clear()
+
+    def clear_backdrop(self) -> None:
+        """No backdrop."""
+        self._backdrop, self._backdrop_shown = None, np.zeros(0, dtype=bool)
+        self._joined.clear()
 
     def move(self, body: int, position: Sequence[float], rotation: np.ndarray | Sequence[float]) -> None:
         """Put a tracked body at ``position`` (metres) turned by ``rotation`` (3, 3, or its 9 values row by row),
@@ -61,6 +99,7 @@ class PrimitiveTable:
         if body in self._rows and (body in self._hidden) == shown:
             (self._hidden.discard if shown else self._hidden.add)(body)
             self._shown = None
+            self._joined.pop("shown", None)
 
     def remove(self, body: int) -> None:
         """Stop tracking a body."""
@@ -69,21 +108,38 @@ class PrimitiveTable:
         self._hidden.discard(body)
         self._moved.discard(body)
         self._shown = self._solid = None
+        self._joined.clear()
 
     def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """The shown bodies as :func:`~clutter_gym.sim.ray_casting.cast_depth` takes them: (bodies (n,), kinds (n,),
-        centres (n, 3), rotations (n, 3, 3), halves (n, 3))."""
+        centres (n, 3), rotations (n, 3, 3), halves (n, 3)), then the shown backdrop rows (id :data:`BACKDROP_ID`)."""
         self._follow_moves()
         if self._shown is None:
             self._shown = self._table([b for b in self._rows if b not in self._hidden])
-        return self._shown[0]
+        return self._with_backdrop("shown", self._shown[0])
 
     def solids(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """The bodies rays hit, shown or not, as :meth:`arrays` gives them."""
+        """The bodies rays hit, shown or not, and the shown backdrop rows, as :meth:`arrays` gives them."""
         self._follow_moves()
         if self._solid is None:
             self._solid = self._table([b for b, row in self._rows.items() if row[3]])
-        return self._solid[0]
+        return self._with_backdrop("solid", self._solid[0])
+
+    def _with_backdrop(self, name: str, table: tuple[np.ndarray, ...]) -> tuple[np.ndarray, ...]:
+        """``table`` followed by the shown backdrop rows; joined once per change of either (the bodies' rows are
+        copied in again only after one of them moved)."""
+        if self._backdrop is None or not self._backdrop_shown.any():
+            return table
+        if name not in self._joined:
+            kinds, centres, rotations, halves = (a[self._backdrop_shown] for a in self._backdrop)
+            ids = np.full(len(kinds), BACKDROP_ID, dtype=np.int64)
+            self._joined[name] = tuple(np.concatenate((a, b)) for a, b in zip(table, (ids, kinds, centres, rotations,
+                                                                                      halves)))
+        joined = self._joined[name]
+        n = len(table[0])
+        for a, b in zip(joined[2:4], table[2:4]):  # bodies' centres and rotations: they may have moved since
+            a[:n] = b
+        return joined
 
     def _follow_moves(self) -> None:
         """Write the poses of the bodies moved since the last call into the built tables' rows."""

@@ -142,7 +142,8 @@ class Rendering:
 
         Returns:
             Depth along the optical axis (height, width) in metres, 0 where nothing is seen; the body id per pixel
-            (height, width), -1 where there is none.
+            (height, width), -1 where there is none, ``primitives.BACKDROP_ID`` where an obstacle has no body (a
+            large scene's far obstacle, out of the physics world).
         """
         bodies, kinds, centres, rotations, halves = self.primitives.arrays()
         depth, hit = np.empty((height, width)), np.empty((height, width), dtype=np.int64)
