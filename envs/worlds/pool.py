@@ -16,7 +16,9 @@ the closed-form inertia of its shape, and starts at rest.
 from __future__ import annotations
 
 from collections import OrderedDict, defaultdict
+from collections.abc import Iterable, Sequence
 from itertools import islice
+from typing import cast
 
 from clutter_gym.datatypes import Obstacle
 from clutter_gym.sim import Sim
@@ -57,7 +59,7 @@ class ObstaclePool:
         self.max_parked = max_parked
         self._parked: OrderedDict[int, tuple] = OrderedDict()  # body -> key, least recently parked first
         self._free: dict[tuple, list[int]] = defaultdict(list)
-        self._active: list[tuple[tuple, int]] = []
+        self._active: dict[int, tuple[tuple, int]] = {}  # obstacle index -> (key, body) of the bodies placed
         self.fixed = fixed
         self.fixed_bodies = []
         for o in fixed:
@@ -65,6 +67,16 @@ class ObstaclePool:
             self._sim.move_static(body, o.centre, yaw_quat(o.yaw))
             self._sim.sleep(body)
             self.fixed_bodies.append(body)
+
+    @property
+    def sim(self) -> Sim:
+        """The physics client the bodies are in."""
+        return self._sim
+
+    @property
+    def placed(self) -> dict[int, int]:
+        """Obstacle index -> body of every obstacle of the scene that has a body."""
+        return {i: body for i, (_, body) in self._active.items()}
 
     @property
     def size(self) -> int:
@@ -86,23 +98,55 @@ class ObstaclePool:
             return self._sim.add_static_boxes([0.5 * s for s in size], colour, centres)
         return self._sim.add_static_cylinders(o.radius, size[2], colour, centres)
 
-    def place(self, obstacles: tuple[Obstacle, ...]) -> list[int]:
-        """Show exactly ``obstacles`` (in order) and park the bodies they no longer need; returns body ids.
+    def place(self, obstacles: tuple[Obstacle, ...], shown: Sequence[int] | None = None) -> list[int]:
+        """Show exactly ``obstacles`` (in order), or only those with the indices ``shown``, and park the bodies they no
+        longer need; returns body ids, -1 for an obstacle not shown.
 
         The last scene's bodies are reused first (each shape's free list is last in, first out), and those are
         still visible. The obstacles no parked body fits get new bodies, made a shape at a time and then given
         broad-phase entries in scene order, so that contacts are solved as if each had been made in turn. Bodies
         beyond ``max_parked`` are deleted before they would be parked, so a large scene followed by a small one
         costs one removal each."""
-        released = self._active
+        released = list(self._active.values())
+        self._release(released)
+        indices = range(len(obstacles)) if shown is None else shown
+        bodies, made = self._acquire(obstacles, indices, {body for _, body in released})
+        self._sim.order_broadphase(made)
+        self._active = {i: (_key(obstacles[i]), body) for i, body in zip(indices, bodies)}
+        self._park(released)
+        out = [-1] * len(obstacles)
+        for i, body in zip(indices, bodies):
+            out[i] = body
+        return out
+
+    def update(self, obstacles: tuple[Obstacle, ...], enter: Sequence[int], leave: Sequence[int]) -> list[int]:
+        """Give the obstacles with the indices ``enter`` bodies and park those of ``leave``, leaving every other body
+        as it is (its cached contacts kept); returns the bodies of ``enter``. The entering bodies get broad-phase
+        entries after every other body's, in scene order."""
+        released = [self._active.pop(i) for i in leave]
+        self._release(released)
+        bodies, _ = self._acquire(obstacles, enter, {body for _, body in released})
+        self._sim.order_broadphase(bodies)
+        for i, body in zip(enter, bodies):
+            self._active[i] = (_key(obstacles[i]), body)
+        self._park(released)
+        return bodies
+
+    def _release(self, released: list[tuple[tuple, int]]) -> None:
+        """Make ``released`` (key, body) pairs free for reuse; those not reused are parked by :meth:`_park`."""
         for key, body in released:
             self._free[key].append(body)
             self._parked[body] = key
-        shown = {body for _, body in released}
-        keys = [_key(o) for o in obstacles]
+
+    def _acquire(self, obstacles: tuple[Obstacle, ...], indices: Iterable[int], shown: set[int]
+                 ) -> tuple[list[int], list[int]]:
+        """Bodies for the obstacles with ``indices``, in place (free ones reused, the missing shapes made in
+        batches), and those of them just made, in scene order. ``shown`` are the free bodies still visible."""
+        indices = list(indices)
         bodies: list[int | None] = []
-        missing: dict[tuple, list[int]] = defaultdict(list)  # shape -> indices of the obstacles it has no body for
-        for i, key in enumerate(keys):
+        missing: dict[tuple, list[int]] = defaultdict(list)  # shape -> positions in ``indices`` it has no body for
+        for n, i in enumerate(indices):
+            key = _key(obstacles[i])
             if self._free[key]:
                 body = self._free[key].pop()
                 del self._parked[body]
@@ -110,19 +154,23 @@ class ObstaclePool:
                     self._sim.set_visible(body, True, _COLOURS[key[0]])
                 bodies.append(body)
             else:
-                missing[key].append(i)
+                missing[key].append(n)
                 bodies.append(None)
-        for key, indices in missing.items():
-            for i, body in zip(indices, self._create(key, [obstacles[i] for i in indices])):
-                bodies[i] = body
-        for o, body in zip(obstacles, bodies):
+        for key, positions in missing.items():
+            for n, body in zip(positions, self._create(key, [obstacles[indices[n]] for n in positions])):
+                bodies[n] = body
+        placed = cast(list[int], bodies)
+        for i, body in zip(indices, placed):
+            o = obstacles[i]
             self._sim.move_static(body, o.centre, yaw_quat(o.yaw))
             if o.movable:  # awake, so that it settles where it was put and stays put by its own contacts
                 self._sim.set_mass(body, o.mass, inertia(o))
             else:
                 self._sim.sleep(body)
-        self._sim.order_broadphase([bodies[i] for i in sorted(i for indices in missing.values() for i in indices)])
-        self._active = list(zip(keys, bodies))
+        return placed, [placed[n] for n in sorted(n for positions in missing.values() for n in positions)]
+
+    def _park(self, released: list[tuple[tuple, int]]) -> None:
+        """Park the ``released`` bodies that were not reused, after deleting the oldest beyond ``max_parked``."""
         self._evict()
         for _, body in released:
             if body in self._parked:
@@ -132,7 +180,6 @@ class ObstaclePool:
                 self._sim.move_static(body, position, (0.0, 0.0, 0.0, 1.0))
                 self._sim.sleep(body)
                 self._sim.set_visible(body, False, _COLOURS[self._parked[body][0]])
-        return bodies
 
     def _evict(self) -> None:
         """Delete the least recently parked bodies beyond ``max_parked``."""
