@@ -90,6 +90,8 @@ class ClutterEnv(gym.Env):
         sim = Sim(physics_hz=physics_hz, solver_iterations=solver_iterations, gui=render_mode == "human",
                   visuals=visuals)
         self.sim, self.robot, self.arena, self.checker, self.task = sim, robot, arena, checker, task
+        # a large scene keeps its far obstacles out of the physics unless something reads every body
+        arena.near_field = not visuals and not any(s.needs_bodies for s in self.sensors)
         self.safety = safety
         self._scan: np.ndarray | None = None  # the reading of the safety filter's sensor delivered last
         self._scan_from = _sensor_named(self.sensors, safety.sensor) if safety else None
@@ -183,6 +185,7 @@ class ClutterEnv(gym.Env):
         self.task.reset(scene, state)
         report = self.checker.check(state, self.sim.contact_distances(self.robot.body))
         self._check_start(report, options)
+        self._follow(state)
         obs, info = self._observe(state, report)
         info.update(
             min_clearance=report.min_clearance, n_contacts=report.n_contacts, is_success=False,
@@ -227,6 +230,7 @@ class ClutterEnv(gym.Env):
         state = self.robot.state()
         self._note_focus(state)
         report = self.checker.check(state, self.sim.contact_distances(self.robot.body))
+        self._follow(state)
         obs, info = self._observe(state, report)
         outcome = self.task.evaluate(state, report, a)
         info.update(
@@ -244,6 +248,21 @@ class ClutterEnv(gym.Env):
         if self.render_mode == "human":
             self.render()
         return obs, float(outcome.reward), outcome.terminated, False, info
+
+    def _follow(self, state: RobotState) -> None:
+        """In a large scene (``worlds/near_field.py``), make every obstacle the robot could touch in the next step a
+        body: those within the ball of the robot's shapes (synced by the last check) grown by twice the distance its
+        fastest point covers in a step at the speeds of ``state``."""
+        if not self.arena.near_field_engaged:
+            return
+        centre, reach = self.checker.model.bounding_ball()
+        linear = np.vstack((state.linear_velocity, state.links.linear_velocity))
+        angular = np.vstack((state.angular_velocity, state.links.angular_velocity))
+        speed = math.sqrt(float((linear * linear).sum(axis=1).max()))
+        speed += math.sqrt(float((angular * angular).sum(axis=1).max())) * reach
+        bodies = self.arena.follow(centre, reach + 2.0 * speed / self._control_hz)
+        if bodies is not None:
+            self.checker.set_obstacle_bodies(bodies)
 
     def _choose_physics(self, scene: Layout) -> None:
         """Under ``physics="auto"``, tick this episode at what ``scene`` needs (the env's own settings unless it

@@ -125,7 +125,19 @@ class TickedRobot(Robot, Protocol):
 
 
 class Arena(Protocol[L]):
-    """The world around the robot: fixed structure built with the world, clutter moved into place per episode."""
+    """The world around the robot: fixed structure built with the world, clutter moved into place per episode.
+
+    Attributes:
+        near_field: whether a large scene may keep its far static obstacles out of the physics world (they stay in
+            the collision checker and in the Sim's primitives); the env sets it False when a sensor or renderer
+            reads pybullet's bodies.
+    """
+
+    near_field: bool
+
+    @property
+    def near_field_engaged(self) -> bool:
+        """Whether this episode's scene keeps far obstacles out of the physics world (call :meth:`follow`)."""
 
     def load(self, sim: Sim) -> None:
         """Build the fixed structure (walls, a table) in an empty world; like :meth:`Robot.load`, called again
@@ -136,7 +148,11 @@ class Arena(Protocol[L]):
 
     def place(self, scene: L) -> tuple[tuple[Obstacle, ...], list[int]]:
         """Move pooled bodies into ``scene``; returns every obstacle (fixed structure included) and its body ids,
-        in the same order, for the collision checker."""
+        in the same order (-1 for an obstacle without a body), for the collision checker."""
+
+    def follow(self, centre: np.ndarray, radius: float) -> list[int] | None:
+        """Make every obstacle within ``radius`` metres of ``centre`` a body before the next physics tick; returns
+        the obstacle bodies (fixed structure included) when they changed, else None."""
 
     def render_camera(self, sim: Sim, robot: np.ndarray, goal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(eye, target) in metres, world frame, of the ``rgb_array`` view (and of the GUI camera under
@@ -184,6 +200,9 @@ class Sensor(Protocol):
         read_every_step: the sensor must be read every control step even while its output is held (state that
             integrates over time, like the IMU's finite difference).
         renders: the sensor draws images of the world, so the Sim must give obstacles visual shapes.
+        needs_bodies: the sensor reads pybullet's bodies (pybullet's rays or renderer), so every obstacle must be a
+            body in the physics world; a large scene otherwise keeps its far obstacles out of it (the Sim's
+            primitives still hold them for the exact caster and the ray-cast camera).
     """
 
     @property
@@ -197,6 +216,9 @@ class Sensor(Protocol):
 
     @property
     def renders(self) -> bool: ...
+
+    @property
+    def needs_bodies(self) -> bool: ...
 
     def reset(self, sim: Sim, state: RobotState, rng: np.random.Generator) -> None:
         """Start an episode: draw per-episode errors (biases, gains) from ``rng``."""

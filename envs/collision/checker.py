@@ -120,6 +120,11 @@ class CollisionChecker:
         self._previous = None  # a reset teleports the robot: nothing to sweep from
         self._touching: set[tuple[int, int]] = set()  # (shape, obstacle) pairs within the tolerance at the last check
 
+    def set_obstacle_bodies(self, bodies: Sequence[int]) -> None:
+        """The pybullet bodies of the obstacles now, where a large scene gave some obstacles bodies or took them back
+        (``worlds/near_field.py``): pybullet's contacts are counted against these."""
+        self._obstacle_bodies = frozenset(bodies)
+
     def move_obstacles(self, obstacles: np.ndarray, positions: np.ndarray, rotations: np.ndarray) -> None:
         """Put movable ``obstacles`` (indices into the scene's) where the physics moved them: centres (k, 3) and
         rotation matrices (k, 3, 3), world frame."""

@@ -188,6 +188,14 @@ class RobotCollisionModel:
         """(n, 3) world centres of the shapes' enclosing balls (radii :attr:`ball_radius`) at the synced poses."""
         return self.ball_centres_at(self.position, self.rotation)
 
+    def bounding_ball(self) -> tuple[np.ndarray, float]:
+        """(centre (3,), radius) of a ball holding every shape at the synced poses, padding included, metres: about
+        the middle of the shapes' enclosing balls."""
+        centres = self.ball_centres()
+        middle = 0.5 * (centres.min(axis=0) + centres.max(axis=0))
+        gaps = centres - middle
+        return middle, float((np.sqrt((gaps * gaps).sum(axis=1)) + self.ball_radius + self.padding).max())
+
     def ball_centres_at(self, position: np.ndarray, rotation: np.ndarray) -> np.ndarray:
         """(n, 3) world centres of the shapes' enclosing balls with the shapes at ``position`` (n, 3) and
         ``rotation`` (n, 3, 3)."""

@@ -30,6 +30,7 @@ from clutter_gym.noise.camera import (
 )
 from clutter_gym.noise.distortion import Intrinsics
 from clutter_gym.sim import Sim
+from clutter_gym.sim.primitives import BACKDROP_ID
 
 CAMERA_MODES = ("rgb", "depth", "segmentation")
 RENDERERS = ("tiny", "egl", "rays")
@@ -37,6 +38,7 @@ RENDERERS = ("tiny", "egl", "rays")
 RAY_MODES = ("depth", "segmentation")
 #: Segmentation classes, by value: what each pixel shows.
 SEGMENTATION_CLASSES = ("nothing", "ground", "obstacle", "robot", "goal")
+_OBSTACLE = SEGMENTATION_CLASSES.index("obstacle")
 
 
 @dataclass(frozen=True)
@@ -144,6 +146,7 @@ class Camera:
         self._classes = np.zeros(1, dtype=np.uint8)
         self._egl_loaded = False
         self.renders = c.renderer != "rays"  # the ray caster needs no visual shapes in the world
+        self.needs_bodies = self.renders  # and sees obstacles without bodies (Sim.ray_cast_image)
 
     def reset(self, sim: Sim, state: RobotState, rng: np.random.Generator) -> None:
         if self.config.renderer == "egl" and not self._egl_loaded:
@@ -179,7 +182,11 @@ class Camera:
                 z = c.far * c.near / (c.far - (c.far - c.near) * buffer)
                 images["depth"] = np.where(z < c.far - 1e-3, z, 0.0)
         if "segmentation" in c.modes:
-            images["segmentation"] = self._classes[np.clip(ids + 1, 0, len(self._classes) - 1)]
+            table = self._classes
+            # bodies made after the reset (a large scene's near obstacles) and obstacles without a body
+            # (Sim.ray_cast_image's BACKDROP_ID) are obstacles
+            other = (ids == BACKDROP_ID) | (ids + 1 >= len(table))
+            images["segmentation"] = np.where(other, _OBSTACLE, table[np.clip(ids + 1, 0, len(table) - 1)])
         return {mode: images[mode] for mode in c.modes}
 
     def read(self, sim: Sim, state: RobotState, rng: np.random.Generator) -> dict[str, np.ndarray]:

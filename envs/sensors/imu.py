@@ -45,6 +45,7 @@ class Imu:
     name = "imu"
     read_every_step = True  # the finite difference needs every control step, even while the output is held
     renders = False
+    needs_bodies = False
 
     def __init__(self, config: ImuConfig, noise: ImuNoise | None = None) -> None:
         self.config = c = config

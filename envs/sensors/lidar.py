@@ -106,6 +106,7 @@ class Lidar:
                              f"lidar.min_range {self.noise.min_range}) = {lo} m to min(lidar_range {c.max_range}, "
                              f"lidar.max_range {self.noise.max_range}) = {hi} m")
         self.spaces = {"lidar": spaces.Box(0.0, 1.0, shape=c.shape, dtype=np.float32)}
+        self.needs_bodies = c.caster == "pybullet"  # the exact caster casts against the Sim's primitives
         az = np.broadcast_to(c.angles, c.shape).reshape(-1)
         el = np.repeat(c.elevations, c.n_rays)
         self._dirs = np.stack([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)], axis=1)

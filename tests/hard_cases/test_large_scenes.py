@@ -15,6 +15,7 @@ from clutter_gym.worlds.pool import PARK_DEPTH
 @pytest.fixture(scope="module")
 def env():
     env = gym.make("ClutterNav-v0", arena_size=30.0)
+    env.unwrapped.arena.near_field = False  # every obstacle a body, as in an env that renders (test_near_field.py)
     yield env
     env.close()
 
@@ -24,7 +25,7 @@ def test_a_large_layout_is_placed_exactly_and_torn_down_to_the_cap(env):
     env.reset(seed=0, options={"scene": big})
     unwrapped = env.unwrapped
     cid = unwrapped.sim.client_id
-    for o, body in zip(big["obstacles"], unwrapped.arena._pool._active):
+    for o, body in zip(big["obstacles"], unwrapped.arena._pool.placed.items()):
         position, quaternion = pb.getBasePositionAndOrientation(body[1], physicsClientId=cid)
         np.testing.assert_allclose(position[:2], o["position"], atol=1e-9)
         yaw = o.get("yaw", 0.0)
