@@ -82,6 +82,11 @@ class PrimitiveTable:
         self._backdrop_shown = np.array(shown, dtype=bool)
         self._joined.clear()
 
+    @property
+    def backdrop_shown(self) -> bool:
+        """Whether some backdrop row is shown: something rays can hit has no pybullet body."""
+        return bool(self._backdrop_shown.any())
+
     def clear_backdrop(self) -> None:
         """No backdrop."""
         self._backdrop, self._backdrop_shown = None, np.zeros(0, dtype=bool)

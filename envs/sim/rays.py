@@ -53,12 +53,19 @@ class Rays:
 
         Raises:
             ValueError: ``caster`` is not one of :data:`RAY_CASTERS`.
+            RuntimeError: pybullet is to cast while some obstacles have no body (the primitives' backdrop): its
+                rays would pass through them.
         """
         if caster not in RAY_CASTERS:
             raise ValueError(f"caster must be one of {RAY_CASTERS}, got {caster!r}")
         if caster == "exact" and (body < 0 or link >= 0) and self.exact_rays_model_world():
             origin, axes = self.link_frame(body, link) if body >= 0 else (_ORIGIN, _AXES)
             return self.cast_exact(starts, ends, origin, axes)
+        if self.primitives.backdrop_shown:
+            raise RuntimeError("pybullet cannot cast these rays: a large scene keeps its far obstacles out of the "
+                               "physics world (worlds/near_field.py), and the world holds bodies the exact caster does "
+                               "not model; set env.unwrapped.arena.near_field = False before reset to keep every "
+                               "obstacle a body")
         if len(starts) > MAX_RAY_BATCH:
             return np.concatenate([
                 self.ray_hit_fractions(starts[i:i + MAX_RAY_BATCH], ends[i:i + MAX_RAY_BATCH], body, link)

@@ -193,6 +193,8 @@ def test_the_backdrop_is_seen_only_where_it_is_shown():
     assert (ids == BACKDROP_ID).sum() == 2
     with pytest.raises(ValueError, match="one flag per backdrop row"):
         sim.primitives.show_backdrop(np.array([True]))
+    with pytest.raises(RuntimeError, match="near_field = False"):  # pybullet's rays would pass through them
+        sim.ray_hit_fractions(starts, ends, caster="pybullet")
     sim.primitives.clear_backdrop()
     np.testing.assert_array_equal(sim.cast_exact(starts, ends), [1.0, 1.0])
     sim.close()
