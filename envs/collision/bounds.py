@@ -14,9 +14,14 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from clutter_gym.collision.kernels import box_cylinder_distance
 from clutter_gym.datatypes import Obstacle
+
+#: relative widening of the k-d tree's search radius in :meth:`ObstacleBounds.near`, so that the tree's own rounding
+#: cannot leave out a column that the exact gap filter keeps
+TREE_SLACK = 1e-9
 
 
 class ObstacleBounds:
@@ -53,6 +58,11 @@ class ObstacleBounds:
         half[1, self._split:] = np.inf
         self._half = half
         self._column = np.argsort(self.index)  # obstacle index -> column
+        self._widest = float(self.enclosing.max(initial=0.0))
+        #: k-d tree over the centres as they were when it was built (lazily: small scenes never ask for it)
+        self._tree: cKDTree | None = None
+        self._moved = np.zeros(len(self.index), dtype=bool)  # columns moved since the tree was built
+        self._moved_columns = np.zeros(0, dtype=int)
 
     def move(self, obstacles: np.ndarray, centres: np.ndarray, rotations: np.ndarray) -> None:
         """Put ``obstacles`` (indices) at ``centres`` (k, 3) with ``rotations`` (k, 3, 3), world frame: any
@@ -62,14 +72,30 @@ class ObstacleBounds:
         to_local[:3, :, columns] = rotations.transpose(1, 2, 0)
         to_local[3, :, columns] = -np.einsum("kji,kj->ki", rotations, centres)
         self.centres[columns] = centres
+        if self._tree is not None:  # the tree holds their old centres: :meth:`near` checks them one by one
+            self._moved[columns] = True
+            self._moved_columns = np.flatnonzero(self._moved)
 
     def __len__(self) -> int:
         return len(self.index)
 
     def near(self, centre: np.ndarray, reach: float) -> np.ndarray:
-        """Columns whose obstacle's enclosing ball comes within ``reach`` of ``centre`` (3,), ascending."""
-        gap = np.linalg.norm(self.centres - centre, axis=1) - self.enclosing
-        return np.flatnonzero(gap <= reach)
+        """Columns whose obstacle's enclosing ball comes within ``reach`` of ``centre`` (3,), ascending.
+
+        A k-d tree over the centres, built on the first call, gives the columns whose centres lie within ``reach``
+        plus the widest enclosing radius; movable obstacles moved since then are added whatever their distance (the
+        tree has their old centres). Each of those is then kept by the same gap test as a pass over every column
+        would make, so the answer is that pass's, at a cost that follows the obstacles near ``centre``.
+        """
+        if self._tree is None:
+            self._tree = cKDTree(self.centres, copy_data=True)  # move() writes into the centres
+        radius = (reach + self._widest) * (1.0 + TREE_SLACK)
+        columns = np.array(self._tree.query_ball_point(centre, radius, return_sorted=True) if radius >= 0.0 else [],
+                           dtype=int)
+        if self._moved_columns.size:
+            columns = np.union1d(columns, self._moved_columns)
+        gap = np.linalg.norm(self.centres[columns] - centre, axis=1) - self.enclosing[columns]
+        return columns[gap <= reach]
 
     def signed_distance_to(self, points: np.ndarray, obstacles: np.ndarray) -> np.ndarray:
         """(P, len(obstacles)) :meth:`signed_distance` from each point to the obstacles with these indices, in their
