@@ -22,6 +22,10 @@ from clutter_gym.datatypes import Obstacle
 #: relative widening of the k-d tree's search radius in :meth:`ObstacleBounds.near`, so that the tree's own rounding
 #: cannot leave out a column that the exact gap filter keeps
 TREE_SLACK = 1e-9
+#: obstacles whose enclosing radius is more than this many times the median one are left out of the k-d tree and
+#: checked one by one: the tree's search must reach as far as its widest obstacle, and an arena's walls would widen
+#: every search to half the arena
+OUTSIZED = 2.0
 
 
 class ObstacleBounds:
@@ -58,11 +62,13 @@ class ObstacleBounds:
         half[1, self._split:] = np.inf
         self._half = half
         self._column = np.argsort(self.index)  # obstacle index -> column
-        self._widest = float(self.enclosing.max(initial=0.0))
-        #: k-d tree over the centres as they were when it was built (lazily: small scenes never ask for it)
+        #: k-d tree over the centres as they were when it was built (lazily: small scenes never ask for it), the
+        #: columns it holds, and the widest enclosing radius among them
         self._tree: cKDTree | None = None
-        self._moved = np.zeros(len(self.index), dtype=bool)  # columns moved since the tree was built
-        self._moved_columns = np.zeros(0, dtype=int)
+        self._tree_columns = np.zeros(0, dtype=int)
+        self._widest = 0.0
+        #: columns :meth:`near` checks one by one: outsized ones, and those moved since the tree was built
+        self._each = np.zeros(0, dtype=int)
 
     def move(self, obstacles: np.ndarray, centres: np.ndarray, rotations: np.ndarray) -> None:
         """Put ``obstacles`` (indices) at ``centres`` (k, 3) with ``rotations`` (k, 3, 3), world frame: any
@@ -73,8 +79,7 @@ class ObstacleBounds:
         to_local[3, :, columns] = -np.einsum("kji,kj->ki", rotations, centres)
         self.centres[columns] = centres
         if self._tree is not None:  # the tree holds their old centres: :meth:`near` checks them one by one
-            self._moved[columns] = True
-            self._moved_columns = np.flatnonzero(self._moved)
+            self._each = np.union1d(self._each, columns)
 
     def __len__(self) -> int:
         return len(self.index)
@@ -83,19 +88,30 @@ class ObstacleBounds:
         """Columns whose obstacle's enclosing ball comes within ``reach`` of ``centre`` (3,), ascending.
 
         A k-d tree over the centres, built on the first call, gives the columns whose centres lie within ``reach``
-        plus the widest enclosing radius; movable obstacles moved since then are added whatever their distance (the
-        tree has their old centres). Each of those is then kept by the same gap test as a pass over every column
-        would make, so the answer is that pass's, at a cost that follows the obstacles near ``centre``.
+        plus the widest enclosing radius among its own; outsized obstacles (``OUTSIZED``) and movable ones moved
+        since then (the tree has their old centres) are added whatever their distance. Each of those is then kept
+        by the same gap test as a pass over every column would make, so the answer is that pass's, at a cost that
+        follows the obstacles near ``centre``.
         """
         if self._tree is None:
-            self._tree = cKDTree(self.centres, copy_data=True)  # move() writes into the centres
+            self._build_tree()
+        assert self._tree is not None
         radius = (reach + self._widest) * (1.0 + TREE_SLACK)
-        columns = np.array(self._tree.query_ball_point(centre, radius, return_sorted=True) if radius >= 0.0 else [],
-                           dtype=int)
-        if self._moved_columns.size:
-            columns = np.union1d(columns, self._moved_columns)
+        hits = self._tree.query_ball_point(centre, radius, return_sorted=True) if radius >= 0.0 else []
+        columns = self._tree_columns[np.array(hits, dtype=int)]
+        if self._each.size:
+            columns = np.union1d(columns, self._each)
         gap = np.linalg.norm(self.centres[columns] - centre, axis=1) - self.enclosing[columns]
         return columns[gap <= reach]
+
+    def _build_tree(self) -> None:
+        """The k-d tree of :meth:`near` over the columns not outsized, at their centres now."""
+        typical = float(np.median(self.enclosing)) if len(self.index) else 0.0
+        outsized = self.enclosing > OUTSIZED * typical
+        self._tree_columns = np.flatnonzero(~outsized)
+        self._tree = cKDTree(self.centres[self._tree_columns])  # a copy: move() writes into the centres
+        self._widest = float(self.enclosing[self._tree_columns].max(initial=0.0))
+        self._each = np.flatnonzero(outsized)
 
     def signed_distance_to(self, points: np.ndarray, obstacles: np.ndarray) -> np.ndarray:
         """(P, len(obstacles)) :meth:`signed_distance` from each point to the obstacles with these indices, in their
