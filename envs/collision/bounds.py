@@ -67,8 +67,10 @@ class ObstacleBounds:
         self._tree: cKDTree | None = None
         self._tree_columns = np.zeros(0, dtype=int)
         self._widest = 0.0
-        #: columns :meth:`near` checks one by one: outsized ones, and those moved since the tree was built
+        #: columns :meth:`near` checks one by one: outsized ones, and those moved since the tree was built (which
+        #: the tree also holds, at their old centres: ``_moved`` marks them)
         self._each = np.zeros(0, dtype=int)
+        self._moved = np.zeros(len(self.index), dtype=bool)
 
     def move(self, obstacles: np.ndarray, centres: np.ndarray, rotations: np.ndarray) -> None:
         """Put ``obstacles`` (indices) at ``centres`` (k, 3) with ``rotations`` (k, 3, 3), world frame: any
@@ -80,6 +82,7 @@ class ObstacleBounds:
         self.centres[columns] = centres
         if self._tree is not None:  # the tree holds their old centres: :meth:`near` checks them one by one
             self._each = np.union1d(self._each, columns)
+            self._moved[columns] = True
 
     def __len__(self) -> int:
         return len(self.index)
@@ -97,11 +100,13 @@ class ObstacleBounds:
             self._build_tree()
         assert self._tree is not None
         radius = (reach + self._widest) * (1.0 + TREE_SLACK)
-        hits = self._tree.query_ball_point(centre, radius, return_sorted=True) if radius >= 0.0 else []
+        hits = self._tree.query_ball_point(centre, radius) if radius >= 0.0 else []
         columns = self._tree_columns[np.array(hits, dtype=int)]
         if self._each.size:
-            columns = np.union1d(columns, self._each)
-        gap = np.linalg.norm(self.centres[columns] - centre, axis=1) - self.enclosing[columns]
+            columns = np.concatenate((columns[~self._moved[columns]], self._each))
+        columns.sort()
+        offset = self.centres[columns] - centre
+        gap = np.sqrt(np.add.reduce(offset * offset, axis=1)) - self.enclosing[columns]  # np.linalg.norm's sum
         return columns[gap <= reach]
 
     def _build_tree(self) -> None:
@@ -112,6 +117,7 @@ class ObstacleBounds:
         self._tree = cKDTree(self.centres[self._tree_columns])  # a copy: move() writes into the centres
         self._widest = float(self.enclosing[self._tree_columns].max(initial=0.0))
         self._each = np.flatnonzero(outsized)
+        self._moved[:] = False
 
     def signed_distance_to(self, points: np.ndarray, obstacles: np.ndarray) -> np.ndarray:
         """(P, len(obstacles)) :meth:`signed_distance` from each point to the obstacles with these indices, in their

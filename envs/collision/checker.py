@@ -251,17 +251,20 @@ class CollisionChecker:
                            for (i, nearest_first, lower), limit in zip(ordered, limits)]
             found.extend((i, *result) for i, result in zip(shapes.tolist(), results))
             return rows[:0]
-        left = []
-        for row in rows.tolist():
-            i, lower = int(moving[row]), bound[row]
-            cutoff = within + self.model.padding[i]
-            kept = np.flatnonzero(lower <= cutoff)
-            if kept.size > SMALL_SCENE:
-                result = self._nearest_in_order(i, candidates[kept], lower[kept], float(self._limits_array[row]))
-            else:
-                kept = kept[np.argsort(lower[kept], kind="stable")]
-                result = self._nearest_obstacle(i, candidates[kept].tolist(), lower[kept].tolist(),
-                                                float(self._limits_array[row]))
+        shapes, lower_bounds = moving[rows], bound[rows]
+        cutoffs = within + self.model.padding[shapes]
+        kept = lower_bounds <= cutoffs[:, None]
+        limits, left = self._limits_array[rows].tolist(), []
+        if lower_bounds.shape[1] > SMALL_SCENE:
+            results = [self._nearest_in_order(i, candidates[k], lower[k], limit)
+                       for i, k, lower, limit in zip(shapes.tolist(), kept, lower_bounds, limits)]
+        else:  # one stable sort for every row, the bounds above a row's cutoff last (and then left out)
+            order = np.argsort(np.where(kept, lower_bounds, np.inf), axis=1, kind="stable")
+            ordered = zip(shapes.tolist(), kept.sum(axis=1).tolist(), candidates[order].tolist(),
+                          np.take_along_axis(lower_bounds, order, axis=1).tolist())
+            results = [self._nearest_obstacle(i, nearest_first[:k], lower[:k], limit)
+                       for (i, k, nearest_first, lower), limit in zip(ordered, limits)]
+        for row, i, result, cutoff in zip(rows.tolist(), shapes.tolist(), results, cutoffs.tolist()):
             if result[0] <= cutoff:
                 found.append((i, *result))
             else:
