@@ -256,7 +256,7 @@ class CollisionChecker:
         kept = lower_bounds <= cutoffs[:, None]
         limits, left = self._limits_array[rows].tolist(), []
         if lower_bounds.shape[1] > SMALL_SCENE:
-            results = [self._nearest_in_order(i, candidates[k], lower[k], limit)
+            results = [self._nearest_kept(i, candidates, lower, np.flatnonzero(k), limit)
                        for i, k, lower, limit in zip(shapes.tolist(), kept, lower_bounds, limits)]
         else:  # one stable sort for every row, the bounds above a row's cutoff last (and then left out)
             order = np.argsort(np.where(kept, lower_bounds, np.inf), axis=1, kind="stable")
@@ -270,6 +270,15 @@ class CollisionChecker:
             else:
                 left.append(row)
         return np.array(left, dtype=int)
+
+    def _nearest_kept(self, i: int, candidates: np.ndarray, lower: np.ndarray, kept: np.ndarray, limit: float
+                      ) -> tuple[float, int, np.ndarray | None]:
+        """:meth:`_nearest_obstacle` over the ``kept`` columns (ascending) of ``candidates`` in ascending (stable)
+        order of their bounds ``lower``: :meth:`_nearest_in_order` where they are many."""
+        if kept.size > SMALL_SCENE:
+            return self._nearest_in_order(i, candidates[kept], lower[kept], limit)
+        kept = kept[np.argsort(lower[kept], kind="stable")]
+        return self._nearest_obstacle(i, candidates[kept].tolist(), lower[kept].tolist(), limit)
 
     def _nearest_in_order(self, i: int, candidates: np.ndarray, lower: np.ndarray, limit: float
                           ) -> tuple[float, int, np.ndarray | None]:

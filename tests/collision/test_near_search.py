@@ -171,6 +171,23 @@ def test_narrow_first_search_equals_every_obstacle_on_random_poses(monkeypatch, 
     assert seen["in range"] == 148 and seen["contacts"] > 5, seen
 
 
+@pytest.mark.parametrize("per_link", [True, False])
+@pytest.mark.parametrize("fidelity", ["primitive", "sphere"])
+def test_an_arm_beside_dense_clutter_widens_onto_many_obstacles(monkeypatch, fidelity, per_link):
+    """The arm beside a dense patch of clutter: shapes far from it find nothing in the first search, and the wider
+    one finds far more obstacles than ``SMALL_SCENE``, of which some shapes keep few and some many; every answer
+    is the one every obstacle gives."""
+    rng = np.random.default_rng(1)
+    obstacles = [Obstacle("box", (0.08, 0.08, 0.08), (float(x), float(y)), 0.0, float(z))
+                 for x, y, z in rng.uniform((0.8, -1.5, 0.0), (2.5, 1.5, 1.2), (600, 3))]
+    narrow, full = checker_pair(fidelity, per_link, obstacles)
+    seen = {"in range": 0, "contacts": 0, "tunneling": 0}
+    for _ in range(15):
+        state = arm_state(rng.uniform(LIMITS[:, 0], LIMITS[:, 1]), np.zeros(3), float(rng.uniform(-np.pi, np.pi)))
+        compare(monkeypatch, narrow, full, state, seen)
+    assert seen["in range"] == 15 and seen["contacts"] > 0, seen
+
+
 # ------------------------------------------------------------------------------ the edge of the first search
 def one_link_robot(path, geometry: str) -> RobotCollisionModel:
     """A robot that is one link "body" of the URDF collision ``geometry`` (elements centred on its origin), padded
