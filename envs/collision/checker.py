@@ -251,6 +251,8 @@ class CollisionChecker:
                            for (i, nearest_first, lower), limit in zip(ordered, limits)]
             found.extend((i, *result) for i, result in zip(shapes.tolist(), results))
             return rows[:0]
+        if not bound.shape[1]:
+            return rows
         shapes, lower_bounds = moving[rows], bound[rows]
         cutoffs = within + self.model.padding[shapes]
         kept = lower_bounds <= cutoffs[:, None]
@@ -262,7 +264,7 @@ class CollisionChecker:
             order = np.argsort(np.where(kept, lower_bounds, np.inf), axis=1, kind="stable")
             ordered = zip(shapes.tolist(), kept.sum(axis=1).tolist(), candidates[order].tolist(),
                           np.take_along_axis(lower_bounds, order, axis=1).tolist())
-            results = [self._nearest_obstacle(i, nearest_first[:k], lower[:k], limit)
+            results = [self._nearest_obstacle(i, nearest_first[:k], lower[:k], limit) if k else (limit, -1, None)
                        for (i, k, nearest_first, lower), limit in zip(ordered, limits)]
         for row, i, result, cutoff in zip(rows.tolist(), shapes.tolist(), results, cutoffs.tolist()):
             if result[0] <= cutoff:
