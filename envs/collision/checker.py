@@ -2,7 +2,8 @@
 
 The obstacles' FCL objects are placed, and their arrays for bounds (:mod:`bounds`) rebuilt, on reset only. Each step
 moves the robot's FCL objects to the link poses the robot read in one batched call, bounds every (shape,
-obstacle) pair from below in one compiled pass, then:
+obstacle) pair from below in one compiled pass (in a large scene, the obstacles near the robot: searched narrow
+first, and wider only while some answer is not proved exact), then:
 
 1. each moving shape asks FCL about its obstacles in order of their bounds, until no bound can beat the best
    exact distance: every link's clearance (capped at ``clearance_range``), its witness points and the closest
