@@ -14,9 +14,18 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from clutter_gym.collision.kernels import box_cylinder_distance
 from clutter_gym.datatypes import Obstacle
+
+#: relative widening of the k-d tree's search radius in :meth:`ObstacleBounds.near`, so that the tree's own rounding
+#: cannot leave out a column that the exact gap filter keeps
+TREE_SLACK = 1e-9
+#: obstacles whose enclosing radius is more than this many times the median one are left out of the k-d tree and
+#: checked one by one: the tree's search must reach as far as its widest obstacle, and an arena's walls would widen
+#: every search to half the arena
+OUTSIZED = 2.0
 
 
 class ObstacleBounds:
@@ -53,6 +62,15 @@ class ObstacleBounds:
         half[1, self._split:] = np.inf
         self._half = half
         self._column = np.argsort(self.index)  # obstacle index -> column
+        #: k-d tree over the centres as they were when it was built (lazily: small scenes never ask for it), the
+        #: columns it holds, and the widest enclosing radius among them
+        self._tree: cKDTree | None = None
+        self._tree_columns = np.zeros(0, dtype=int)
+        self._widest = 0.0
+        #: columns :meth:`near` checks one by one: outsized ones, and those moved since the tree was built (which
+        #: the tree also holds, at their old centres: ``_moved`` marks them)
+        self._each = np.zeros(0, dtype=int)
+        self._moved = np.zeros(len(self.index), dtype=bool)
 
     def move(self, obstacles: np.ndarray, centres: np.ndarray, rotations: np.ndarray) -> None:
         """Put ``obstacles`` (indices) at ``centres`` (k, 3) with ``rotations`` (k, 3, 3), world frame: any
@@ -62,14 +80,44 @@ class ObstacleBounds:
         to_local[:3, :, columns] = rotations.transpose(1, 2, 0)
         to_local[3, :, columns] = -np.einsum("kji,kj->ki", rotations, centres)
         self.centres[columns] = centres
+        if self._tree is not None:  # the tree holds their old centres: :meth:`near` checks them one by one
+            self._each = np.union1d(self._each, columns)
+            self._moved[columns] = True
 
     def __len__(self) -> int:
         return len(self.index)
 
     def near(self, centre: np.ndarray, reach: float) -> np.ndarray:
-        """Columns whose obstacle's enclosing ball comes within ``reach`` of ``centre`` (3,), ascending."""
-        gap = np.linalg.norm(self.centres - centre, axis=1) - self.enclosing
-        return np.flatnonzero(gap <= reach)
+        """Columns whose obstacle's enclosing ball comes within ``reach`` of ``centre`` (3,), ascending.
+
+        A k-d tree over the centres, built on the first call, gives the columns whose centres lie within ``reach``
+        plus the widest enclosing radius among its own; outsized obstacles (``OUTSIZED``) and movable ones moved
+        since then (the tree has their old centres) are added whatever their distance. Each of those is then kept
+        by the same gap test as a pass over every column would make, so the answer is that pass's, at a cost that
+        follows the obstacles near ``centre``.
+        """
+        if self._tree is None:
+            self._build_tree()
+        assert self._tree is not None
+        radius = (reach + self._widest) * (1.0 + TREE_SLACK)
+        hits = self._tree.query_ball_point(centre, radius) if radius >= 0.0 else []
+        columns = self._tree_columns[np.array(hits, dtype=int)]
+        if self._each.size:
+            columns = np.concatenate((columns[~self._moved[columns]], self._each))
+        columns.sort()
+        offset = self.centres[columns] - centre
+        gap = np.sqrt(np.add.reduce(offset * offset, axis=1)) - self.enclosing[columns]  # np.linalg.norm's sum
+        return columns[gap <= reach]
+
+    def _build_tree(self) -> None:
+        """The k-d tree of :meth:`near` over the columns not outsized, at their centres now."""
+        typical = float(np.median(self.enclosing)) if len(self.index) else 0.0
+        outsized = self.enclosing > OUTSIZED * typical
+        self._tree_columns = np.flatnonzero(~outsized)
+        self._tree = cKDTree(self.centres[self._tree_columns])  # a copy: move() writes into the centres
+        self._widest = float(self.enclosing[self._tree_columns].max(initial=0.0))
+        self._each = np.flatnonzero(outsized)
+        self._moved[:] = False
 
     def signed_distance_to(self, points: np.ndarray, obstacles: np.ndarray) -> np.ndarray:
         """(P, len(obstacles)) :meth:`signed_distance` from each point to the obstacles with these indices, in their

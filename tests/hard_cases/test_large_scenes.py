@@ -53,3 +53,49 @@ def test_nearest_obstacles_are_found_exactly_without_sorting_every_bound(env, mo
             full = checker.clearance()
         for a, b in zip(partial, full):
             np.testing.assert_array_equal(a, b)
+
+
+def test_a_large_scene_is_searched_near_the_robot_and_reports_what_every_obstacle_gives(env, monkeypatch):
+    """ClutterNav's clearance range is the whole arena, and its checker searches near the robot first: on driven
+    steps (from the cleared start corner, where the first search finds nothing) and on 100 random poses, every
+    report and every shape's clearance, obstacle and witness points are what every obstacle bounded gives."""
+    env.reset(seed=0, options={"scene": grid_scene(2000)})
+    unwrapped, rng = env.unwrapped, np.random.default_rng(3)
+    checker, check = unwrapped.checker, unwrapped.checker.check
+    seen = {"in range": 0, "contacts": 0}
+
+    def compared(state, pybullet_contacts=()):
+        before = checker._previous, checker._touching
+        with monkeypatch.context() as m:
+            m.setattr(clutter_gym.collision.checker, "SMALL_SCENE", 10**9)  # every obstacle bounded
+            expected, every = check(state, pybullet_contacts), checker.clearance()
+        checker._previous, checker._touching = before
+        got = check(state, pybullet_contacts)
+        for a, b in zip(checker.clearance(), every):
+            np.testing.assert_array_equal(a, b)
+        assert (got.min_clearance, got.closest, got.self_collision, got.tunneling) == (
+            expected.min_clearance, expected.closest, expected.self_collision, expected.tunneling)
+        for a, b in ((got.witness, expected.witness), (got.link_clearance, expected.link_clearance),
+                     (got.directions, expected.directions)):
+            np.testing.assert_array_equal(a, b)
+        assert [(c.link, c.obstacle, c.depth, *c.position) for c in got.contacts] == [
+            (c.link, c.obstacle, c.depth, *c.position) for c in expected.contacts]
+        seen["in range"] += got.closest is not None
+        seen["contacts"] += got.in_contact
+        return got
+
+    checker.check = compared
+    try:
+        env.reset(seed=0, options={"scene": grid_scene(2000)})
+        for action in rng.uniform(-1.0, 1.0, (150, 2)).astype(np.float32):
+            _, _, terminated, truncated, _ = env.step(action)
+            if terminated or truncated:
+                env.reset(seed=0, options={"scene": grid_scene(2000)})
+        for _ in range(100):
+            x, y = rng.uniform(-14.0, 14.0, 2)
+            unwrapped.robot.reset_pose(float(x), float(y), float(rng.uniform(-np.pi, np.pi)))
+            checker._previous = None  # a teleport: nothing to sweep
+            checker.check(unwrapped.robot.state())
+    finally:
+        del checker.check
+    assert seen["in range"] > 200 and seen["contacts"] > 5, seen
