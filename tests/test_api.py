@@ -238,7 +238,7 @@ def test_obstacles_have_visual_shapes_where_the_env_draws(make_env, kwargs, draw
     env.reset(seed=0)
     sim = env.unwrapped.sim
     colours = {pb.getVisualShapeData(body, physicsClientId=sim.client_id)[0][7]
-               for _, body in env.unwrapped.arena._pool._active}
+               for body in env.unwrapped.arena._pool.placed.values()}
     assert sim.visuals is draws
     assert (colours == {(1.0, 1.0, 1.0, 1.0)}) is not draws
     if not draws:

@@ -104,4 +104,4 @@ def test_the_render_leaves_every_colour_as_it_was(make_env):
     pool = u.arena._pool
     alpha = {b: pb.getVisualShapeData(b, physicsClientId=cid)[0][7][3] for b in pool._parked}
     assert alpha and all(a == 0.0 for a in alpha.values())
-    assert all(pb.getVisualShapeData(b, physicsClientId=cid)[0][7][3] == 1.0 for _, b in pool._active)
+    assert all(pb.getVisualShapeData(b, physicsClientId=cid)[0][7][3] == 1.0 for b in pool.placed.values())
