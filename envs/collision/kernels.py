@@ -3,7 +3,7 @@
 At a few shapes and tens of obstacles, numpy's per-call overhead costs more than the arithmetic: each of these
 replaces a chain of small numpy calls on the step's hot path with one call (docs/benchmarks.md, "The exact LIDAR
 caster and the envs' own vector env"). Each computes what the numpy it replaced did; a sum taken in another order
-can differ in its last bits, which the bounds' slack (``checker.BOUND_SLACK``) and the swept audit's threshold
+can differ in its last bits, which the bounds' slack (``nearest.BOUND_SLACK``) and the swept audit's threshold
 absorb (the checker's reports over seeded runs of the three envs are unchanged).
 """
 

@@ -12,6 +12,7 @@ see them as the table's *backdrop*: rows with no body, shown while their obstacl
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import cast
 
 import numpy as np
 
@@ -20,6 +21,8 @@ from clutter_gym.sim.ray_casting import BOX, CYLINDER
 _KINDS = {"box": BOX, "cylinder": CYLINDER}
 #: The id :meth:`PrimitiveTable.arrays` gives backdrop rows: an obstacle that has no body now.
 BACKDROP_ID = -2
+#: bodies (n,), kinds (n,), centres (n, 3), rotations (n, 3, 3), halves (n, 3): what the casters take
+Arrays = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 
 
 class PrimitiveTable:
@@ -115,7 +118,7 @@ class PrimitiveTable:
         self._shown = self._solid = None
         self._joined.clear()
 
-    def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    def arrays(self) -> Arrays:
         """The shown bodies as :func:`~clutter_gym.sim.ray_casting.cast_depth` takes them: (bodies (n,), kinds (n,),
         centres (n, 3), rotations (n, 3, 3), halves (n, 3)), then the shown backdrop rows (id :data:`BACKDROP_ID`)."""
         self._follow_moves()
@@ -123,18 +126,18 @@ class PrimitiveTable:
             self._shown = self._table([b for b in self._rows if b not in self._hidden])
         return self._with_backdrop("shown", self._shown[0])
 
-    def solids(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    def solids(self) -> Arrays:
         """The bodies rays hit, shown or not, and the shown backdrop rows, as :meth:`arrays` gives them."""
         self._follow_moves()
         if self._solid is None:
             self._solid = self._table([b for b, row in self._rows.items() if row[3]])
         return self._with_backdrop("solid", self._solid[0])
 
-    def _with_backdrop(self, name: str, table: tuple[np.ndarray, ...]) -> tuple[np.ndarray, ...]:
+    def _with_backdrop(self, name: str, table: tuple[np.ndarray, ...]) -> Arrays:
         """``table`` followed by the shown backdrop rows; joined once per change of either (the bodies' rows are
         copied in again only after one of them moved)."""
         if self._backdrop is None or not self._backdrop_shown.any():
-            return table
+            return cast(Arrays, table)
         if name not in self._joined:
             kinds, centres, rotations, halves = (a[self._backdrop_shown] for a in self._backdrop)
             ids = np.full(len(kinds), BACKDROP_ID, dtype=np.int64)
@@ -144,7 +147,7 @@ class PrimitiveTable:
         n = len(table[0])
         for a, b in zip(joined[2:4], table[2:4]):  # bodies' centres and rotations: they may have moved since
             a[:n] = b
-        return joined
+        return cast(Arrays, joined)
 
     def _follow_moves(self) -> None:
         """Write the poses of the bodies moved since the last call into the built tables' rows."""

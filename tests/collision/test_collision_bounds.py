@@ -9,8 +9,8 @@ import pytest
 
 from clutter_gym.collision import CollisionChecker, RobotCollisionModel, UrdfKinematics
 from clutter_gym.collision.bounds import ObstacleBounds
-from clutter_gym.collision.checker import SMALL_SCENE
 from clutter_gym.collision.distance import signed_distance
+from clutter_gym.collision.nearest import SMALL_SCENE
 from clutter_gym.collision.obstacles import obstacle_object
 from clutter_gym.datatypes import Obstacle
 from clutter_gym.robots import PandaArm

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import clutter_gym.collision.checker as checker_module
+import clutter_gym.collision.nearest as nearest_module
 from clutter_gym.collision import (
     CollisionChecker,
     RobotCollisionModel,
@@ -16,7 +16,7 @@ from clutter_gym.collision import (
     load_collision_elements,
 )
 from clutter_gym.collision.bounds import ObstacleBounds
-from clutter_gym.collision.checker import FIRST_SEARCH, SMALL_SCENE
+from clutter_gym.collision.nearest import FIRST_SEARCH, SMALL_SCENE
 from clutter_gym.datatypes import LinkStates, Obstacle, RobotState
 from clutter_gym.robots import PandaArm
 
@@ -118,7 +118,7 @@ def checker_pair(fidelity: str, per_link: bool, obstacles: list[Obstacle], clear
 def every_obstacle(monkeypatch, call):
     """``call()`` with every obstacle bounded, as in a scene of at most ``SMALL_SCENE`` obstacles."""
     with monkeypatch.context() as m:
-        m.setattr(checker_module, "SMALL_SCENE", 10**9)
+        m.setattr(nearest_module, "SMALL_SCENE", 10**9)
         return call()
 
 

@@ -6,7 +6,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-import clutter_gym.collision.checker
+import clutter_gym.collision.nearest
 from clutter_gym.hard_cases.large_scenes import grid_scene
 from clutter_gym.sim import pb
 from clutter_gym.worlds.pool import PARK_DEPTH
@@ -49,7 +49,7 @@ def test_nearest_obstacles_are_found_exactly_without_sorting_every_bound(env, mo
         checker.sync(unwrapped.robot.state())
         partial = checker.clearance()
         with monkeypatch.context() as m:
-            m.setattr(clutter_gym.collision.checker, "SMALL_SCENE", 10**9)  # every bound sorted
+            m.setattr(clutter_gym.collision.nearest, "SMALL_SCENE", 10**9)  # every bound sorted
             full = checker.clearance()
         for a, b in zip(partial, full):
             np.testing.assert_array_equal(a, b)
@@ -67,7 +67,7 @@ def test_a_large_scene_is_searched_near_the_robot_and_reports_what_every_obstacl
     def compared(state, pybullet_contacts=()):
         before = checker._previous, checker._touching
         with monkeypatch.context() as m:
-            m.setattr(clutter_gym.collision.checker, "SMALL_SCENE", 10**9)  # every obstacle bounded
+            m.setattr(clutter_gym.collision.nearest, "SMALL_SCENE", 10**9)  # every obstacle bounded
             expected, every = check(state, pybullet_contacts), checker.clearance()
         checker._previous, checker._touching = before
         got = check(state, pybullet_contacts)
