@@ -257,6 +257,12 @@ class ObstacleBodies:
         """Deactivate a static body so the physics tick skips it (teleporting it wakes it again)."""
         pb.changeDynamics(body, -1, activationState=pb.ACTIVATION_STATE_SLEEP, physicsClientId=self._cid)
 
+    def rotation_matrices(self, quaternions: Sequence[Sequence[float]]) -> np.ndarray:
+        """(n, 3, 3) rotation matrices of ``quaternions`` (x, y, z, w) as :meth:`move_static` gives them to
+        :attr:`primitives`, bit for bit."""
+        rows = [pb.getMatrixFromQuaternion(q, physicsClientId=self._cid) for q in quaternions]
+        return np.array(rows, dtype=float).reshape(-1, 3, 3)
+
     def move_static(self, body: int, position: Sequence[float], quaternion: Sequence[float]) -> None:
         """Teleport a static body's base inertial frame to ``position`` (metres, world frame) and ``quaternion``
         (x, y, z, w); it has no velocity to reset."""
