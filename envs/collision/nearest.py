@@ -93,7 +93,6 @@ class NearestSearch:
                 best[i], other[i], points[i] = raw_i - model.padding[i], j, p
         return best, other, points, candidates, bound, within
 
-
     def _nearest_spheres(self, rows: np.ndarray, candidates: np.ndarray, bound: np.ndarray, within: float | None,
                          answered: list[tuple[np.ndarray, np.ndarray, np.ndarray]]) -> np.ndarray:
         """Answer the sphere ``rows`` (of the moving shapes) from their bounds: append (rows, unpadded distance,
@@ -108,19 +107,15 @@ class NearestSearch:
             return rows if within is not None else rows[:0]
         nearest = np.argmin(bound[rows], axis=1)
         lowest = bound[rows, nearest]
+        left = rows[:0]
         if within is not None:
             exact = lowest <= within + self.model.padding[self._moving[rows]]
             if not exact.all():
                 rows, nearest, lowest, left = rows[exact], nearest[exact], lowest[exact], rows[~exact]
-            else:
-                left = rows[:0]
-        else:
-            left = rows[:0]
         raw = lowest + BOUND_SLACK
         in_range = raw < self._limits_array[rows]
         answered.append((rows[in_range], raw[in_range], candidates[nearest[in_range]]))
         return left
-
 
     def _nearest_obstacles(self, rows: np.ndarray, candidates: np.ndarray, bound: np.ndarray, within: float | None,
                            found: list[tuple[int, float, int, np.ndarray | None]]) -> np.ndarray:
@@ -172,7 +167,6 @@ class NearestSearch:
                 left.append(row)
         return np.array(left, dtype=int)
 
-
     def _nearest_kept(self, i: int, candidates: np.ndarray, lower: np.ndarray, kept: np.ndarray, limit: float
                       ) -> tuple[float, int, np.ndarray | None]:
         """:meth:`_nearest_obstacle` over the ``kept`` columns (ascending) of ``candidates`` in ascending (stable)
@@ -181,7 +175,6 @@ class NearestSearch:
             return self._nearest_in_order(i, candidates[kept], lower[kept], limit)
         kept = kept[np.argsort(lower[kept], kind="stable")]
         return self._nearest_obstacle(i, candidates[kept].tolist(), lower[kept].tolist(), limit)
-
 
     def _nearest_in_order(self, i: int, candidates: np.ndarray, lower: np.ndarray, limit: float
                           ) -> tuple[float, int, np.ndarray | None]:
@@ -199,7 +192,6 @@ class NearestSearch:
                 result = found
         return result
 
-
     def _sphere_witnesses(self, spheres: np.ndarray, best: np.ndarray, other: np.ndarray, points: np.ndarray) -> None:
         """Witness points, from FCL, of the spheres in range that are reported: the nearest shape of their link
         (the first of equals, as :meth:`check` picks it) or within the contact tolerance. Call after every sphere's
@@ -214,7 +206,6 @@ class NearestSearch:
         for i in reported:
             _, result = signed_distance(model.object(i), self._obstacles[other[i]])
             points[i] = result.nearest_points
-
 
     def _search_radii(self) -> list[float]:
         """The ``within`` of each search for obstacles (:meth:`_lower_bounds`), narrowest first, the last the whole
@@ -232,7 +223,6 @@ class NearestSearch:
             while radii[-1] < full:
                 radii.append(min(WIDEN * radii[-1], full))
         return radii
-
 
     def _lower_bounds(self, grow: np.ndarray | None = None, within: float | None = None
                       ) -> tuple[np.ndarray, np.ndarray]:
@@ -258,7 +248,6 @@ class NearestSearch:
                               else reach + within + BOUND_SLACK)
         return bounds.index[columns], bounds.signed_distance(centres, columns) - radii
 
-
     def _nearest_obstacle(self, i: int, obstacles: list[int], lower: list[float], limit: float
                           ) -> tuple[float, int, np.ndarray | None]:
         """(unpadded distance, obstacle index, witness points) of shape ``i``'s nearest obstacle within ``limit``.
@@ -275,7 +264,6 @@ class NearestSearch:
             if d < best:
                 best, nearest, witness = d, j, result.nearest_points
         return best, nearest, witness
-
 
     def _nearest_pair(self, candidates: np.ndarray, bound: np.ndarray, within: float | None = None
                       ) -> tuple[float, int, int, np.ndarray | None] | None:

@@ -101,7 +101,6 @@ class SweptAudit(NearestSearch):
                     hits += 1
         return hits
 
-
     def _ball_sweep_survivors(self, shape: int, motion: ScrewMotion, obstacles: list[int], reach: float) -> list[int]:
         """The ``obstacles`` that the enclosing ball of ``shape`` may come within ``reach`` of on ``motion``: its
         centre's exact distance to each at :data:`BALL_SAMPLES` times, and between two samples the cones of the path

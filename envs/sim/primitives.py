@@ -41,6 +41,7 @@ class PrimitiveTable:
         # the backdrop: (kinds, centres, rotations, halves) of shapes without a body, and which of them are shown
         self._backdrop: tuple[np.ndarray, ...] | None = None
         self._backdrop_shown = np.zeros(0, dtype=bool)
+        self._any_shown = False  # self._backdrop_shown.any(), asked at every cast
         self._joined: dict[str, tuple[np.ndarray, ...]] = {}  # "shown"/"solid" tables with the shown backdrop rows
 
     def __contains__(self, body: int) -> bool:
@@ -76,6 +77,7 @@ class PrimitiveTable:
                           np.array(rotations, dtype=float).reshape(-1, 3, 3),
                           np.array(halves, dtype=float).reshape(-1, 3))
         self._backdrop_shown = np.zeros(len(self._backdrop[0]), dtype=bool)
+        self._any_shown = False
         self._joined.clear()
 
     def show_backdrop(self, shown: np.ndarray) -> None:
@@ -83,16 +85,17 @@ class PrimitiveTable:
         if self._backdrop is None or len(shown) != len(self._backdrop_shown):
             raise ValueError(f"need one flag per backdrop row ({len(self._backdrop_shown)}), got {len(shown)}")
         self._backdrop_shown = np.array(shown, dtype=bool)
+        self._any_shown = bool(self._backdrop_shown.any())
         self._joined.clear()
 
     @property
     def backdrop_shown(self) -> bool:
         """Whether some backdrop row is shown: something rays can hit has no pybullet body."""
-        return bool(self._backdrop_shown.any())
+        return self._any_shown
 
     def clear_backdrop(self) -> None:
         """No backdrop."""
-        self._backdrop, self._backdrop_shown = None, np.zeros(0, dtype=bool)
+        self._backdrop, self._backdrop_shown, self._any_shown = None, np.zeros(0, dtype=bool), False
         self._joined.clear()
 
     def move(self, body: int, position: Sequence[float], rotation: np.ndarray | Sequence[float]) -> None:
@@ -136,7 +139,7 @@ class PrimitiveTable:
     def _with_backdrop(self, name: str, table: tuple[np.ndarray, ...]) -> Arrays:
         """``table`` followed by the shown backdrop rows; joined once per change of either (the bodies' rows are
         copied in again only after one of them moved)."""
-        if self._backdrop is None or not self._backdrop_shown.any():
+        if self._backdrop is None or not self._any_shown:
             return cast(Arrays, table)
         if name not in self._joined:
             kinds, centres, rotations, halves = (a[self._backdrop_shown] for a in self._backdrop)

@@ -46,7 +46,7 @@ class NearField:
         self._static = np.zeros(0, dtype=int)  # scene indices of the static obstacles, the backdrop's rows
         self._tree: cKDTree | None = None
         self._enclosing = np.zeros(0)  # per static obstacle: the radius of its enclosing ball about its centre
-        self._bodies: dict[int, int] = {}  # static row -> body, for the rows that have one
+        self._given: set[int] = set()  # the static rows whose obstacle has a body (the pool knows which)
         self._ball: tuple[np.ndarray, float] | None = None  # the active ball (centre, radius)
         self.refreshes = 0  # times the active ball moved (a figure for benchmarks and tests)
 
@@ -58,7 +58,7 @@ class NearField:
     def place(self, obstacles: tuple[Obstacle, ...]) -> list[int]:
         """Put a new scene in: every obstacle a body (a small scene, or an env that reads bodies), or the movable ones
         only until :meth:`follow` says where the robot is; returns body ids in scene order, -1 for none."""
-        self._obstacles, self._ball, self._bodies, self.refreshes = obstacles, None, {}, 0
+        self._obstacles, self._ball, self._given, self.refreshes = obstacles, None, set(), 0
         static = [i for i, o in enumerate(obstacles) if not o.movable]
         if not self.allowed or len(static) < NEAR_FIELD_FROM:
             self._tree = None
@@ -90,17 +90,16 @@ class NearField:
         self.refreshes += 1
         inside = set(self._within(centre, reach).tolist())
         keep = set(self._within(centre, reach + MARGIN).tolist())
-        leave = [row for row in self._bodies if row not in keep]
-        enter = sorted(inside.difference(self._bodies))
+        leave = sorted(self._given.difference(keep))
+        enter = sorted(inside.difference(self._given))
         if not enter and not leave:
             return False
         static = self._static
-        for row in leave:
-            del self._bodies[row]
-        entered = self.pool.update(self._obstacles, static[enter].tolist(), static[leave].tolist())
-        self._bodies.update(zip(enter, entered))
+        self.pool.update(self._obstacles, static[enter].tolist(), static[leave].tolist())
+        self._given.difference_update(leave)
+        self._given.update(enter)
         shown = np.ones(len(static), dtype=bool)
-        shown[list(self._bodies)] = False
+        shown[list(self._given)] = False
         self._sim.primitives.show_backdrop(shown)
         return True
 

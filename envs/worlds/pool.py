@@ -119,10 +119,10 @@ class ObstaclePool:
             out[i] = body
         return out
 
-    def update(self, obstacles: tuple[Obstacle, ...], enter: Sequence[int], leave: Sequence[int]) -> list[int]:
+    def update(self, obstacles: tuple[Obstacle, ...], enter: Sequence[int], leave: Sequence[int]) -> None:
         """Give the obstacles with the indices ``enter`` bodies and park those of ``leave``, leaving every other body
-        as it is (its cached contacts kept); returns the bodies of ``enter``. The entering bodies get broad-phase
-        entries after every other body's, in scene order."""
+        as it is (its cached contacts kept; :attr:`placed` says which bodies there are). The entering bodies get
+        broad-phase entries after every other body's, in scene order."""
         released = [self._active.pop(i) for i in leave]
         self._release(released)
         bodies, _ = self._acquire(obstacles, enter, {body for _, body in released})
@@ -130,7 +130,6 @@ class ObstaclePool:
         for i, body in zip(enter, bodies):
             self._active[i] = (_key(obstacles[i]), body)
         self._park(released)
-        return bodies
 
     def _release(self, released: list[tuple[tuple, int]]) -> None:
         """Make ``released`` (key, body) pairs free for reuse; those not reused are parked by :meth:`_park`."""
