@@ -59,9 +59,11 @@ class Agent:
                  folder: Path | None) -> None:
         self.run, self.config, self.model, self.folder = run, config, model, folder
         self.step = int(model.num_timesteps)
-        self.observation_space = frame_space(model.observation_space, config.frame_stack)
-        self._normalizer = normalizer if normalizer is not None and normalizer.norm_obs else None
-        self._residual = _residual(config) if config.residual_gain else None
+        # a student with a privileged critic acts on the student's entries alone
+        self.observation_space = frame_space(getattr(model.policy, "actor_space", model.observation_space),
+                                             config.frame_stack)
+        self._normalizer = _for_entries(normalizer, self.observation_space)
+        self._residual = _residual(config) if config.uses_base else None
 
     def predict(self, obs: dict[str, np.ndarray] | np.ndarray, state: Any = None,
                 deterministic: bool = True) -> tuple[np.ndarray, Any]:
@@ -139,6 +141,22 @@ class Agent:
                 raise ValueError("obs entries must all be single observations or all batches of the same size")
             return singles[0]
         return _check_shape("obs", np.shape(obs), expected.shape)
+
+
+def _for_entries(normalizer: Any | None, space: spaces.Space) -> Any | None:
+    """The observation normalisation of ``normalizer`` for observations of ``space`` (a student's entries, where
+    the statistics also hold its critic's); None without one."""
+    if normalizer is None or not normalizer.norm_obs:
+        return None
+    if not isinstance(space, spaces.Dict) or not isinstance(normalizer.obs_rms, dict):
+        return normalizer
+    if set(normalizer.obs_rms) <= set(space.spaces):
+        return normalizer
+    narrowed = object.__new__(type(normalizer))  # a shallow copy: the training run's own normaliser stays as it is
+    narrowed.__dict__.update(normalizer.__dict__)
+    narrowed.norm_obs_keys = [key for key in normalizer.norm_obs_keys if key in space.spaces]
+    narrowed.obs_rms = {key: normalizer.obs_rms[key] for key in narrowed.norm_obs_keys}
+    return narrowed
 
 
 def _residual(config: TrainConfig):
@@ -228,6 +246,11 @@ def policy_spaces(config: TrainConfig) -> tuple[spaces.Space, spaces.Space]:
     observation_space = env.observation_space
     action_space = policy_action_space(env.action_space, config.residual_space)
     env.close()
+    if config.critic_inputs:  # the critic's entries, from the teacher's env as made (it is never reset here)
+        teacher_env = gym.make(config.env_id, **config.teacher_kwargs())
+        critic = {key: teacher_env.observation_space[key] for key in config.critic_inputs}
+        teacher_env.close()
+        observation_space = spaces.Dict({**observation_space.spaces, **critic})
     if config.frame_stack > 1:
         observation_space = StackedObservations(1, config.frame_stack, observation_space).stacked_observation_space
     return observation_space, action_space

@@ -37,6 +37,7 @@ class RunMonitor(BaseCallback):
         every = self.config.checkpoint_every
         self._next_checkpoint = (self.num_timesteps // every + 1) * every
         self._start_steps, self._start_time = self.num_timesteps, time.perf_counter()
+        self._calls = 0
         self.recent.extend(self.run.read_episodes()[-WINDOW:])
         if self.progress:
             self._bar = tqdm(total=self.config.timesteps, initial=self.num_timesteps, unit="step", dynamic_ncols=True,
@@ -62,21 +63,27 @@ class RunMonitor(BaseCallback):
         self._file.flush()
 
     def _on_step(self) -> bool:
-        for info in self.locals["infos"]:
-            stats = info.get("episode_stats")
-            if stats is not None:
-                row = {"timestep": float(self.num_timesteps), **stats}
-                self._append(row)
-                self.recent.append(row)
+        self.record(self.locals["infos"], self.num_timesteps)
         if self.num_timesteps >= self._next_checkpoint:
             self.run.save_checkpoint(self.model, self.model.get_vec_normalize_env(), self.num_timesteps,
                                      self.config.keep_checkpoints)
             self._next_checkpoint += self.config.checkpoint_every
-        if self._bar is not None:
-            self._bar.update(self.num_timesteps - self._bar.n)
-            if self.n_calls % 50 == 0:
-                self._bar.set_postfix(self._postfix(), refresh=False)
         return True
+
+    def record(self, infos: list[dict], step: int) -> None:
+        """Log the episodes that ended in a vector step (reaching env step ``step``) and move the bar (the
+        distillation's rounds call this too)."""
+        for info in infos:
+            stats = info.get("episode_stats")
+            if stats is not None:
+                row = {"timestep": float(step), **stats}
+                self._append(row)
+                self.recent.append(row)
+        if self._bar is not None:
+            self._bar.update(step - self._bar.n)
+            self._calls += 1
+            if self._calls % 50 == 0:
+                self._bar.set_postfix(self._postfix(), refresh=False)
 
     def _postfix(self) -> dict[str, str]:
         elapsed = time.perf_counter() - self._start_time

@@ -18,6 +18,7 @@ from typing import Any
 
 import yaml
 
+from clutter_gym.training.distill_config import DistillSettings, TeacherSettings
 from clutter_gym.training.residual import MAPLESS_ENVS, PURSUIT_ENVS, check_residual_base, check_residual_space
 
 HYPERPARAMS_FILE = "ppo.yml"
@@ -133,7 +134,13 @@ class TrainConfig:
             (``{attitude_gain: 4.0}``; the names: :data:`clutter_gym.training.residual.FLYER_GAINS`).
         env_kwargs: extra ``gym.make`` keyword arguments. Its ``noise`` entry, if any, holds noise-section
             overrides (``{"lidar": {"range_sigma": 0.02}}``) applied on top of whichever profile the env is
-            made under, for training and evaluation alike.
+            made under, for training and evaluation alike. A distilled student's are its own: what its policy reads.
+        teacher: the privileged teacher a student is distilled from (:mod:`clutter_gym.training.distill_config`);
+            none by default (PPO from scratch).
+        distill: the DAgger rounds before PPO, and the fine-tuning's pull towards the teacher (with a teacher).
+        critic_inputs: observation entries of the teacher's env that PPO's critic reads and its actor does not
+            (an asymmetric actor-critic; with a teacher). Training steps count the distillation's: PPO fine-tunes
+            from there up to ``timesteps``.
         ppo: PPO hyperparameters.
     """
 
@@ -155,6 +162,9 @@ class TrainConfig:
     residual_base: dict[str, float] = field(default_factory=dict)
     train_env_mix: dict[str, list[Any]] = field(default_factory=dict)
     env_kwargs: dict[str, Any] = field(default_factory=dict)
+    teacher: TeacherSettings = field(default_factory=TeacherSettings)
+    distill: DistillSettings = field(default_factory=DistillSettings)
+    critic_inputs: tuple[str, ...] = ()
     ppo: PPOHyperparams = field(default_factory=PPOHyperparams)
 
     def __post_init__(self) -> None:
@@ -177,6 +187,14 @@ class TrainConfig:
         _check_range("frame_stack", self.frame_stack, 1, 32)
         _check_range("train_layouts", self.train_layouts, 0, 10**7)
         _check_range("residual_gain", self.residual_gain, 0.0, 1000.0)
+        self.teacher.check(self.env_id)
+        if self.critic_inputs and not self.teacher.name:
+            raise ValueError("critic_inputs needs a teacher (its env gives the privileged entries)")
+        if not all(isinstance(key, str) for key in self.critic_inputs):
+            raise ValueError(f"critic_inputs must be a list of observation entry names, got {list(self.critic_inputs)}")
+        if self.teacher.name and self.residual_gain:
+            raise ValueError("a student distilled from a teacher acts on its own (residual_gain 0); ClutterFly-v0's "
+                             "acts through the flight controller with residual_space: velocity")
         if self.residual_gain and not (self.env_id in MAPLESS_ENVS
                                        or self.env_id in PURSUIT_ENVS and self.env_kwargs.get("subgoal_lookahead")):
             raise ValueError(f"residual_gain > 0 needs env_id in {MAPLESS_ENVS}, or in {PURSUIT_ENVS} with "
@@ -188,8 +206,9 @@ class TrainConfig:
             raise ValueError("residual_gain > 0 on ClutterReach-v0 without a subgoal (a residual on the proximity "
                              "field) needs env_kwargs.observe_directions: true and control: joint_velocity")
         check_residual_space(self.env_id, self.residual_space)
-        if self.residual_space != "action" and not self.residual_gain:
-            raise ValueError(f"residual_space {self.residual_space!r} needs residual_gain > 0")
+        if self.residual_space != "action" and not (self.residual_gain or self.teacher.name):
+            raise ValueError(f"residual_space {self.residual_space!r} needs residual_gain > 0, or a teacher (the "
+                             "student then commands the velocity itself)")
         check_residual_base(self.env_id, self.residual_base)
         if self.residual_base and not self.residual_gain:
             raise ValueError("residual_base needs residual_gain > 0 (it sets the gains of a residual's base)")
@@ -218,9 +237,20 @@ class TrainConfig:
         kwargs["noise"] = {"profile": profile, **sections} if sections else profile
         return kwargs
 
+    def teacher_kwargs(self, noise: str | None = None) -> dict[str, Any]:
+        """``gym.make`` keyword arguments of the env the teacher labels: :meth:`make_kwargs` and the teacher's own."""
+        return {**self.make_kwargs(noise), **self.teacher.kwargs(self.env_id)}
+
+    @property
+    def uses_base(self) -> bool:
+        """The policy acts through a base controller: a residual on it, or (a student on ClutterFly-v0) the
+        flight controller flying the velocity the policy commands."""
+        return bool(self.residual_gain) or self.residual_space != "action"
+
     def to_dict(self) -> dict[str, Any]:
         data = asdict(self)
         data["ppo"]["net_arch"] = list(self.ppo.net_arch)
+        data["critic_inputs"] = list(self.critic_inputs)
         return data
 
     @classmethod
@@ -235,6 +265,13 @@ class TrainConfig:
         data["env_kwargs"] = dict(data.get("env_kwargs") or {})
         if data.get("residual_base") is None:  # an empty YAML block reads as None
             data.pop("residual_base", None)
+        teacher = data.pop("teacher", None) or {}
+        if not isinstance(teacher, dict):
+            raise ValueError(f"teacher must be a mapping (name, env_kwargs), got {teacher!r}")
+        _reject_unknown("teacher key(s)", teacher, {"name", "env_kwargs"})
+        data["teacher"] = TeacherSettings(**teacher)
+        data["distill"] = DistillSettings.from_dict(data.pop("distill", None) or {})
+        data["critic_inputs"] = tuple(data.pop("critic_inputs", None) or ())
         return cls(**data, ppo=PPOHyperparams(**ppo))
 
 

@@ -52,27 +52,36 @@ def saved_step(path: Path) -> int:
 
 
 def load_ppo(path: Path, config: TrainConfig, observation_space: spaces.Space, action_space: spaces.Space,
-             env: VecEnv | None = None) -> PPO:
+             env: VecEnv | None = None, **distilled: Any) -> PPO:
     """The PPO model in ``path`` for the run of ``config``, with nothing unpickled.
 
     Args:
         path: the model.zip.
-        config: the run's settings (the clip range).
-        observation_space: the policy's observation space (a frame stack's, if the run stacks frames).
+        config: the run's settings (the clip range; a teacher's run is a
+            :class:`~clutter_gym.training.privileged.DistilledPPO` whose policy may have a privileged critic).
+        observation_space: the policy's observation space (a frame stack's, if the run stacks frames; with
+            ``critic_inputs``, the critic's entries too).
         action_space: the env's action space.
         env: the vector env to continue training on (None: a model to act with).
+        **distilled: a teacher's run's :class:`DistilledPPO` arguments that are not saved (its label recorder).
 
     Raises:
         ValueError: ``path`` is not a complete SB3 model file.
     """
+    from clutter_gym.training.privileged import DistilledPPO, PrivilegedCriticPolicy
     from clutter_gym.training.vec_env import policy_name
 
+    policy_class = PrivilegedCriticPolicy if config.teacher.name else PPO.policy_aliases[policy_name(observation_space)]
     replacements: dict[str, Any] = {
-        "policy_class": PPO.policy_aliases[policy_name(observation_space)],
+        "policy_class": policy_class,
         "observation_space": observation_space,
         "action_space": action_space,
         "clip_range": config.ppo.clip_range,
     }
     pickled = [key for key, item in read_attributes(path).items() if isinstance(item, dict) and ":serialized:" in item]
     custom = {key: replacements.get(key) for key in pickled}
-    return PPO.load(path, env=env, device="cpu", custom_objects=custom)
+    algorithm = DistilledPPO if config.teacher.name else PPO
+    model = algorithm.load(path, env=env, device="cpu", custom_objects=custom)
+    for key, value in distilled.items():
+        setattr(model, key, value)
+    return model

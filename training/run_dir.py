@@ -10,6 +10,8 @@ RUN/
   model/                 the final model.zip + vecnormalize.npz
   best/                  the policy that did best in the validations during training (when they are on)
   validation.csv         one row per validation: step, success and collision rates, whether it became best/
+  distill.csv            one row per DAgger round of a run with a teacher: its steps, samples, teacher share,
+                         fit loss, rollout and validation rates, wall time
   training.json          wall time spent in training (summed over resumes) and the steps reached
   eval.json              the evaluation after training
 ```
@@ -114,6 +116,7 @@ class RunDir:
         self.validation_file = self.root / "validation.csv"
         self.eval_file = self.root / "eval.json"
         self.training_file = self.root / "training.json"
+        self.distill_file = self.root / "distill.csv"
 
     # -- config ---------------------------------------------------------------------------------------------
     def write_config(self, config: TrainConfig) -> None:
@@ -237,6 +240,21 @@ class RunDir:
         if len(kept) < len(rows):
             _write_rows(self.validation_file, kept)
         return dropped_best
+
+    # -- distillation log -----------------------------------------------------------------------------------
+    def read_distill_rows(self) -> list[dict[str, float]]:
+        """One row per DAgger round done (:mod:`clutter_gym.training.distill`)."""
+        return _read_rows(self.distill_file)
+
+    def append_distill_row(self, row: dict[str, float]) -> None:
+        _write_rows(self.distill_file, [*self.read_distill_rows(), row])
+
+    def truncate_distill_rows(self, last_step: int) -> None:
+        """Drop the rounds that ended after ``last_step`` (a resumed run redoes them)."""
+        rows = self.read_distill_rows()
+        kept = [row for row in rows if row["step"] <= last_step]
+        if len(kept) < len(rows):
+            _write_rows(self.distill_file, kept)
 
     # -- episode log ----------------------------------------------------------------------------------------
     def read_episodes(self) -> list[dict[str, float]]:

@@ -19,9 +19,11 @@ from stable_baselines3.common.vec_env import VecEnv
 
 from clutter_gym.training.callbacks import BestPolicyKeeper, RunMonitor
 from clutter_gym.training.config import EVAL_SEED, TrainConfig
+from clutter_gym.training.distill import Distiller
 from clutter_gym.training.evaluate import evaluate
 from clutter_gym.training.normalizer import NORMALIZER_FILE, normalizer_path, read_statistics
 from clutter_gym.training.policy_file import load_ppo, saved_step
+from clutter_gym.training.privileged import DistilledPPO, LabelRecorder, PrivilegedCriticPolicy
 from clutter_gym.training.run_dir import MODEL_FILE, RunDir
 from clutter_gym.training.vec_env import policy_name, training_env
 from clutter_gym.util.atomic import write_text_atomically
@@ -57,9 +59,21 @@ def start(config: TrainConfig, out: str | Path) -> RunDir:
 
 
 def build_model(config: TrainConfig, venv: VecEnv) -> PPO:
-    """A fresh PPO on ``venv`` with the config's hyperparameters and seed (on the CPU)."""
-    return PPO(policy_name(venv.observation_space), venv, seed=config.seed, device="cpu", verbose=0,
-               **config.ppo.sb3_kwargs())
+    """A fresh PPO on ``venv`` with the config's hyperparameters and seed (on the CPU); with a teacher, the
+    :class:`DistilledPPO` whose actor the distillation fits (and whose critic reads ``critic_inputs``)."""
+    kwargs = config.ppo.sb3_kwargs()
+    if not config.teacher.name:
+        return PPO(policy_name(venv.observation_space), venv, seed=config.seed, device="cpu", verbose=0, **kwargs)
+    kwargs["policy_kwargs"]["critic_inputs"] = config.critic_inputs
+    return DistilledPPO(PrivilegedCriticPolicy, venv, seed=config.seed, device="cpu", verbose=0,
+                        **distilled_kwargs(config), **kwargs)
+
+
+def distilled_kwargs(config: TrainConfig) -> dict[str, Any]:
+    """:class:`DistilledPPO`'s own arguments for the run of ``config``."""
+    settings = config.distill
+    return {"bc_weight": settings.bc_weight, "bc_steps": settings.bc_steps, "start_step": settings.steps,
+            "recorder": LabelRecorder()}
 
 
 def train(run: RunDir, progress: bool = True, timesteps: int | None = None, trust_pickle: bool = False,
@@ -107,16 +121,21 @@ def train(run: RunDir, progress: bool = True, timesteps: int | None = None, trus
         if point is None:
             model = build_model(config, venv)
         else:
-            model = load_ppo(point[1] / MODEL_FILE, config, venv.observation_space, venv.action_space, env=venv)
+            model = load_ppo(point[1] / MODEL_FILE, config, venv.observation_space, venv.action_space, env=venv,
+                             **(distilled_kwargs(config) if config.teacher.name else {}))
             model.set_random_seed(config.seed + done)
         model.set_logger(configure(str(run.tb_dir), ["tensorboard"]))
+        if config.teacher.name and len(run.read_distill_rows()) < config.distill.rounds:
+            Distiller(run, config, model, venv, progress).run_rounds()
         remaining = config.timesteps - model.num_timesteps
         callbacks = [RunMonitor(run, config, progress)]
         if config.validate_every:
             callbacks.append(BestPolicyKeeper(run, config))
+        if isinstance(model, DistilledPPO):
+            callbacks.append(model.recorder)
         if remaining > 0:
             t0 = time.perf_counter()
-            model.learn(remaining, callback=CallbackList(callbacks), reset_num_timesteps=point is None)
+            model.learn(remaining, callback=CallbackList(callbacks), reset_num_timesteps=model.num_timesteps == 0)
             run.add_training_time(time.perf_counter() - t0, model.num_timesteps)
         run.save_model(model, model.get_vec_normalize_env(), run.model_dir)
     finally:
@@ -172,6 +191,7 @@ def _forget_after(run: RunDir, step: int) -> None:
     if step == 0 and dropped:
         _say(f"{run.root} has no checkpoint to continue from: starting over from step 0 (dropped the {dropped} "
              "episode rows of the attempt before)")
+    run.truncate_distill_rows(step)
     if run.truncate_validations(step):
         _say(f"{run.best_dir} was saved after step {step}, which is being redone: removed")
 

@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
+from gymnasium.wrappers import FilterObservation
 import numpy as np
 from gymnasium import spaces
 from stable_baselines3.common.monitor import Monitor
@@ -24,33 +25,58 @@ from clutter_gym.training.worker_vec_env import WorkerVecEnv
 
 def make_env(env_id: str, make_kwargs: dict[str, Any], render_mode: str | None = None, layouts: int = 0,
              residual_gain: float = 0.0, residual_space: str = "action",
-             residual_base: dict[str, float] | None = None) -> gym.Env:
+             residual_base: dict[str, float] | None = None, teacher: str = "",
+             keep: tuple[str, ...] | None = None) -> gym.Env:
     """One env with SB3's Monitor and the EpisodeStats wrapper (importable in a fresh worker process); with
-    ``layouts`` > 0 it resets from a pool of that many layouts (:class:`LayoutPool`), with ``residual_gain`` > 0
-    it takes residual actions (in ``residual_space``) on the subgoal pursuit (:class:`SubgoalResidual`, with the
-    base controller's ``residual_base`` gains)."""
+    ``layouts`` > 0 it resets from a pool of that many layouts (:class:`LayoutPool`), with a base controller
+    (``residual_gain`` > 0, or the velocity interface ``residual_space="velocity"``) it takes residual actions on
+    it (:class:`SubgoalResidual`, with the base controller's ``residual_base`` gains); with a ``teacher`` (its env
+    arguments already in ``make_kwargs``) its steps carry the teacher's labels (:class:`TeacherLabels`) and only
+    the observation entries ``keep`` reach the policy."""
     import clutter_gym  # noqa: F401  (registers the ids in worker processes)
 
     env = gym.make(env_id, render_mode=render_mode, **make_kwargs)
     if layouts:
         env = LayoutPool(env, layouts)
-    if residual_gain:
+    if residual_gain or residual_space != "action":
         env = SubgoalResidual(env, residual_gain, residual_space, residual_base)
+    if teacher:
+        from clutter_gym.training.teachers import TeacherLabels, make_teacher
+
+        env = TeacherLabels(env, make_teacher(env_id, teacher, env))
+        env = FilterObservation(env, list(keep or env.observation_space.spaces))
     return EpisodeStats(Monitor(env))
 
 
 def build_vec_env(config: TrainConfig, seed: int) -> VecEnv:
     """``config.n_envs`` envs over ``env_workers(config)`` processes, seeded ``seed, seed + 1, ...`` at their first
     reset; with ``config.train_layouts`` each env resets from its share of that many fixed layouts, and env ``i``
-    takes its share of ``config.train_env_mix``."""
-    fns = [functools.partial(make_env, config.env_id, config.train_kwargs(i), layouts=config.layouts_per_env,
+    takes its share of ``config.train_env_mix``. A run with a teacher makes them with the teacher's env arguments
+    too, and its policy sees the student's entries and ``critic_inputs``."""
+    keep = None
+    if config.teacher.name:
+        keep = (*student_keys(config), *config.critic_inputs)
+    fns = [functools.partial(make_env, config.env_id, _train_kwargs(config, i), layouts=config.layouts_per_env,
                              residual_gain=config.residual_gain, residual_space=config.residual_space,
-                             residual_base=config.residual_base)
+                             residual_base=config.residual_base, teacher=config.teacher.name, keep=keep)
            for i in range(config.n_envs)]
     workers = env_workers(config)
     venv: VecEnv = DummyVecEnv(fns) if workers == 1 else WorkerVecEnv(fns, workers)
     venv.seed(seed)
     return venv
+
+
+def _train_kwargs(config: TrainConfig, index: int) -> dict[str, Any]:
+    return {**config.train_kwargs(index), **config.teacher.kwargs(config.env_id)}
+
+
+def student_keys(config: TrainConfig) -> tuple[str, ...]:
+    """The observation entries of the run's own env (what a student reads), sorted."""
+    env = gym.make(config.env_id, **config.make_kwargs())
+    try:
+        return tuple(sorted(env.observation_space.spaces))
+    finally:
+        env.close()
 
 
 def env_workers(config: TrainConfig) -> int:

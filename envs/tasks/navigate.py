@@ -107,7 +107,7 @@ class NavigateTask:
             sub_high = np.array([self.subgoal_lookahead, 1.0, 1.0], dtype=np.float32)
             self.spaces["subgoal"] = spaces.Box(low, sub_high, dtype=np.float32)
         self._max_goal_distance = float(high[0])
-        self._spec, self._robot_radius = spec, robot_radius
+        self.spec, self.robot_radius = spec, robot_radius
         self._goal = (0.0, 0.0)
         self._path_distance: PathDistance | None = None
         self._previous_path = 0.0
@@ -118,7 +118,7 @@ class NavigateTask:
     def reset(self, scene: Scene, state: RobotState) -> None:
         self._goal = (float(scene.goal[0]), float(scene.goal[1]))
         margin = SUBGOAL_PLAN_MARGIN if self.subgoal_lookahead > 0.0 else None
-        self._path_distance = PathDistance(scene, self._spec, self._robot_radius, plan_margin=margin)
+        self._path_distance = PathDistance(scene, self.spec, self.robot_radius, plan_margin=margin)
         self._previous_path = self.path_distance(state)
 
     def path_distance(self, state: RobotState) -> float:
@@ -137,13 +137,13 @@ class NavigateTask:
         from +x. ``subgoal`` (when enabled): the same for the point ``subgoal_lookahead`` metres ahead on the
         planned path (the goal itself when nearer)."""
         x, y = float(state.position[0]), float(state.position[1])
-        goal = _polar(self._goal, x, y, state.yaw, self._max_goal_distance)
+        goal = polar(self._goal, x, y, state.yaw, self._max_goal_distance)
         if self.observe_bearing:
             goal = np.append(goal, np.float32(math.atan2(goal[1], goal[2]) / math.pi))
         obs = {"goal": goal}
         if self.subgoal_lookahead > 0.0:
             point = self._path_distance.waypoint(x, y, lookahead=self.subgoal_lookahead)
-            obs["subgoal"] = _polar(point, x, y, state.yaw, self.subgoal_lookahead)
+            obs["subgoal"] = polar(point, x, y, state.yaw, self.subgoal_lookahead)
         return obs
 
     def evaluate(self, state: RobotState, report: CollisionReport, action: np.ndarray) -> StepOutcome:
@@ -174,7 +174,7 @@ def _forward_speed(state: RobotState) -> float:
     return vx * math.cos(state.yaw) + vy * math.sin(state.yaw)
 
 
-def _polar(point: tuple[float, float], x: float, y: float, yaw: float, max_distance: float) -> np.ndarray:
+def polar(point: tuple[float, float], x: float, y: float, yaw: float, max_distance: float) -> np.ndarray:
     """(distance, sin bearing, cos bearing) of ``point`` seen from a robot at (x, y) heading ``yaw``."""
     dx, dy = point[0] - x, point[1] - y
     bearing = math.atan2(dy, dx) - yaw

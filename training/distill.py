@@ -1,0 +1,171 @@
+"""DAgger: a student policy that reads only the robot's sensors, distilled from a privileged teacher.
+
+Ross, Gordon and Bagnell's DAgger (2011), on the run's own vector env and PPO model. Before the first round the
+teacher drives ``warmup_steps`` steps that only fit the observation normalisation, which is then frozen, so every
+stored observation is normalised alike and the saved statistics are the ones the policy was fitted under. Each
+round the envs run ``round_steps`` steps: the student's deterministic policy drives (the teacher a decaying share of
+the episodes, all of the first round's by default), the teacher's action at every visited state is its label
+(:class:`~clutter_gym.training.teachers.TeacherLabels`), the round's samples join the aggregated data set, and the
+actor is fitted to the whole set by regression of its mean action on the labels. After each round the student is
+validated on held-out layouts (the best kept in ``best/``), checkpointed, and the round is a row of
+``distill.csv``. A resumed run continues from its newest round's student with an empty data set, which the
+remaining rounds fill from its own rollouts.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+import numpy as np
+import torch as th
+from stable_baselines3 import PPO
+from stable_baselines3.common.vec_env import VecEnv, VecNormalize
+
+from clutter_gym.training.callbacks import BestPolicyKeeper, RunMonitor
+from clutter_gym.training.config import TrainConfig
+from clutter_gym.training.distill_config import DistillSettings
+from clutter_gym.training.privileged import mean_actions
+from clutter_gym.training.run_dir import RunDir
+
+
+class Dataset:
+    """The aggregated samples, observations as the policy sees them and the teacher's actions; keeps the newest
+    ``max_samples``."""
+
+    def __init__(self, max_samples: int) -> None:
+        self.max_samples = max_samples
+        self._obs: list[dict[str, np.ndarray]] = []
+        self._labels: list[np.ndarray] = []
+        self.size = 0
+
+    def add(self, obs: dict[str, np.ndarray], labels: np.ndarray) -> None:
+        self._obs.append({key: np.array(value, dtype=np.float32) for key, value in obs.items()})
+        self._labels.append(np.asarray(labels, dtype=np.float32))
+        self.size += len(labels)
+        while self.size - len(self._labels[0]) >= self.max_samples:
+            self.size -= len(self._labels.pop(0))
+            self._obs.pop(0)
+
+    def arrays(self) -> tuple[dict[str, np.ndarray], np.ndarray]:
+        """Every kept sample: observations by entry, labels (newest ``max_samples``)."""
+        labels = np.concatenate(self._labels)[-self.max_samples:]
+        obs = {key: np.concatenate([chunk[key] for chunk in self._obs])[-self.max_samples:] for key in self._obs[0]}
+        return obs, labels
+
+
+def fit(model: PPO, dataset: Dataset, settings: DistillSettings, optimizer: th.optim.Optimizer) -> float:
+    """``settings.epochs`` passes of regression of the actor's mean action on the labels; the last pass's mean
+    squared error."""
+    obs, labels = dataset.arrays()
+    policy = model.policy
+    policy.set_training_mode(True)
+    target = th.as_tensor(labels)
+    inputs = {key: th.as_tensor(value) for key, value in obs.items()}
+    total = 0.0
+    for _ in range(settings.epochs):
+        order = th.randperm(len(target))  # torch's generator, which the model's seed sets
+        total = 0.0
+        for start in range(0, len(target), settings.batch_size):
+            rows = order[start:start + settings.batch_size]
+            loss = ((mean_actions(policy, {k: v[rows] for k, v in inputs.items()}) - target[rows]) ** 2).mean()
+            optimizer.zero_grad()
+            loss.backward()
+            optimizer.step()
+            total += float(loss) * len(rows)
+    policy.set_training_mode(False)
+    return total / len(target)
+
+
+def _normalizer(venv: VecEnv) -> VecNormalize | None:
+    while not isinstance(venv, VecNormalize) and hasattr(venv, "venv"):
+        venv = venv.venv
+    return venv if isinstance(venv, VecNormalize) else None
+
+
+class Distiller:
+    """The DAgger rounds of one run (see the module docstring).
+
+    Args:
+        run: the run folder.
+        config: its settings (``teacher`` and ``distill``).
+        model: the PPO model whose actor is the student, on ``venv``.
+        venv: the run's training envs, behind :class:`TeacherLabels`, normalisation and frame stack.
+        progress: show a progress bar.
+    """
+
+    def __init__(self, run: RunDir, config: TrainConfig, model: PPO, venv: VecEnv, progress: bool) -> None:
+        self.run, self.config, self.model, self.venv = run, config, model, venv
+        self.settings = config.distill
+        self.monitor = RunMonitor(run, config, progress)
+        self.keeper = BestPolicyKeeper(run, config) if config.validate_episodes else None
+        self.dataset = Dataset(self.settings.max_samples)
+        self.optimizer = th.optim.Adam(model.policy.parameters(), lr=self.settings.learning_rate)
+
+    def run_rounds(self) -> None:
+        """The rounds not done yet (a resumed run's newest student continues)."""
+        done = len(self.run.read_distill_rows())
+        self.monitor.init_callback(self.model)
+        self.monitor.on_training_start({}, {})
+        if self.keeper is not None:
+            self.keeper.init_callback(self.model)
+            self.keeper.on_training_start({}, {})
+        normalizer = _normalizer(self.venv)
+        try:
+            self.obs = self.venv.reset()
+            if done == 0 and self.settings.warmup_steps:
+                self.venv.env_method("set_teacher_share", 1.0)
+                self._collect(self.settings.warmup_steps, store=False)
+            if normalizer is not None:
+                normalizer.training = False  # frozen: every stored observation is normalised alike
+            for index in range(done, self.settings.rounds):
+                self._round(index)
+            if normalizer is not None:
+                normalizer.training = True  # PPO's fine-tuning updates them as PPO always does
+        finally:
+            self.monitor.on_training_end()
+            if self.keeper is not None:
+                self.keeper.on_training_end()
+
+    def _round(self, index: int) -> None:
+        t0 = time.perf_counter()
+        share = self.settings.share(index)
+        self.venv.env_method("set_teacher_share", share)
+        episodes = self._collect(self.settings.round_steps, store=True)
+        loss = fit(self.model, self.dataset, self.settings, self.optimizer)
+        row: dict[str, float] = {"round": float(index), "step": float(self.model.num_timesteps),
+                                 "samples": float(self.dataset.size), "teacher_share": share, "loss": loss,
+                                 **_rates(episodes)}
+        if self.keeper is not None:
+            self.keeper.num_timesteps = self.model.num_timesteps
+            validation = self.keeper.validate()
+            row.update(validation_success=validation["success"], validation_collision=validation["collision"])
+        seconds = time.perf_counter() - t0
+        self.run.add_training_time(seconds, self.model.num_timesteps)
+        self.run.save_checkpoint(self.model, _normalizer(self.venv), self.model.num_timesteps,
+                                 self.config.keep_checkpoints)
+        self.run.append_distill_row({**row, "seconds": seconds})
+
+    def _collect(self, steps: int, store: bool) -> list[dict[str, float]]:
+        """Runs the envs ``steps`` env steps (rounded up to whole vector steps), the student acting; stores each
+        state's observation with the teacher's label when ``store``; returns the finished episodes' statistics."""
+        n = self.venv.num_envs
+        episodes: list[dict[str, float]] = []
+        for _ in range(-(-steps // n)):
+            actions, _ = self.model.predict(self.obs, deterministic=True)
+            obs, _, _, infos = self.venv.step(actions)
+            if store:
+                self.dataset.add(self.obs, np.stack([info["teacher_action"] for info in infos]))
+            self.model.num_timesteps += n
+            self.monitor.record(infos, self.model.num_timesteps)
+            episodes += [info["episode_stats"] for info in infos if "episode_stats" in info]
+            self.obs = obs
+        return episodes
+
+
+def _rates(episodes: list[dict[str, Any]]) -> dict[str, float]:
+    """The round's episodes: how many, and their success and collision rates (NaN without any)."""
+    if not episodes:
+        return {"episodes": 0.0, "success": float("nan"), "collision": float("nan")}
+    return {"episodes": float(len(episodes)), "success": float(np.mean([e["success"] for e in episodes])),
+            "collision": float(np.mean([e["collision"] for e in episodes]))}
