@@ -268,14 +268,15 @@ def test_a_mesh_under_the_limit_is_read_as_before(tmp_path):
 # -- sizes that would make a make run for hours or overflow the stack -----------------------------------------
 
 def test_a_urdf_of_too_many_links_is_refused_at_once(tmp_path):
-    """Before: 120 small links (46 kB) made for minutes (the allowed-collision matrix samples every pair of links
-    with collision geometry; 60 took 50 s), and a 1 MB file of them for hours."""
-    links = "".join(f'<link name="l{i}"><collision><geometry><sphere radius="0.005"/></geometry></collision></link>'
+    """Before: a make's time grew with the square of the links with collision geometry (the allowed-collision matrix
+    samples every pair: 110 links added to the diffbot took 110 s), and this file of 2,000 (0.3 MB) ran the child
+    out of its 3 GB of address space within half a minute."""
+    links = "".join(f'<link name="l{i}"><collision><geometry><sphere radius="0.002"/></geometry></collision></link>'
                     f'<joint name="j{i}" type="fixed"><parent link="base_link"/><child link="l{i}"/>'
-                    f'<origin xyz="{0.01 * (i % 10)} {0.01 * (i // 10)} 0.1"/></joint>\n' for i in range(120))
+                    f'<origin xyz="{0.005 * (i % 40)} {0.005 * (i // 40)} 0.1"/></joint>\n' for i in range(2000))
     urdf = variant(tmp_path, "</robot>", links + "</robot>")
     out = in_a_child(f"""gym.make("ClutterNav-v0", robot=spec({str(urdf)!r}))""", timeout=60.0)
-    assert out["refused"].endswith("v.urdf: has 129 links; a URDF here has 1 to 128")
+    assert out["refused"].endswith("v.urdf: has 2009 links; a URDF here has 1 to 128") and out["peak_mb"] < 1024
 
 
 def test_elements_nested_deeper_than_a_urdf_are_refused(tmp_path):
