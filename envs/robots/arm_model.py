@@ -136,7 +136,8 @@ def _check_arm_joints(joints: Sequence[Joint], source: Path, where: str) -> None
                              "revolute and continuous joints (a sliding axis is not read from specs yet)")
         if not joint.lower < joint.upper:
             raise ValueError(f"{where}: arm_joints {joint.name!r} of {source} has <limit lower={joint.lower:g} "
-                             f"upper={joint.upper:g}>: an arm joint needs lower < upper, in radians")
+                             f"upper={joint.upper:g}> (0 where not given): an arm joint needs lower < upper, in "
+                             "radians")
 
 
 def _limits(spec: Mapping[str, object], key: str, given: Mapping[str, float], source: Path, where: str,

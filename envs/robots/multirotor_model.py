@@ -193,7 +193,7 @@ def multirotor_from_spec(spec: Mapping[str, object], where: str, folder: Path | 
                          "to read it from")
     defaults = {**SPEC_DEFAULTS, "rotor_radius": max(cylinders, default=math.nan)}  # the others are required
     given = {key: spec[key] if key in spec else defaults[key] for key in RANGES}
-    values = {key: value if as_number(value) is None else as_number(value) for key, value in given.items()}
+    values = {key: value if (number := as_number(value)) is None else number for key, value in given.items()}
     try:
         check_ranges(values, RANGES)
         hubs = np.array([body.frames[link][0][:2] for link in rotors])

@@ -142,8 +142,9 @@ def number(spec: Mapping[str, object], key: str, where: str, default: float, low
     from the URDF, for the error when the spec leaves ``key`` out and the URDF gives none, or one out of range."""
     if key not in spec:
         if derived and not low <= default <= high:  # nan included
-            found = "gives none" if math.isnan(default) else f"gives {default:.4g}, outside [{low:g}, {high:g}]"
-            raise ValueError(f"{where}: {key} was not given, and {derived} {found}: give {key} in the spec")
+            found = "none" if math.isnan(default) else f"{default:.4g}, outside [{low:g}, {high:g}]"
+            raise ValueError(f"{where}: {key} was not given, and reading it from {derived} gives {found}: give {key} "
+                             "in the spec")
         if not math.isfinite(default):
             raise ValueError(f"{where}: {key} is needed: it cannot be read from the URDF")
     value = spec.get(key, default)

@@ -25,8 +25,8 @@ from clutter_gym.util.transforms import quat_to_matrix
 
 #: The largest angle between a wheel's axle and the base's +y (a wheel turned further scrubs sideways as it rolls).
 AXLE_TOLERANCE = math.radians(5.0)
-#: Metres another link's collision shapes may reach below the wheels' lowest points. Measured on the diffbot, both
-#: casters lowered by 0.5 mm cost 0.2% of a forward drive's travel, by 1 mm 12%, by 2 mm all of it.
+#: Metres another link's collision shapes may reach below the wheels' lowest points: casters a millimetre or two
+#: below the diffbot's wheels cost much or all of a forward drive's travel (docs/robots.md gives the figures).
 GROUND_TOLERANCE = 5e-4
 #: How far a ``wheel_radius`` may be from the radius the wheel's collision shape gives (reach below its axle), as a
 #: share of the latter: the wheel speeds are ``v / r``, so a wrong radius scales every commanded speed; a quarter is

@@ -155,8 +155,8 @@ def kuka_with(tmp_path, old: str, new: str) -> str:
     ('<joint name="lbr_iiwa_joint_7" type="revolute">', '<joint name="lbr_iiwa_joint_7" type="prismatic">',
      r"arm_joints 'lbr_iiwa_joint_7' of .*kuka.urdf is prismatic; an arm spec takes revolute and continuous joints"),
     (JOINT_7, JOINT_7.replace('lower="-3.05432619099" upper="3.05432619099"', 'lower="3.05" upper="-3.05"'),
-     r"arm_joints 'lbr_iiwa_joint_7' of .*kuka.urdf has <limit lower=3.05 upper=-3.05>: an arm joint needs lower < "
-     r"upper, in radians"),
+     r"arm_joints 'lbr_iiwa_joint_7' of .*kuka.urdf has <limit lower=3.05 upper=-3.05> \(0 where not given\): an arm "
+     r"joint needs lower < upper, in radians"),
     (JOINT_7, JOINT_7.replace('lower="-3.05432619099"', 'lower="nan"'),
      r"the URDF was refused: .*kuka.urdf: joint 'lbr_iiwa_joint_7' <limit> lower: expected 1 finite number, got "
      r"'nan'"),

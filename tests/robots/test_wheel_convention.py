@@ -148,9 +148,9 @@ def test_a_derived_radius_from_a_cylinder_that_does_not_stand_on_its_rim_is_name
 def test_a_derived_track_out_of_range_is_named_as_derived(tmp_path):
     urdf = diffbot_with(tmp_path, ('<origin xyz="0 0.145 0"/>', '<origin xyz="0 0.004 0"/>'),
                         ('<origin xyz="0 -0.145 0"/>', '<origin xyz="0 -0.004 0"/>'))
-    refused({**BASE, "urdf": urdf}, r"spec: wheel_separation was not given, and the wheel joints' positions in "
-                                    r".*edited.urdf \(the left wheels' mean y less the right's\) gives 0.008, outside "
-                                    r"\[0.01, 5\]: give wheel_separation in the spec")
+    refused({**BASE, "urdf": urdf}, r"spec: wheel_separation was not given, and reading it from the wheel joints' "
+                                    r"positions in .*edited.urdf \(the left wheels' mean y less the right's\) gives "
+                                    r"0.008, outside \[0.01, 5\]: give wheel_separation in the spec")
 
 
 @pytest.mark.parametrize("value, message", [
