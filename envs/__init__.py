@@ -14,7 +14,7 @@ except PackageNotFoundError:  # imported from a source tree that was never insta
 ENV_IDS = ("ClutterNav-v0", "ClutterReach-v0", "ClutterFly-v0")
 #: Each env with the env arguments its shipped PPO agent trains with (training/hyperparams/ppo.yml), under an id of
 #: its own, for tools that make envs by id alone: rl-zoo3 makes its evaluation env without the conf file's
-#: env_kwargs. Making one needs the ``[train]`` extra; keyword arguments go on top of the shipped ones.
+#: env_kwargs. Making one needs no training extra; keyword arguments go on top of the shipped ones.
 TRAIN_IDS = {"ClutterNavTrain-v0": "ClutterNav-v0", "ClutterReachTrain-v0": "ClutterReach-v0",
              "ClutterFlyTrain-v0": "ClutterFly-v0"}
 

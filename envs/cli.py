@@ -12,10 +12,12 @@ import typing
 from pathlib import Path
 
 import gymnasium as gym
+from gymnasium.error import DependencyNotInstalled
 
 import clutter_gym  # noqa: F401  (registers the envs)
 from clutter_gym.noise.profiles import PROFILE_NAMES, profile_description, profile_table_markdown, resolve_noise
 from clutter_gym.training import commands as training_commands
+from clutter_gym.training import require_train_extra
 from clutter_gym.training.baselines import CascadedFlyer, PotentialFieldNavigator
 from clutter_gym.training.commands import UserError, positive_int
 from clutter_gym.training.joint_planner import JointPlannerReacher
@@ -148,7 +150,10 @@ def _run(argv: list[str] | None) -> int:
         profiles(args.name)
     else:
         try:
+            require_train_extra(f"clutter-gym {args.command}")
             return args.handler(args)
+        except DependencyNotInstalled as exc:
+            parser.exit(1, f"clutter-gym {args.command}: error: {exc}\n")
         except UserError as exc:
             parser.exit(2, f"clutter-gym {args.command}: error: {exc}\n")
     return 0
