@@ -26,7 +26,7 @@ for _env_id in ENV_IDS:  # gym.make_vec's default for them: their envs in blocks
     register(id=_env_id, entry_point=_ENTRY_POINTS[_env_id], max_episode_steps=_EPISODE_STEPS[_env_id],
              vector_entry_point=make_block_vector_env(_env_id))
 #: ClutterReach goal-conditioned for HER: Dict(observation, achieved_goal, desired_goal) and compute_reward.
-register(id="ClutterReachGoal-v0", entry_point="clutter_gym.goal_conditioned:make_goal_reach",
+register(id="ClutterReachGoal-v0", entry_point="clutter_gym.goal_conditioned:ClutterReachGoalEnv",
          max_episode_steps=_EPISODE_STEPS["ClutterReach-v0"])
 for _train_id, _env_id in TRAIN_IDS.items():
     register(id=_train_id, entry_point="clutter_gym.training.zoo:shipped_env", kwargs={"env_id": _env_id},
