@@ -202,6 +202,14 @@ def main(argv: list[str] | None = None) -> int:
 def _run(argv: list[str] | None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    try:
+        return _dispatch(parser, args)
+    except KeyboardInterrupt as exc:  # Ctrl-C: training wrote a checkpoint first (TrainingInterrupted)
+        print(f"clutter-gym {args.command}: {training_commands.interrupted(args, exc)}", file=sys.stderr, flush=True)
+        return 130
+
+
+def _dispatch(parser: argparse.ArgumentParser, args: argparse.Namespace) -> int:
     if args.command == "demo":
         try:
             summary = demo(args)
