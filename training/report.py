@@ -77,16 +77,17 @@ def main_job(run: RunDir, out: Path, timesteps: int | None, episodes: int, progr
         summaries[profile] = summary
     eval_s = time.perf_counter() - t0
     if navigation:
-        write_episode_pair(run, summaries["none"], out / "episode.gif")
+        write_episode_pair(run, summaries["none"], out / "episode.gif", progress=progress)
     curve = plot_learning_curve(run, out / "learning_curve.png")
     report = out / "report.md"
     write_text_atomically(report, render_report(run, summaries, curve, train_s, eval_s))
     return report
 
 
-def write_episode_pair(run: RunDir, summary: dict, path: Path) -> Path:
+def write_episode_pair(run: RunDir, summary: dict, path: Path, progress: bool = False) -> Path:
     """The first successful and the first failed episode of an evaluation, replayed side by side (top-down, with
-    trail, LIDAR beams, planner path and reward terms); two successes or two failures if there is no other kind."""
+    trail, LIDAR beams, planner path and reward terms); two successes or two failures if there is no other kind.
+    ``progress`` shows a bar of the frames drawn."""
     from clutter_gym.training.agent import load
     from clutter_gym.training.episode_view import record_episode, write_episodes_video
 
@@ -102,7 +103,7 @@ def write_episode_pair(run: RunDir, summary: dict, path: Path) -> Path:
                   for i in picks]
     finally:
         env.close()
-    return write_episodes_video(path, traces, fps=env.metadata["render_fps"])
+    return write_episodes_video(path, traces, fps=env.metadata["render_fps"], progress=progress)
 
 
 def rolling_rate(values: np.ndarray, window: int = WINDOW) -> np.ndarray:
@@ -253,4 +254,8 @@ def render_report(run: RunDir, summaries: dict, curve: Path | None, train_s: flo
     if curve is not None:
         lines += [f"![learning curve]({curve.name})", ""]
     lines += ["![evaluation episodes, clean sensors](episode.gif)", ""]
+    if config.env_id == "ClutterNav-v0":
+        from clutter_gym.training.episode_view import EVERY, SPEEDUP
+
+        lines += [f"*Every {EVERY}th step of two evaluation episodes, at {SPEEDUP:g}x the real speed.*", ""]
     return "\n".join(lines)
