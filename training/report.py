@@ -20,6 +20,7 @@ from clutter_gym.training.evaluate import evaluate
 from clutter_gym.training.run_dir import RunDir
 from clutter_gym.training.train import start, train
 from clutter_gym.util.atomic import write_text_atomically
+from clutter_gym.util.machine import machine_state
 
 PROFILES = ("none", "nominal")
 WINDOW = 100
@@ -63,6 +64,7 @@ def _differences(saved: dict, wanted: dict, ignore: set[str], prefix: str = "") 
 
 def main_job(run: RunDir, out: Path, timesteps: int | None, episodes: int, progress: bool = True) -> Path:
     """Train (or resume / reuse) ``run``, evaluate it under each of PROFILES, write the report; returns its path."""
+    machine = machine_state()
     t0 = time.perf_counter()
     if not run.is_finished() or (timesteps is not None and timesteps != run.read_config().timesteps):
         train(run, progress=progress, timesteps=timesteps)
@@ -80,7 +82,7 @@ def main_job(run: RunDir, out: Path, timesteps: int | None, episodes: int, progr
         write_episode_pair(run, summaries["none"], out / "episode.gif", progress=progress)
     curve = plot_learning_curve(run, out / "learning_curve.png")
     report = out / "report.md"
-    write_text_atomically(report, render_report(run, summaries, curve, train_s, eval_s))
+    write_text_atomically(report, render_report(run, summaries, curve, train_s, eval_s, machine))
     return report
 
 
@@ -219,14 +221,17 @@ def _observation_line(config) -> str:
     return line
 
 
-def render_report(run: RunDir, summaries: dict, curve: Path | None, train_s: float, eval_s: float) -> str:
+def render_report(run: RunDir, summaries: dict, curve: Path | None, train_s: float, eval_s: float,
+                  machine: str) -> str:
+    """report.md: the run, its times and the ``machine`` they were measured on (:func:`machine_state`), the
+    evaluation table, the verdict, the learning curve and the episode GIF."""
     config = run.read_config()
     lines = [
         f"# PPO on {config.env_id}",
         "",
         f"PPO, {config.timesteps:,} env steps with {config.n_envs} envs, seed {config.seed}, training noise profile "
         f"{config.noise!r}; this invocation spent {train_s / 60:.1f} min training (0 when it reused a finished run) "
-        f"and {eval_s / 60:.1f} min evaluating. Config: `{run.config_file}`.",
+        f"and {eval_s / 60:.1f} min evaluating, on {machine}. Config: `{run.config_file}`.",
         "",
         _observation_line(config),
         "",

@@ -217,6 +217,7 @@ def test_the_main_job_reports_its_verdict_and_shows_two_episodes_side_by_side(tm
     assert "after 0.5 s held still it turns the base" in report
     assert "Target on clean sensors" in report and "**missed**" in report  # 128 steps of training cannot meet it
     assert "Evaluated policy: `best`" in report
+    assert "min evaluating, on " in report and " cores, load average " in report  # what the times ran on
     frames = imageio.mimread(tmp_path / "episode.gif")
     height, width = frames[0].shape[:2]
     assert height >= 360 and width >= 2 * 360  # two readable panels
