@@ -43,7 +43,7 @@ def missing_train_packages() -> list[str]:
 
 def require_train_extra(what: str) -> None:
     """Raise Gymnasium's ``DependencyNotInstalled``, naming the install command, when the ``[train]`` extra is
-    missing; ``what`` (``"clutter-gym train"``, ``"load()"``) is what needs it.
+    missing; ``what`` (``"clutter-gym train"``, ``"clutter_gym.training.load"``) is what needs it.
 
     Raises:
         DependencyNotInstalled: a distribution of the extra is not installed.

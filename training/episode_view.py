@@ -22,8 +22,8 @@ from clutter_gym.util.video import write_video
 PANEL_PX = 360
 _CAPTION_PX = 75
 _DPI = 100
-#: The GIF shows every EVERY-th step, played at SPEEDUP times the real speed: two 400-step episodes then make 51
-#: frames of 720 x 435 pixels (about 2 MB, small enough for a README; docs/training.md) and take seconds to draw.
+#: The GIF shows every EVERY-th step, played at SPEEDUP times the real speed: few and small frames, so that a README
+#: can embed it and drawing it takes seconds, not a minute (its size and time: docs/training.md).
 EVERY = 8
 SPEEDUP = 2.0
 
