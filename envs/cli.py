@@ -223,7 +223,7 @@ def _dispatch(parser: argparse.ArgumentParser, args: argparse.Namespace) -> int:
         profiles(args.name)
     else:
         try:
-            require_train_extra(f"clutter-gym {args.command}")
+            require_train_extra("this command")
             return args.handler(args)
         except DependencyNotInstalled as exc:
             parser.exit(1, f"clutter-gym {args.command}: error: {exc}\n")

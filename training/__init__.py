@@ -43,15 +43,15 @@ def missing_train_packages() -> list[str]:
 
 def require_train_extra(what: str) -> None:
     """Raise Gymnasium's ``DependencyNotInstalled``, naming the install command, when the ``[train]`` extra is
-    missing; ``what`` (``"clutter-gym train"``, ``"clutter_gym.training.load"``) is what needs it.
+    missing; ``what`` (``"this command"``, ``"clutter_gym.training.load"``) is what needs it.
 
     Raises:
         DependencyNotInstalled: a distribution of the extra is not installed.
     """
     missing = missing_train_packages()
     if missing:
-        raise DependencyNotInstalled(f"{what} needs the training extra, and {', '.join(missing)} "
-                                     f"{'is' if len(missing) == 1 else 'are'} not installed: {INSTALL_TRAIN}")
+        raise DependencyNotInstalled(f"{what} needs the training extra, which is not installed (missing: "
+                                     f"{', '.join(missing)}): {INSTALL_TRAIN}")
 
 
 def __getattr__(name: str) -> Any:
