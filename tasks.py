@@ -131,8 +131,27 @@ def main(argv: list[str]) -> int:
     ensure_installed()
     if argv[0] == "test" and not static_checks():
         return 1
-    return subprocess.run([*commands[argv[0]], *argv[1:]], cwd=ROOT).returncode
+    return run_to_the_end([*commands[argv[0]], *argv[1:]])
+
+
+def run_to_the_end(command: list[str]) -> int:
+    """Run ``command`` in ROOT and return its exit status (128 + N when signal N ended it, as a shell says).
+
+    Ctrl-C reaches the command too (a terminal signals its whole foreground process group), and the command decides
+    what to do with it: the training commands write a checkpoint and exit with 130. So this process waits for it
+    to finish instead of killing it, as ``subprocess.run`` would a quarter of a second after the interrupt."""
+    process = subprocess.Popen(command, cwd=ROOT)
+    while True:
+        try:
+            status = process.wait()
+        except KeyboardInterrupt:
+            continue
+        return 128 - status if status < 0 else status
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv[1:]))
+    try:
+        sys.exit(main(sys.argv[1:]))
+    except KeyboardInterrupt:  # while installing or checking: what was installed whole is kept (the stamps)
+        print("tasks.py: interrupted", file=sys.stderr)
+        sys.exit(130)

@@ -34,6 +34,7 @@ from benchmarks.harness import table_header
 from benchmarks.speed import aero_cost, noise_cost, physics_rate, throughput
 from clutter_gym.noise.profiles import PROFILE_NAMES
 from clutter_gym.util.atomic import write_text_atomically
+from clutter_gym.util.machine import machine_state
 
 DOCS = Path(__file__).resolve().parents[1] / "docs"
 HEADLINE = "headline"  # the section that opens the report: the default step against its floor and a peer
@@ -375,6 +376,7 @@ def main() -> None:
     parser.add_argument("--out", type=Path, default=DOCS,
                         help="folder of speed-vs-error.md and its plots (speed-vs-error/); default docs/")
     args = parser.parse_args()
+    machine = machine_state()
     t0 = time.perf_counter()
     choices: list[Choice] = []
     for name, measure in sections(args.quick, args.seed).items():
@@ -386,7 +388,8 @@ def main() -> None:
         ("" if args.sections == names else " --sections " + " ".join(args.sections))
     lines = ["# Speed against error", "",
              f"Written by `python3 tasks.py bench` (`python -m benchmarks.speed_vs_error{options}`, seed {args.seed}) "
-             f"on {platform.machine()} with {platform.python_implementation()} {platform.python_version()}. Every "
+             f"on {platform.machine()} with {platform.python_implementation()} {platform.python_version()}, "
+             f"{machine}. Every "
              "speed figure is measured in one process beside the error it costs; "
              "compare ratios, as absolute times follow the machine. A choice's Pareto front is the settings no other "
              "is both faster and more accurate than.", ""]

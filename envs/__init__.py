@@ -14,7 +14,7 @@ except PackageNotFoundError:  # imported from a source tree that was never insta
 ENV_IDS = ("ClutterNav-v0", "ClutterReach-v0", "ClutterFly-v0")
 #: Each env with the env arguments its shipped PPO agent trains with (training/hyperparams/ppo.yml), under an id of
 #: its own, for tools that make envs by id alone: rl-zoo3 makes its evaluation env without the conf file's
-#: env_kwargs. Making one needs the ``[train]`` extra; keyword arguments go on top of the shipped ones.
+#: env_kwargs. Making one needs no training extra; keyword arguments go on top of the shipped ones.
 TRAIN_IDS = {"ClutterNavTrain-v0": "ClutterNav-v0", "ClutterReachTrain-v0": "ClutterReach-v0",
              "ClutterFlyTrain-v0": "ClutterFly-v0"}
 
@@ -26,7 +26,7 @@ for _env_id in ENV_IDS:  # gym.make_vec's default for them: their envs in blocks
     register(id=_env_id, entry_point=_ENTRY_POINTS[_env_id], max_episode_steps=_EPISODE_STEPS[_env_id],
              vector_entry_point=make_block_vector_env(_env_id))
 #: ClutterReach goal-conditioned for HER: Dict(observation, achieved_goal, desired_goal) and compute_reward.
-register(id="ClutterReachGoal-v0", entry_point="clutter_gym.goal_conditioned:make_goal_reach",
+register(id="ClutterReachGoal-v0", entry_point="clutter_gym.goal_conditioned:ClutterReachGoalEnv",
          max_episode_steps=_EPISODE_STEPS["ClutterReach-v0"])
 for _train_id, _env_id in TRAIN_IDS.items():
     register(id=_train_id, entry_point="clutter_gym.training.zoo:shipped_env", kwargs={"env_id": _env_id},

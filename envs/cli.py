@@ -9,40 +9,81 @@ import os
 import sys
 import time
 import typing
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any, NamedTuple
 
 import gymnasium as gym
+import numpy as np
+from gymnasium.error import DependencyNotInstalled
 
 import clutter_gym  # noqa: F401  (registers the envs)
 from clutter_gym.noise.profiles import PROFILE_NAMES, profile_description, profile_table_markdown, resolve_noise
+from clutter_gym.robots.registry import registered
 from clutter_gym.training import commands as training_commands
+from clutter_gym.training import require_train_extra
 from clutter_gym.training.baselines import CascadedFlyer, PotentialFieldNavigator
-from clutter_gym.training.commands import UserError, positive_int
+from clutter_gym.training.commands import UserError, positive_int, user_errors
 from clutter_gym.training.joint_planner import JointPlannerReacher
 from clutter_gym.util.video import write_video
 
-#: Per demo env: its gym.make arguments, the scripted policy for the env, and the policy's name.
+
+class Demo(NamedTuple):
+    """An env's demo: its gym.make arguments, its scripted policy (made from the env after a reset) and the
+    policy's name, the kind of robot the env drives (``--robot`` takes the registered robots of it), and what of
+    the robot the frames ring (whose path length the summary gives as ``moved_m``)."""
+
+    kwargs: dict[str, Any]
+    make_policy: Callable[[gym.Env], Callable[[Any], np.ndarray]]
+    name: str
+    robot_kind: str
+    focus: str
+
+
 DEMOS = {
-    "ClutterNav-v0": ({}, PotentialFieldNavigator.for_env, "scripted potential-field policy"),
-    "ClutterReach-v0": ({}, JointPlannerReacher, "scripted joint-space planner on the known layout, tracked"),
-    "ClutterFly-v0": ({"subgoal_lookahead": 0.5}, lambda env: CascadedFlyer.for_env(env, "subgoal"),
-                      "scripted position controller on the planned path"),
+    "ClutterNav-v0": Demo({}, PotentialFieldNavigator.for_env, "scripted potential-field policy", "diff_drive",
+                          "base"),
+    "ClutterReach-v0": Demo({}, JointPlannerReacher, "scripted joint-space planner on the known layout, tracked",
+                            "arm", "end effector"),
+    "ClutterFly-v0": Demo({"subgoal_lookahead": 0.5}, lambda env: CascadedFlyer.for_env(env, "subgoal"),
+                          "scripted position controller on the planned path", "multirotor", "airframe"),
 }
 DEMO_ENVS = tuple(DEMOS)
+#: Without ``--seed``, the demo shows the first of these seeds whose layout the scripted policy has a plan for.
+DEMO_SEEDS = range(10)
 
 
 def demo(args: argparse.Namespace) -> dict:
-    """Roll out the env's scripted policy, write a GIF and return the episode summary."""
-    kwargs, make_policy, name = DEMOS[args.env]
-    env = gym.make(args.env, render_mode="rgb_array", noise=args.noise, **kwargs)
+    """Roll out the env's scripted policy, write a GIF and return the episode summary.
+
+    Without ``args.seed``, layouts the policy has no plan for (``policy.no_plan``, the joint planner's) are
+    skipped, and the summary says which and why; with it, that layout is shown, and the summary says why the robot
+    holds still if it has no plan.
+
+    Raises:
+        UserError: the env refuses ``args.robot`` (unknown, or of another kind).
+    """
+    spec = DEMOS[args.env]
+    kwargs = {**spec.kwargs, **({"robot": args.robot} if args.robot else {})}
+    with user_errors(ValueError):
+        env = gym.make(args.env, render_mode="rgb_array", noise=args.noise, **kwargs)
     try:
-        obs, info = env.reset(seed=args.seed)
-        policy = make_policy(env)
-        frames = [env.render()]
-        episode_return, contact_steps, min_clearance = 0.0, 0, info["min_clearance"]
-        step_time, steps, terminated, truncated = 0.0, 0, False, False
-        while not (terminated or truncated) and steps < args.max_steps:
+        skipped: dict[str, str] = {}
+        seeds = DEMO_SEEDS if args.seed is None else [args.seed]
+        for seed in seeds:
+            obs, info = env.reset(seed=seed)
+            policy = spec.make_policy(env)  # a fresh one per layout: the demo of a seed is the same however reached
             action = policy(obs)
+            no_plan = getattr(policy, "no_plan", None)
+            if no_plan is None or seed == seeds[-1]:
+                break
+            skipped[str(seed)] = no_plan
+        base = env.unwrapped
+        frames = [env.render()]
+        focus = np.asarray(base.robot.render_focus(base.robot.state())[0], dtype=float)
+        episode_return, contact_steps, min_clearance, moved = 0.0, 0, info["min_clearance"], 0.0
+        step_time, steps = 0.0, 0
+        while True:
             t0 = time.perf_counter()
             obs, reward, terminated, truncated, info = env.step(action)
             step_time += time.perf_counter() - t0
@@ -50,21 +91,31 @@ def demo(args: argparse.Namespace) -> dict:
             episode_return += reward
             contact_steps += info["n_contacts"] > 0
             min_clearance = min(min_clearance, info["min_clearance"])
+            now = np.asarray(base.robot.render_focus(base.robot.state())[0], dtype=float)
+            moved, focus = moved + float(np.linalg.norm(now - focus)), now
             if steps % args.frame_every == 0:
                 frames.append(env.render())
+            if terminated or truncated or steps >= args.max_steps:
+                break
+            action = policy(obs)
         frames.append(env.render())
-        gif = Path(args.out) / f"{args.env}-seed{args.seed}.gif"
+        gif = Path(args.out) / f"{args.env}-seed{seed}.gif"
         write_video(gif, frames, fps=env.metadata["render_fps"] / args.frame_every)
     finally:
         env.close()
     return {
         "env": args.env,
-        "policy": name,
-        "seed": args.seed,
+        "robot": base.robot.name,
+        "policy": spec.name,
+        "seed": seed,
+        "skipped_seeds": skipped,
+        "no_plan": getattr(policy, "no_plan", None),
         "noise": args.noise,
         "steps": steps,
         "return": round(episode_return, 3),
         "success": bool(info["is_success"]),
+        "moved_m": round(moved, 3),
+        "moved": spec.focus,
         "contact_steps": int(contact_steps),
         "min_clearance_m": round(float(min_clearance), 4),
         "steps_per_s": round(steps / step_time, 1) if step_time > 0 else None,
@@ -73,9 +124,16 @@ def demo(args: argparse.Namespace) -> dict:
 
 
 def _print_demo(summary: dict) -> None:
-    print(f"{summary['env']} seed {summary['seed']}, noise {summary['noise']!r}: {summary['policy']}")
+    print(f"{summary['env']} ({summary['robot']}) seed {summary['seed']}, noise {summary['noise']!r}: "
+          f"{summary['policy']}")
+    for seed, why in summary["skipped_seeds"].items():
+        print(f"  skipped seed   {seed}: {why}")
+    if summary["no_plan"]:
+        print(f"  no plan        {summary['no_plan']}: the robot holds still (without --seed the demo shows the "
+              "first layout with a plan)")
     print(f"  steps          {summary['steps']}  ({'goal reached' if summary['success'] else 'goal not reached'})")
     print(f"  return         {summary['return']:.2f}")
+    print(f"  moved          {summary['moved_m']:.2f} m ({summary['moved']})")
     print(f"  contact steps  {summary['contact_steps']}")
     print(f"  min clearance  {summary['min_clearance_m']:.3f} m")
     print(f"  env steps/s    {summary['steps_per_s']} (env.step only, in a short run with rendering in between;"
@@ -98,9 +156,15 @@ def build_parser() -> argparse.ArgumentParser:
                        description="Roll out a scripted policy (ClutterNav: a potential field; ClutterReach: a "
                                    "joint-space planner on the known layout and a path tracker; ClutterFly: a "
                                    "position controller on the planned path), write an episode GIF of the rgb_array "
-                                   "frames (robot and goal ringed, the robot's trail drawn) and print a summary.")
+                                   "frames (robot and goal ringed, the robot's trail drawn) and print a summary. "
+                                   "Without --seed it shows the first layout the policy has a plan for, and says "
+                                   "which it skipped and why.")
     p.add_argument("--env", choices=DEMO_ENVS, default="ClutterNav-v0", help="env id")
-    p.add_argument("--seed", type=int, default=0, help="reset seed (the layout)")
+    p.add_argument("--seed", type=int, default=None,
+                   help="reset seed (the layout); default: the first from 0 on whose layout the scripted policy has "
+                        "a plan")
+    p.add_argument("--robot", choices=registered(), default=None,
+                   help="a registered robot of the env's kind (default: the env's own)")
     p.add_argument("--max-steps", type=positive_int, default=600, help="stop the episode after this many steps")
     p.add_argument("--frame-every", type=positive_int, default=2, help="keep every k-th frame in the GIF")
     p.add_argument("--out", default="out/demo", help="folder for the GIF")
@@ -138,8 +202,19 @@ def main(argv: list[str] | None = None) -> int:
 def _run(argv: list[str] | None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    try:
+        return _dispatch(parser, args)
+    except KeyboardInterrupt as exc:  # Ctrl-C: training wrote a checkpoint first (TrainingInterrupted)
+        print(f"clutter-gym {args.command}: {training_commands.interrupted(args, exc)}", file=sys.stderr, flush=True)
+        return 130
+
+
+def _dispatch(parser: argparse.ArgumentParser, args: argparse.Namespace) -> int:
     if args.command == "demo":
-        summary = demo(args)
+        try:
+            summary = demo(args)
+        except UserError as exc:
+            parser.exit(2, f"clutter-gym demo: error: {exc}\n")
         if args.json:
             print(json.dumps(summary))
         else:
@@ -148,7 +223,10 @@ def _run(argv: list[str] | None) -> int:
         profiles(args.name)
     else:
         try:
+            require_train_extra("this command")
             return args.handler(args)
+        except DependencyNotInstalled as exc:
+            parser.exit(1, f"clutter-gym {args.command}: error: {exc}\n")
         except UserError as exc:
             parser.exit(2, f"clutter-gym {args.command}: error: {exc}\n")
     return 0

@@ -16,35 +16,38 @@ in the env's own terms).
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
+
+from clutter_gym.clutter_reach import ClutterReachEnv
 
 #: ClutterReach's reward terms that the goal reward replaces.
 GOAL_TERMS = ("progress", "success")
 REWARD_TYPES = ("sparse", "dense")
 
 
-class GoalConditionedReach(gym.Wrapper):
-    """A ClutterReach env with the ``Dict(observation, achieved_goal, desired_goal)`` observation of goal-conditioned
-    envs: ``achieved_goal`` is ``ee_position``, ``desired_goal`` is ``target`` (world frame, metres) and
-    ``observation`` the other entries flattened (``ee_position`` included, as panda-gym does).
+class ClutterReachGoalEnv(ClutterReachEnv):
+    """ClutterReach with the ``Dict(observation, achieved_goal, desired_goal)`` observation of goal-conditioned envs:
+    ``achieved_goal`` is ``ee_position``, ``desired_goal`` is ``target`` (world frame, metres) and ``observation``
+    the other entries flattened (``ee_position`` included, as panda-gym does).
 
-    Args:
-        env: a ClutterReach env.
-        reward_type: "sparse" (-1 until within the success radius, else 0) or "dense" (minus the distance).
+    It is the env itself, not a wrapper, so that ``env.unwrapped.compute_reward`` is there, where
+    Gymnasium-Robotics' ``GoalEnv`` puts it and HER implementations call it. It takes ClutterReach's keyword
+    arguments (:class:`~clutter_gym.clutter_reach.ClutterReachEnv`) and ``reward_type``: "sparse" (-1 until within
+    the success radius, else 0) or "dense" (minus the distance).
     """
 
-    def __init__(self, env: gym.Env, reward_type: str = "sparse") -> None:
+    def __init__(self, reward_type: str = "sparse", **kwargs: Any) -> None:
         if reward_type not in REWARD_TYPES:
             raise ValueError(f"reward_type must be one of {REWARD_TYPES}, got {reward_type!r}")
-        super().__init__(env)
+        super().__init__(**kwargs)
         self.reward_type = reward_type
-        self.distance_threshold = float(env.unwrapped.task.success_radius)
-        inner = env.observation_space
+        self.distance_threshold = float(self.task.success_radius)
+        inner = self.observation_space
         self._rest = spaces.Dict({key: space for key, space in inner.spaces.items() if key != "target"})
         goal = inner["target"]
         self.observation_space = spaces.Dict({
@@ -60,12 +63,13 @@ class GoalConditionedReach(gym.Wrapper):
             "desired_goal": np.asarray(obs["target"], dtype=np.float32),
         }
 
-    def reset(self, **kwargs: Any) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
-        obs, info = self.env.reset(**kwargs)
+    def reset(self, *, seed: int | None = None,
+              options: Mapping[str, Any] | None = None) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        obs, info = super().reset(seed=seed, options=options)
         return self._goal_obs(obs), info
 
     def step(self, action: Any) -> tuple[dict[str, np.ndarray], float, bool, bool, dict[str, Any]]:
-        obs, _, terminated, truncated, info = self.env.step(action)
+        obs, _, terminated, truncated, info = super().step(action)
         goal_obs = self._goal_obs(obs)
         reward = float(self.compute_reward(goal_obs["achieved_goal"], goal_obs["desired_goal"], info))
         return goal_obs, reward, terminated, truncated, info
@@ -93,8 +97,9 @@ class GoalConditionedReach(gym.Wrapper):
         return (goal + (rest[0] if isinstance(info, Mapping) else rest)).astype(np.float32)
 
 
-def make_goal_reach(reward_type: str = "sparse", **kwargs: Any) -> gym.Env:
-    """The entry point of ``ClutterReachGoal-v0``: ClutterReach made with ``kwargs``, goal-conditioned."""
-    from clutter_gym.clutter_reach import ClutterReachEnv
-
-    return GoalConditionedReach(ClutterReachEnv(**kwargs), reward_type)
+# The keyword check every env runs at make time (make_checks.check_keywords) reads __init__'s signature: ClutterReach's
+# arguments and reward_type, so a misspelt one is named with its closest match as for every env.
+_reach = inspect.signature(ClutterReachEnv.__init__)
+ClutterReachGoalEnv.__init__.__signature__ = _reach.replace(  # type: ignore[attr-defined]
+    parameters=[*_reach.parameters.values(),
+                inspect.Parameter("reward_type", inspect.Parameter.KEYWORD_ONLY, default="sparse", annotation=str)])

@@ -170,6 +170,43 @@ def test_the_reach_demo_plans_to_the_target_and_writes_a_gif(tmp_path, capsys):
     assert Path(summary["gif"]).stat().st_size > 0
 
 
+def _demo_robots() -> list[tuple[str, str]]:
+    from clutter_gym.cli import DEMOS
+    from clutter_gym.robots.registry import registered
+
+    return [(env_id, robot) for env_id, demo in DEMOS.items() for robot in registered(demo.robot_kind)]
+
+
+@pytest.mark.parametrize("env_id, robot", _demo_robots())
+def test_the_default_demo_moves_every_registered_robot_to_its_goal(env_id, robot, tmp_path, capsys):
+    """A demo shows the env working on its defaults: the robot (the point the frames ring) moves and arrives."""
+    assert main(["demo", "--env", env_id, "--robot", robot, "--frame-every", "1000", "--out", str(tmp_path),
+                 "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["robot"] == robot and summary["no_plan"] is None
+    assert summary["moved_m"] > 0.1 and summary["success"], summary
+
+
+def test_a_layout_without_a_plan_is_said_so_and_the_default_demo_shows_one_with_a_plan(tmp_path, capsys):
+    """Seed 0 of ClutterReach-v0 is a layout the joint planner finds no path for (if it ever does, pick another)."""
+    assert main(["demo", "--env", "ClutterReach-v0", "--seed", "0", "--frame-every", "1000", "--out",
+                 str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "the planner found no path" in out and "moved          0.00 m" in out
+    assert main(["demo", "--env", "ClutterReach-v0", "--frame-every", "1000", "--out", str(tmp_path), "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["seed"] == 1 and summary["skipped_seeds"] == {"0": "the planner found no path"}
+    assert summary["moved_m"] > 0.1 and summary["success"]
+
+
+def test_the_demo_refuses_a_robot_of_another_kind_in_one_line(capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        main(["demo", "--env", "ClutterReach-v0", "--robot", "husky"])
+    err = capsys.readouterr().err.strip()
+    assert exit_info.value.code == 2 and len(err.splitlines()) == 1, err
+    assert err.startswith("clutter-gym demo: error: ") and "robot 'husky' is a wheeled base" in err
+
+
 def test_the_fly_demo_flies_the_planned_path_to_the_goal_and_writes_a_gif(tmp_path, capsys):
     assert main(["demo", "--env", "ClutterFly-v0", "--seed", "1", "--frame-every", "10", "--out", str(tmp_path),
                  "--json"]) == 0

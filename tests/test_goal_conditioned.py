@@ -12,9 +12,12 @@ from clutter_gym.goal_conditioned import GOAL_TERMS
 
 @pytest.mark.parametrize("reward_type", ["sparse", "dense"])
 def test_compute_reward_agrees_with_step_one_by_one_and_in_batches(reward_type):
+    """Through ``env.unwrapped``, where Gymnasium-Robotics' GoalEnv and HER implementations call it."""
     env = gym.make("ClutterReachGoal-v0", reward_type=reward_type, collision_fidelity="primitive")
+    compute = env.unwrapped.compute_reward
     obs, _ = env.reset(seed=2)
     assert set(obs) == {"observation", "achieved_goal", "desired_goal"} and obs in env.observation_space
+    assert env.unwrapped.observation_space == env.observation_space
     rng = np.random.default_rng(0)
     achieved, desired, infos, rewards = [], [], [], []
     for _ in range(120):
@@ -23,10 +26,9 @@ def test_compute_reward_agrees_with_step_one_by_one_and_in_batches(reward_type):
         desired.append(obs["desired_goal"])
         infos.append(info)
         rewards.append(reward)
-        assert reward == env.get_wrapper_attr("compute_reward")(obs["achieved_goal"], obs["desired_goal"], info)
+        assert reward == compute(obs["achieved_goal"], obs["desired_goal"], info)
         if terminated or truncated:
             obs, _ = env.reset()
-    compute = env.get_wrapper_attr("compute_reward")
     batch = compute(np.array(achieved), np.array(desired), np.array(infos))
     np.testing.assert_array_equal(batch, np.array(rewards, dtype=np.float32))
     assert any(sum(v for k, v in i["reward_terms"].items() if k not in GOAL_TERMS) < 0 for i in infos)
@@ -40,10 +42,12 @@ def test_the_goal_env_passes_gymnasiums_checker_and_refuses_an_unknown_reward_ty
     env = gym.make("ClutterReachGoal-v0")
     check_env(env.unwrapped, skip_render_check=True)
     with pytest.raises(ValueError, match="copy_info_dict"):  # SB3's default stores no infos
-        env.get_wrapper_attr("compute_reward")(np.zeros((2, 3)), np.ones((2, 3)), np.array([{}, {}]))
+        env.unwrapped.compute_reward(np.zeros((2, 3)), np.ones((2, 3)), np.array([{}, {}]))
     env.close()
     with pytest.raises(ValueError, match="reward_type must be one of"):
         gym.make("ClutterReachGoal-v0", reward_type="shaped")
+    with pytest.raises(TypeError, match="'reward_tpye' \\(did you mean 'reward_type'\\?\\)"):
+        gym.make("ClutterReachGoal-v0", reward_tpye="dense")  # named as every env names a misspelt argument
 
 
 def test_her_with_sac_trains_on_it():

@@ -19,7 +19,7 @@ LEAST_RING_PIXELS = 80  # a ring of the least radius is about 2 pi 8 px by 2 px
 
 def _demo_frames(make_env, env_id: str, seeds=range(4), every: int = 25, steps: int = 75):
     """(env, frame) at reset and every ``every`` steps of the demo's scripted policy, until the episode ends."""
-    kwargs, make_policy, _ = DEMOS[env_id]
+    kwargs, make_policy = DEMOS[env_id].kwargs, DEMOS[env_id].make_policy
     env = make_env(env_id, render_mode="rgb_array", **kwargs)
     for seed in seeds:
         obs, _ = env.reset(seed=seed)

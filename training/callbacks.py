@@ -40,8 +40,15 @@ class RunMonitor(BaseCallback):
         self._calls = 0
         self.recent.extend(self.run.read_episodes()[-WINDOW:])
         if self.progress:
-            self._bar = tqdm(total=self.config.timesteps, initial=self.num_timesteps, unit="step", dynamic_ncols=True,
+            self._bar = tqdm(total=self._last_step(), initial=self.num_timesteps, unit="step", dynamic_ncols=True,
                              desc=f"{self.config.env_id} seed {self.config.seed}")
+
+    def _last_step(self) -> int:
+        """The step training ends at: PPO collects whole rollouts (``n_steps`` per env), so it stops at the first
+        rollout's end at or past the budget (20,480 for a budget of 20,000 in rollouts of 128 x 16)."""
+        rollout = getattr(self.model, "n_steps", 1) * self.model.n_envs
+        start = self.num_timesteps
+        return start + math.ceil(max(self.config.timesteps - start, 0) / rollout) * rollout
 
     def _append(self, row: dict[str, float]) -> None:
         with writing(self.run.episodes_file):

@@ -48,6 +48,20 @@ def run_errors() -> AbstractContextManager[None]:
     return user_errors(RunWriteError, UntrustedFileError, FileNotFoundError)
 
 
+def interrupted(args: argparse.Namespace, exc: KeyboardInterrupt) -> str:
+    """What to say when Ctrl-C stopped a command: the step training stood at (a ``TrainingInterrupted`` wrote its
+    checkpoint) and how to resume: ``report`` and ``train --resume`` continue the run when run again, a new ``train``
+    run through ``--resume``."""
+    step = getattr(exc, "step", None)
+    said = "interrupted" if step is None else f"interrupted at step {step}"
+    folder = getattr(args, "run_folder", None)  # set by run_train once the new run's folder exists
+    if args.command == "train" and args.resume is None and folder is not None:
+        return f"{said}; run clutter-gym train --resume {folder} to resume"
+    if args.command in ("train", "report"):
+        return f"{said}; run the same command again to resume"
+    return said
+
+
 def positive_int(text: str) -> int:
     value = int(text)
     if value < 1:
@@ -264,6 +278,7 @@ def run_train(args: argparse.Namespace) -> int:
             config = config_for(args.env, train_overrides(args))
             run = start(config, args.out or f"runs/{config.env_id}/{config.noise}-seed{config.seed}")
     print(f"run folder: {run.root}")
+    args.run_folder = run.root  # what a new run is resumed from, for the message of an interrupt
     with run_errors():
         summary = train(run, progress=not args.no_progress, timesteps=args.timesteps, trust_pickle=args.trust_pickle)
     if summary is not None:

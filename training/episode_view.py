@@ -18,9 +18,14 @@ import numpy as np
 from clutter_gym.training.figures import plt
 from clutter_gym.util.video import write_video
 
-#: Height of one episode's panel in pixels (the width follows the square arena plus the caption).
-PANEL_PX = 520
+#: Side of one episode's square panel in pixels; the three caption lines sit above it.
+PANEL_PX = 360
+_CAPTION_PX = 75
 _DPI = 100
+#: The GIF shows every EVERY-th step, played at SPEEDUP times the real speed: few and small frames, so that a README
+#: can embed it and drawing it takes seconds, not a minute (its size and time: docs/training.md).
+EVERY = 8
+SPEEDUP = 2.0
 
 
 @dataclass
@@ -50,14 +55,14 @@ def record_episode(env: Any, policy: Callable[[Any, Any], tuple[np.ndarray, Any]
                          base.task.success_radius, np.asarray(lidar.config.angles, dtype=float))
     trace.path = base.task.planned_path(_pose(base)[:2]) if base.task.subgoal_lookahead > 0 else None
     state, total, step = None, 0.0, 0
-    _append(trace, base, info, f"{title}: step 0", False)
+    _append(trace, base, info, f"{title}\nstep 0", False)
     while True:
         action, state = policy(obs, state)
         obs, reward, terminated, truncated, info = env.step(action)
         total, step = total + reward, step + 1
         terms = " ".join(f"{k} {v:+.2f}" for k, v in info["reward_terms"].items() if v)
         end = " | SUCCESS" if info["is_success"] else (" | CONTACT" if info["cost"] else "")
-        caption = (f"{title}: step {step}, return {total:.1f}, clearance {info['min_clearance'] * 100:.0f} cm{end}\n"
+        caption = (f"{title}\nstep {step}, return {total:.1f}, clearance {info['min_clearance'] * 100:.0f} cm{end}\n"
                    f"{terms}{_monitor_text(info)}")
         _append(trace, base, info, caption, info["cost"] > 0)
         if terminated or truncated:
@@ -87,10 +92,11 @@ def _append(trace: EpisodeTrace, base: Any, info: dict, caption: str, contact: b
 def draw_frame(traces: list[EpisodeTrace], t: int) -> np.ndarray:
     """(H, W, 3) uint8: every episode at its step ``t`` (or its last), side by side."""
     n = len(traces)
-    fig, axes = plt.subplots(1, n, figsize=(n * PANEL_PX / _DPI, (PANEL_PX + 60) / _DPI), dpi=_DPI, squeeze=False)
+    height = PANEL_PX + _CAPTION_PX
+    fig, axes = plt.subplots(1, n, figsize=(n * PANEL_PX / _DPI, height / _DPI), dpi=_DPI, squeeze=False)
     for ax, trace in zip(axes[0], traces):
         _draw_episode(ax, trace, min(t, len(trace.poses) - 1))
-    fig.subplots_adjust(left=0.01, right=0.99, bottom=0.01, top=0.86, wspace=0.04)
+    fig.subplots_adjust(left=0.01, right=0.99, bottom=0.01, top=1.0 - (_CAPTION_PX - 4) / height, wspace=0.04)
     fig.canvas.draw()
     image = np.asarray(fig.canvas.buffer_rgba())[:, :, :3].copy()
     plt.close(fig)
@@ -138,8 +144,14 @@ def _obstacle_patch(obstacle: Any, ax: Any) -> Any:
     return patch
 
 
-def write_episodes_video(path: str | Path, traces: list[EpisodeTrace], fps: float, every: int = 2) -> Path:
-    """The episodes side by side as a GIF or MP4, every ``every``-th step (and the last)."""
+def write_episodes_video(path: str | Path, traces: list[EpisodeTrace], fps: float, every: int = EVERY,
+                         speedup: float = SPEEDUP, progress: bool = False) -> Path:
+    """The episodes side by side as a GIF or MP4, every ``every``-th step (and the last), played at ``speedup``
+    times the real speed (``fps``: the env's steps per second); ``progress`` shows a bar of the frames drawn."""
+    from tqdm import tqdm
+
     length = max(len(trace.poses) for trace in traces)
     steps = sorted({*range(0, length, every), length - 1})
-    return write_video(path, [draw_frame(traces, t) for t in steps], fps=fps / every)
+    frames = [draw_frame(traces, t) for t in tqdm(steps, desc=f"drawing {Path(path).name}", unit="frame",
+                                                  disable=not progress, dynamic_ncols=True)]
+    return write_video(path, frames, fps=fps * speedup / every)

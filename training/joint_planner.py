@@ -21,7 +21,8 @@ class JointPlannerReacher:
 
     The tracker time-parameterises the path at the env's joint speed limits and commands, each step, the
     velocity that brings the measured joints to the next reference point. Without a plan (no IK solution clear
-    of the layout, or RRT-Connect out of nodes) the arm holds still: the episode times out.
+    of the layout, or RRT-Connect out of nodes) the arm holds still: the episode times out, and :attr:`no_plan`
+    says so.
 
     Args:
         env: a ClutterReach env (its scene and joint speeds are read from it at every reset).
@@ -54,6 +55,12 @@ class JointPlannerReacher:
         self.failed += path is None
         self.reference = None if path is None else time_parameterise(path, self.speed)
         self._scene, self._k = scene, 0
+
+    @property
+    def no_plan(self) -> str | None:
+        """Why the arm holds still this episode ("the planner found no path"), or None while it has a plan (and
+        before the episode's first action, which plans)."""
+        return "the planner found no path" if self._scene is not None and self.reference is None else None
 
     def __call__(self, obs: Mapping[str, np.ndarray]) -> np.ndarray:
         if self.env.scene is not self._scene:

@@ -20,6 +20,7 @@ from clutter_gym.training.evaluate import evaluate
 from clutter_gym.training.run_dir import RunDir
 from clutter_gym.training.train import start, train
 from clutter_gym.util.atomic import write_text_atomically
+from clutter_gym.util.machine import machine_state
 
 PROFILES = ("none", "nominal")
 WINDOW = 100
@@ -63,6 +64,7 @@ def _differences(saved: dict, wanted: dict, ignore: set[str], prefix: str = "") 
 
 def main_job(run: RunDir, out: Path, timesteps: int | None, episodes: int, progress: bool = True) -> Path:
     """Train (or resume / reuse) ``run``, evaluate it under each of PROFILES, write the report; returns its path."""
+    machine = machine_state()
     t0 = time.perf_counter()
     if not run.is_finished() or (timesteps is not None and timesteps != run.read_config().timesteps):
         train(run, progress=progress, timesteps=timesteps)
@@ -77,16 +79,17 @@ def main_job(run: RunDir, out: Path, timesteps: int | None, episodes: int, progr
         summaries[profile] = summary
     eval_s = time.perf_counter() - t0
     if navigation:
-        write_episode_pair(run, summaries["none"], out / "episode.gif")
+        write_episode_pair(run, summaries["none"], out / "episode.gif", progress=progress)
     curve = plot_learning_curve(run, out / "learning_curve.png")
     report = out / "report.md"
-    write_text_atomically(report, render_report(run, summaries, curve, train_s, eval_s))
+    write_text_atomically(report, render_report(run, summaries, curve, train_s, eval_s, machine))
     return report
 
 
-def write_episode_pair(run: RunDir, summary: dict, path: Path) -> Path:
+def write_episode_pair(run: RunDir, summary: dict, path: Path, progress: bool = False) -> Path:
     """The first successful and the first failed episode of an evaluation, replayed side by side (top-down, with
-    trail, LIDAR beams, planner path and reward terms); two successes or two failures if there is no other kind."""
+    trail, LIDAR beams, planner path and reward terms); two successes or two failures if there is no other kind.
+    ``progress`` shows a bar of the frames drawn."""
     from clutter_gym.training.agent import load
     from clutter_gym.training.episode_view import record_episode, write_episodes_video
 
@@ -102,7 +105,7 @@ def write_episode_pair(run: RunDir, summary: dict, path: Path) -> Path:
                   for i in picks]
     finally:
         env.close()
-    return write_episodes_video(path, traces, fps=env.metadata["render_fps"])
+    return write_episodes_video(path, traces, fps=env.metadata["render_fps"], progress=progress)
 
 
 def rolling_rate(values: np.ndarray, window: int = WINDOW) -> np.ndarray:
@@ -218,14 +221,17 @@ def _observation_line(config) -> str:
     return line
 
 
-def render_report(run: RunDir, summaries: dict, curve: Path | None, train_s: float, eval_s: float) -> str:
+def render_report(run: RunDir, summaries: dict, curve: Path | None, train_s: float, eval_s: float,
+                  machine: str) -> str:
+    """report.md: the run, its times and the ``machine`` they were measured on (:func:`machine_state`), the
+    evaluation table, the verdict, the learning curve and the episode GIF."""
     config = run.read_config()
     lines = [
         f"# PPO on {config.env_id}",
         "",
         f"PPO, {config.timesteps:,} env steps with {config.n_envs} envs, seed {config.seed}, training noise profile "
         f"{config.noise!r}; this invocation spent {train_s / 60:.1f} min training (0 when it reused a finished run) "
-        f"and {eval_s / 60:.1f} min evaluating. Config: `{run.config_file}`.",
+        f"and {eval_s / 60:.1f} min evaluating, on {machine}. Config: `{run.config_file}`.",
         "",
         _observation_line(config),
         "",
@@ -253,4 +259,8 @@ def render_report(run: RunDir, summaries: dict, curve: Path | None, train_s: flo
     if curve is not None:
         lines += [f"![learning curve]({curve.name})", ""]
     lines += ["![evaluation episodes, clean sensors](episode.gif)", ""]
+    if config.env_id == "ClutterNav-v0":
+        from clutter_gym.training.episode_view import EVERY, SPEEDUP
+
+        lines += [f"*Every {EVERY}th step of two evaluation episodes, at {SPEEDUP:g}x the real speed.*", ""]
     return "\n".join(lines)

@@ -29,6 +29,16 @@ from clutter_gym.training.vec_env import policy_name, training_env
 from clutter_gym.util.atomic import write_text_atomically
 
 
+class TrainingInterrupted(KeyboardInterrupt):
+    """Training was interrupted (Ctrl-C) and a checkpoint of where it stood was written, as rl-zoo3 saves on an
+    interrupt: resuming the run continues from ``step``, the env steps trained.
+    """
+
+    def __init__(self, step: int) -> None:
+        super().__init__(f"interrupted at step {step}")
+        self.step = step
+
+
 def check_env_builds(config: TrainConfig) -> None:
     """Make and close the config's env once, so a bad env argument fails here, named, not in a worker process.
 
@@ -85,7 +95,8 @@ def train(run: RunDir, progress: bool = True, timesteps: int | None = None, trus
 
     A run with checkpoints continues from the newest complete one (:func:`resume_point`), with the config saved in
     the folder: the steps after it are redone and their episode and validation rows dropped, so a killed run loses
-    at most one checkpoint interval. A run killed before its first checkpoint starts over, saying so. A finished
+    at most one checkpoint interval; an interrupted one (Ctrl-C) writes a checkpoint first and loses nothing. A
+    run killed before its first checkpoint starts over, saying so. A finished
     run is left as it is unless ``timesteps`` raises its total; it then continues from its final model. The
     continued run draws new env seeds, so it is not bit-identical to an uninterrupted one.
 
@@ -101,6 +112,7 @@ def train(run: RunDir, progress: bool = True, timesteps: int | None = None, trus
         FileNotFoundError: the statistics of a run trained with normalisation are missing from its newest model.
         UntrustedFileError: they are a pickle and ``trust_pickle`` is False.
         RunWriteError: a checkpoint or the final model could not be written.
+        TrainingInterrupted: training was interrupted; the checkpoint of its step was written.
     """
     config = run.read_config()
     if timesteps is not None and timesteps != config.timesteps:
@@ -126,7 +138,11 @@ def train(run: RunDir, progress: bool = True, timesteps: int | None = None, trus
             model.set_random_seed(config.seed + done)
         model.set_logger(configure(str(run.tb_dir), ["tensorboard"]))
         if config.teacher.name and len(run.read_distill_rows()) < config.distill.rounds:
-            Distiller(run, config, model, venv, progress).run_rounds()
+            try:
+                Distiller(run, config, model, venv, progress).run_rounds()
+            except KeyboardInterrupt:  # the round under way is dropped: its checkpoint would hold half a round
+                rows = run.read_distill_rows()
+                raise TrainingInterrupted(int(rows[-1]["step"]) if rows else 0) from None
         remaining = config.timesteps - model.num_timesteps
         callbacks = [RunMonitor(run, config, progress)]
         if config.validate_every:
@@ -134,8 +150,17 @@ def train(run: RunDir, progress: bool = True, timesteps: int | None = None, trus
         if isinstance(model, DistilledPPO):
             callbacks.append(model.recorder)
         if remaining > 0:
+            if point is not None:
+                _say(f"continuing from the checkpoint of step {done}")
             t0 = time.perf_counter()
-            model.learn(remaining, callback=CallbackList(callbacks), reset_num_timesteps=model.num_timesteps == 0)
+            callback = CallbackList(callbacks)
+            try:
+                model.learn(remaining, callback=callback, reset_num_timesteps=model.num_timesteps == 0)
+            except KeyboardInterrupt:
+                callback.on_training_end()  # the progress bar and the episode log closed before the checkpoint
+                run.save_checkpoint(model, model.get_vec_normalize_env(), model.num_timesteps, config.keep_checkpoints)
+                run.add_training_time(time.perf_counter() - t0, model.num_timesteps)
+                raise TrainingInterrupted(model.num_timesteps) from None
             run.add_training_time(time.perf_counter() - t0, model.num_timesteps)
         run.save_model(model, model.get_vec_normalize_env(), run.model_dir)
     finally:

@@ -12,6 +12,7 @@ changes the speed, never the trajectories.
 from __future__ import annotations
 
 import functools
+import signal
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -49,6 +50,9 @@ def _answer(envs: DummyVecEnv, cmd: str, data: Any) -> Any:
 
 
 def _serve(remote: Any, parent_remote: Any, make: CloudpickleWrapper) -> None:
+    # Ctrl-C reaches every process of the terminal's group: the parent handles it (training writes a checkpoint)
+    # and then closes the workers, which must still answer the step they are in, not die with a traceback.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     serve(remote, parent_remote, make.var, _answer)
 
 

@@ -23,6 +23,7 @@ from clutter_gym.training.commands import add_settings_options, settings
 from clutter_gym.training.figures import plt, save_figure
 from clutter_gym.training.report import WINDOW, main_job, prepare_run, rolling_rate
 from clutter_gym.util.atomic import write_text_atomically
+from clutter_gym.util.machine import machine_state
 
 
 def main() -> None:
@@ -35,7 +36,7 @@ def main() -> None:
     add_settings_options(parser)
     args = parser.parse_args()
     out = Path(args.out)
-    lines = [table_header("seed", "train wall (min)", "steps",
+    lines = [f"On {machine_state()}.", "", table_header("seed", "train wall (min)", "steps",
                           "training success / collision at 25 / 50 / 75 / 100% of budget", "eval `none` success",
                           "eval `none` collision", "eval `nominal` success", "eval `nominal` collision")]
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.6), sharey=True)

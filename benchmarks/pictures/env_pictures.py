@@ -39,7 +39,7 @@ def _rollout(env: gym.Env, seed: int, make_policy, steps: int) -> int:
 
 def mid_episode_frame(env_id: str, seed: int, fraction: float = 0.5) -> np.ndarray:
     """The ``rgb_array`` frame ``fraction`` of the way through the demo policy's episode on ``seed``."""
-    kwargs, make_policy, _ = DEMOS[env_id]
+    kwargs, make_policy = DEMOS[env_id].kwargs, DEMOS[env_id].make_policy
     env = gym.make(env_id, render_mode="rgb_array", **kwargs)
     try:
         length = _rollout(env, seed, make_policy, MAX_STEPS)

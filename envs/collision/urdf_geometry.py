@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
+from clutter_gym.collision.urdf_checks import check_urdf, resolve_optenv
 from clutter_gym.util.transforms import rpy_quat
 
 KINDS = ("box", "cylinder", "sphere", "capsule", "mesh")
@@ -32,6 +33,10 @@ MIN_MESH_SIZE = 1e-3
 #: a mesh (as scaled) whose thinnest extent is at most this share of its widest is refused as nearly flat: it encloses
 #: almost no volume, and the minimum enclosing sphere's Qhull step loses its thickness in round-off.
 MIN_THICKNESS = 1e-3
+#: triangles a collision mesh may have. The fidelity levels, the allowed-collision matrix and pybullet all work on
+#: the whole mesh, so a make's time and memory grow with it (docs/robots.md gives the figures); a mesh is refused
+#: above this, not simplified here, as pybullet would still load the full one and the two engines would disagree.
+MAX_FACES = 100_000
 
 
 @dataclass(frozen=True, eq=False)
@@ -106,9 +111,15 @@ def _load_mesh(path: Path) -> trimesh.Trimesh:
     never mutated.
 
     Raises:
-        ValueError: the mesh has no triangles, none of positive area, or all of its vertices in one plane (no solid
-            to collide with or to take a hull of); the message names the file.
+        ValueError: the mesh has more than :data:`MAX_FACES` triangles (counted on a quick read before the full
+            one), none, none of positive area, or all of its vertices in one plane (no solid to collide with or to
+            take a hull of); the message names the file.
     """
+    faces = _face_count(path)
+    if faces > MAX_FACES:
+        raise ValueError(f"mesh {path} has {faces:,} triangles, more than the {MAX_FACES:,} a collision mesh may "
+                         "have: simplify it (e.g. trimesh's simplify_quadric_decimation, or MeshLab) or model the "
+                         "link with primitives")
     loaded = trimesh.load(path, force="mesh", process=True)
     if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
         raise ValueError(f"mesh {path} holds no triangles")
@@ -120,6 +131,17 @@ def _load_mesh(path: Path) -> trimesh.Trimesh:
         raise ValueError(f"mesh {path} is flat: every vertex lies in one plane, so it encloses no volume")
     trimesh.repair.fix_normals(loaded)  # one winding: a surface sampled by area-weighted normals needs it
     return loaded
+
+
+def _face_count(path: Path) -> int:
+    """How many triangles the mesh file holds: a binary STL's header says so (its size confirms it is one), so a
+    large one is refused without reading its triangles; any other file is read without processing."""
+    size = path.stat().st_size
+    with path.open("rb") as file:
+        head = file.read(84)
+    if len(head) == 84 and size == 84 + 50 * int.from_bytes(head[80:], "little"):
+        return int.from_bytes(head[80:], "little")
+    return len(getattr(trimesh.load(path, force="mesh", process=False), "faces", ()))
 
 
 def check_solid(mesh: trimesh.Trimesh, what: str) -> None:
@@ -190,19 +212,28 @@ def load_collision_elements(urdf: str | Path) -> list[CollisionElement]:
     root = parse_urdf(urdf)
     elements = []
     for link in root.findall("link"):
-        name = link.attrib.get("name")
+        name = link.attrib["name"]  # every link has one: parse_urdf checked
         for i, col in enumerate(link.findall("collision")):
             elements.append(_element(col, name, urdf, f"{urdf.name} link {name!r} collision {i}"))
     return elements
 
 
 def parse_urdf(urdf: Path) -> ET.Element:
+    """The URDF's elements, its xacro ``optenv`` defaults taken, once it has passed every check of
+    :mod:`.urdf_checks` (a tree, finite numbers, no xacro left): what every reader of a URDF in the package reads.
+
+    Raises:
+        ValueError: the file is missing, is not XML, or fails a check (the message names the file and the element).
+    """
     if not urdf.is_file():
         raise ValueError(f"URDF not found: {urdf}")
     try:
-        return ET.parse(urdf).getroot()
+        root = ET.parse(urdf).getroot()
     except ET.ParseError as exc:
         raise ValueError(f"cannot parse URDF {urdf}: {exc}") from exc
+    resolve_optenv(root)
+    check_urdf(root, urdf)
+    return root
 
 
 def urdf_digest(urdf: str | Path) -> str:

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from clutter_gym.collision.kinematics import Joint
 from clutter_gym.robots.spec_reading import check_keys, joint_names, load_spec_urdf, mount, number, numbers
 
 #: The keys of an ``arm`` spec (besides ``kind``); the first four are required.
@@ -90,6 +91,7 @@ def arm_from_spec(spec: Mapping[str, object], where: str, folder: Path | None = 
     if ee_link not in kinematics.links:
         raise ValueError(f"{where}: ee_link {ee_link!r} is not a link of {source}; add it with ee_mount or pick one "
                          f"of {kinematics.links}")
+    _check_arm_joints([moving[j] for j in joints], source, where)
     n = len(joints)
     lower = np.array([moving[j].lower for j in joints])
     upper = np.array([moving[j].upper for j in joints])
@@ -98,8 +100,8 @@ def arm_from_spec(spec: Mapping[str, object], where: str, folder: Path | None = 
         raise ValueError(f"{where}: ready {ready.tolist()} is outside the joint limits {lower.tolist()} .. "
                          f"{upper.tolist()}")
     limits = _urdf_limits(urdf.urdf, joints)
-    speed = np.array(numbers(spec.get("speed_limits", limits[0]), n, f"{where}: speed_limits", 0.01, 20.0))
-    effort = np.array(numbers(spec.get("effort_limits", limits[1]), n, f"{where}: effort_limits", 0.01, 5000.0))
+    speed, effort = (np.array(_limits(spec, key, dict(zip(joints, given)), source, where, high))
+                     for key, given, high in (("speed_limits", limits[0], 20.0), ("effort_limits", limits[1], 5000.0)))
     geometric = [e.link for e in elements if e.link != kinematics.root]
     tracked = tuple(dict.fromkeys([link for link in kinematics.links if link in geometric] + [ee_link]))
     moved = {j.child for j in kinematics.joints}
@@ -111,6 +113,10 @@ def arm_from_spec(spec: Mapping[str, object], where: str, folder: Path | None = 
             link = kinematics.parent[link]
         return True
 
+    if bolted(ee_link):
+        what = "the root link" if ee_link == kinematics.root else "bolted to the root link"
+        raise ValueError(f"{where}: ee_link {ee_link!r} is {what} of {source}: no arm joint moves it; pick a link "
+                         "past the last arm joint (or mount one there with ee_mount)")
     frames = kinematics.forward(np.zeros((1, n)))
     shoulder = frames[moving[joints[1]].child][0, :3, 3]
     reach = number(spec, "reach", where, 0.8, 0.2, 2.0)
@@ -119,6 +125,35 @@ def arm_from_spec(spec: Mapping[str, object], where: str, folder: Path | None = 
                     lower=lower, upper=upper, speed_limit=speed, effort_limit=effort,
                     shoulder=np.array([0.0, 0.0, float(shoulder[2])]), reach=reach,
                     fixed_links=tuple(link for link in tracked if bolted(link)))
+
+
+def _check_arm_joints(joints: Sequence[Joint], source: Path, where: str) -> None:
+    """Refuse an arm joint that slides (the arm's joint spaces, its planner and its IK read angles) or whose range
+    is empty or inverted (pybullet reads lower > upper as no limit at all)."""
+    for joint in joints:
+        if joint.kind == "prismatic":
+            raise ValueError(f"{where}: arm_joints {joint.name!r} of {source} is prismatic; an arm spec takes "
+                             "revolute and continuous joints (a sliding axis is not read from specs yet)")
+        if not joint.lower < joint.upper:
+            raise ValueError(f"{where}: arm_joints {joint.name!r} of {source} has <limit lower={joint.lower:g} "
+                             f"upper={joint.upper:g}> (0 where not given): an arm joint needs lower < upper, in "
+                             "radians")
+
+
+def _limits(spec: Mapping[str, object], key: str, given: Mapping[str, float], source: Path, where: str,
+            high: float) -> list[float]:
+    """``spec[key]``, or the limits the URDF gives (``given``, nan where it gives none) when the spec leaves it out."""
+    if key not in spec:
+        missing = [joint for joint, value in given.items() if math.isnan(value)]
+        if missing:
+            attribute = "velocity" if key == "speed_limits" else "effort"
+            raise ValueError(f"{where}: {key} was not given, and {source} gives no <limit {attribute}=...> for "
+                             f"{missing}: give {key} in the spec")
+        wrong = {joint: value for joint, value in given.items() if not 0.01 <= value <= high}
+        if wrong:
+            raise ValueError(f"{where}: {key} was not given, and the <limit> of {source} gives {wrong}, outside "
+                             f"[0.01, {high:g}]: give {key} in the spec")
+    return numbers(spec.get(key, list(given.values())), len(given), f"{where}: {key}", 0.01, high)
 
 
 def _urdf_limits(urdf: Path, joints: Sequence[str]) -> tuple[list[float], list[float]]:

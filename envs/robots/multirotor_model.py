@@ -22,7 +22,7 @@ import numpy as np
 from clutter_gym.robots.rate_loop import allocation, mixing_matrix
 from clutter_gym.robots.rigid_body import RigidBody, rigid_body
 from clutter_gym.robots.rotors import RotorModel
-from clutter_gym.robots.spec_reading import check_keys, load_spec_urdf, spec_mounts
+from clutter_gym.robots.spec_reading import as_number, check_keys, load_spec_urdf, spec_mounts
 from clutter_gym.sim import GRAVITY
 from clutter_gym.util.checks import is_number
 
@@ -192,7 +192,8 @@ def multirotor_from_spec(spec: Mapping[str, object], where: str, folder: Path | 
         raise ValueError(f"{where}: rotor_radius is needed: the rotor links of {source} have no collision cylinder "
                          "to read it from")
     defaults = {**SPEC_DEFAULTS, "rotor_radius": max(cylinders, default=math.nan)}  # the others are required
-    values = {key: _number(spec[key] if key in spec else defaults[key]) for key in RANGES}
+    given = {key: spec[key] if key in spec else defaults[key] for key in RANGES}
+    values = {key: value if (number := as_number(value)) is None else number for key, value in given.items()}
     try:
         check_ranges(values, RANGES)
         hubs = np.array([body.frames[link][0][:2] for link in rotors])
@@ -259,10 +260,3 @@ def _spin(value: object, n: int, where: str) -> tuple[float, ...]:
                          f"counter-clockwise seen from above, -1 for clockwise; got {value!r}")
     return tuple(float(s) for s in value)
 
-
-def _number(value: object) -> object:
-    """``value`` as a float where it reads as one (YAML leaves ``3e-8`` a string), else as it is."""
-    try:
-        return float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        return value

@@ -14,14 +14,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from clutter_gym.robots.arm import Arm
 from clutter_gym.robots.arm_model import arm_from_spec
 from clutter_gym.robots.multirotor import Multirotor
 from clutter_gym.robots.multirotor_model import multirotor_from_spec
 from clutter_gym.robots.panda import PandaArm
 from clutter_gym.robots.quadrotor import Quadrotor
+from clutter_gym.robots.spec_reading import read_spec_file
 from clutter_gym.robots.wheeled import diffbot, wheeled_base_from_spec
 from clutter_gym.sim import pybullet_data_file
 
@@ -80,22 +79,19 @@ def resolve_robot(robot: str | Path | Mapping[str, Any], kind: str, env_id: str)
     takes = f"{env_id} takes a {KINDS[kind]}: robot= one of {registered(kind)}, or a spec with kind {kind!r}"
     where = "robot"
     folder = None
-    if isinstance(robot, (str, Path)) and Path(robot).suffix in (".yaml", ".yml"):
+    if isinstance(robot, (str, Path)) and Path(robot).suffix.lower() in (".yaml", ".yml"):
         path = Path(robot).expanduser()
         if not path.is_file():
             raise ValueError(f"robot spec file {str(path)!r} not found; {takes}")
-        try:
-            robot = yaml.safe_load(path.read_text())
-        except yaml.YAMLError as error:
-            raise ValueError(f"robot spec file {path} is not valid YAML: {error}") from None
-        where, folder = f"robot spec {path}", path.parent
-        if not isinstance(robot, Mapping):
-            raise ValueError(f"{where}: expected a mapping of keys, got {type(robot).__name__}")
+        robot, where, folder = read_spec_file(path), f"robot spec {path}", path.parent
     if isinstance(robot, Mapping):
         spec_kind = robot.get("kind")
         if spec_kind != kind:
             raise ValueError(f"{where}: kind {spec_kind!r} does not fit; {takes}")
         return SPEC_READERS[kind](robot, where, folder)
+    if isinstance(robot, (str, Path)) and Path(robot).suffix.lower() == ".urdf":
+        raise ValueError(f"robot {str(robot)!r} is a URDF: robot= takes its spec, e.g. {{'kind': {kind!r}, 'urdf': "
+                         f"{str(robot)!r}, ...}} (docs/robots.md); {takes}")
     if not isinstance(robot, str) or robot not in _ROBOTS:
         raise ValueError(f"unknown robot {robot!r}; {takes}")
     entry = _ROBOTS[robot]

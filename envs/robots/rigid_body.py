@@ -94,7 +94,8 @@ def rigid_body(urdf: str | Path) -> RigidBody:
     """Compose the links of ``urdf`` into one body (parallel-axis theorem per link).
 
     Raises:
-        ValueError: the URDF cannot be read, has a joint that is not fixed, a link with a negative mass, or no mass.
+        ValueError: the URDF cannot be read (``parse_urdf`` refuses a negative mass), has a joint that is not fixed,
+            or no mass.
     """
     urdf = Path(urdf)
     root = parse_urdf(urdf)
@@ -128,8 +129,6 @@ def rigid_body(urdf: str | Path) -> RigidBody:
             continue
         where = f"{urdf.name} link {name!r} inertial"
         mass = float(parse_floats(inertial.find("mass").attrib.get("value"), 1, 0.0, f"{where} mass")[0])
-        if mass < 0.0:
-            raise ValueError(f"{where}: mass must be >= 0 kg, got {mass}")
         xyz, rot = _origin(inertial, where)
         attrib = inertial.find("inertia").attrib
         ixx, ixy, ixz, iyy, iyz, izz = (float(attrib.get(k, 0.0)) for k in _INERTIA_KEYS)

@@ -1,28 +1,58 @@
-"""What every robot spec reader does first: check the keys, find the URDF, prepare and parse it; and read numbers,
-joint lists and mounts with errors that name the field."""
+"""What every robot spec reader does first: read the spec file, check the keys, find the URDF, prepare and parse it;
+and read numbers, joint lists and mounts with errors that name the field (and, for a value the spec left out, say
+that it was derived from the URDF and how)."""
 
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+import yaml
+
 from clutter_gym.collision.kinematics import UrdfKinematics
-from clutter_gym.collision.urdf_geometry import CollisionElement, load_collision_elements
+from clutter_gym.collision.urdf_geometry import CollisionElement, load_collision_elements, parse_urdf
 from clutter_gym.robots.urdf_prep import Mount, prepared_urdf
+from clutter_gym.util.checks import is_number
+
+#: A number in exponent notation with no dot or no exponent sign (3e-8, 1.0e3): YAML 1.2 reads it as a number, but
+#: PyYAML (YAML 1.1) leaves it a string, so a spec file's number may arrive as this text. No other text is a number.
+_EXPONENT = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)[eE][-+]?\d+")
 
 
 @dataclass(frozen=True, eq=False)
 class SpecUrdf:
     """A spec's URDF: the user's file (``source``), the prepared copy the env loads (``urdf``), its kinematics and
-    collision elements, and the robot's name."""
+    collision elements, the robot's name, and the masses the user's file gives its links (kg; a link without an
+    ``<inertial>`` is left out: the prepared copy gives it a token gram)."""
 
     source: Path
     urdf: Path
     kinematics: UrdfKinematics
     elements: list[CollisionElement]
     name: str
+    masses: dict[str, float]
+
+
+def read_spec_file(path: Path) -> Mapping[str, object]:
+    """The mapping of keys a YAML spec file holds.
+
+    Raises:
+        ValueError: the file is not UTF-8 text, not YAML, or not a mapping (one line naming the file).
+    """
+    try:
+        spec = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except UnicodeDecodeError:
+        raise ValueError(f"robot spec {path}: not UTF-8 text; a spec is a YAML mapping of keys (docs/robots.md)") \
+            from None
+    except yaml.YAMLError as error:
+        raise ValueError(f"robot spec {path}: not valid YAML: {' '.join(str(error).split())}") from None
+    if not isinstance(spec, Mapping):
+        raise ValueError(f"robot spec {path}: expected a mapping of keys, got {type(spec).__name__}")
+    return spec
 
 
 def check_keys(spec: Mapping[str, object], keys: Sequence[str], required: int, kind: str, where: str) -> None:
@@ -48,12 +78,20 @@ def spec_source(spec: Mapping[str, object], where: str, folder: Path | None) -> 
 
 def load_spec_urdf(spec: Mapping[str, object], where: str, folder: Path | None,
                    mounts: tuple[Mount, ...]) -> SpecUrdf:
-    """The spec's URDF prepared with ``mounts`` and parsed; a URDF the parser refuses is reported as such."""
+    """The spec's URDF prepared with ``mounts`` and parsed; a URDF the parser refuses (``collision/urdf_checks.py``
+    says what it refuses) is reported as such, and so is one whose links weigh nothing in all: pybullet would fly or
+    drive the prepared copy's token grams."""
     source = spec_source(spec, where, folder)
     name = str(spec.get("name", source.stem))
     try:
+        masses = {str(link.get("name")): float(mass.get("value", "nan")) for link in parse_urdf(source).findall("link")
+                  if (mass := link.find("inertial/mass")) is not None}
+        if not sum(masses.values()) > 0.0:
+            given = f"gives its links {sum(masses.values()):g} kg in all" if masses else "has no <inertial> element"
+            raise ValueError(f"{source} {given}, so the robot's mass and inertia are unknown (pybullet would take a "
+                             "token gram a link): give each link an <inertial> with its mass and inertia")
         urdf = prepared_urdf(source, name, mounts)
-        return SpecUrdf(source, urdf, UrdfKinematics(urdf), load_collision_elements(urdf), name)
+        return SpecUrdf(source, urdf, UrdfKinematics(urdf), load_collision_elements(urdf), name, masses)
     except ValueError as error:
         raise ValueError(f"{where}: the URDF was refused: {error}") from None
 
@@ -72,26 +110,49 @@ def joint_names(spec: Mapping[str, object], key: str, urdf: SpecUrdf, where: str
     return tuple(str(j) for j in joints)
 
 
+def as_number(value: object) -> float | None:
+    """``value`` as a float when it is a number (not a bool: ``true`` is not 1 metre), or text YAML 1.2 reads as a
+    number and PyYAML leaves a string (exponent notation, :data:`_EXPONENT`); else None."""
+    if is_number(value):
+        return float(value)
+    if isinstance(value, str) and _EXPONENT.fullmatch(value.strip()):
+        return float(value)
+    return None
+
+
 def numbers(value: object, n: int, where: str, low: float, high: float) -> list[float]:
     """``value`` as ``n`` finite numbers in [low, high], or an error naming ``where`` and the range."""
-    try:
-        out = [float(v) for v in value]  # type: ignore[union-attr]
-    except (TypeError, ValueError):
-        out = []
-    if len(out) != n or not all(math.isfinite(v) and low <= v <= high for v in out):
-        raise ValueError(f"{where} must be {n} number{'s' if n > 1 else ''} in [{low:g}, {high:g}], got {value!r}")
-    return out
+    items = list(value) if isinstance(value, (list, tuple, np.ndarray)) else []
+    out = [as_number(v) for v in items]
+    if len(out) != n or not all(v is not None and math.isfinite(v) and low <= v <= high for v in out):
+        raise ValueError(f"{where} must be {n} number{'s' if n > 1 else ''} in [{low:g}, {high:g}], got "
+                         f"{value!r}{_typed(value)}")
+    return [v for v in out if v is not None]  # all of them: None was refused above
 
 
-def number(spec: Mapping[str, object], key: str, where: str, default: float, low: float, high: float) -> float:
-    """``spec[key]`` (``default`` if absent) as one number in [low, high]."""
-    if key not in spec and not math.isfinite(default):
-        raise ValueError(f"{where}: {key} is needed: it cannot be read from the URDF")
+def _typed(value: object) -> str:
+    """What a message adds when ``value`` is (or holds) text or a boolean, which are not numbers here."""
+    items = value if isinstance(value, (list, tuple)) else [value]
+    return " (text and true/false are not numbers)" if any(isinstance(v, (str, bool)) for v in items) else ""
+
+
+def number(spec: Mapping[str, object], key: str, where: str, default: float, low: float, high: float,
+           derived: str = "") -> float:
+    """``spec[key]`` (``default`` if absent) as one number in [low, high]. ``derived`` says how ``default`` was read
+    from the URDF, for the error when the spec leaves ``key`` out and the URDF gives none, or one out of range."""
+    if key not in spec:
+        if derived and not low <= default <= high:  # nan included
+            found = "none" if math.isnan(default) else f"{default:.4g}, outside [{low:g}, {high:g}]"
+            raise ValueError(f"{where}: {key} was not given, and reading it from {derived} gives {found}: give {key} "
+                             "in the spec")
+        if not math.isfinite(default):
+            raise ValueError(f"{where}: {key} is needed: it cannot be read from the URDF")
     value = spec.get(key, default)
     try:
         return numbers([value], 1, "", low, high)[0]
     except ValueError:
-        raise ValueError(f"{where}: {key} must be a number in [{low:g}, {high:g}], got {value!r}") from None
+        raise ValueError(f"{where}: {key} must be a number in [{low:g}, {high:g}], got {value!r}{_typed(value)}") \
+            from None
 
 
 def spec_mounts(spec: Mapping[str, object], where: str) -> tuple[Mount, ...]:

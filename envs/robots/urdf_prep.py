@@ -14,7 +14,6 @@ allowed-collision matrix), is the same on every machine.
 from __future__ import annotations
 
 import hashlib
-import re
 import shutil
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
@@ -26,7 +25,6 @@ from clutter_gym.util.cache_dir import user_cache_dir
 
 #: kg of a link the URDF gives no mass (pybullet's default would be 1 kg)
 TOKEN_MASS = 1e-3
-_OPTENV = re.compile(r"\$\(optenv\s+\S+\s*([^)]*)\)")
 
 
 @dataclass(frozen=True)
@@ -93,10 +91,6 @@ def _mesh_copies(root: ET.Element, source: Path) -> dict[str, Path]:
 
 
 def _prepared_text(root: ET.Element, mounts: tuple[Mount, ...]) -> str:
-    for element in root.iter():
-        for key, value in element.attrib.items():
-            if "$(" in value:
-                element.set(key, _OPTENV.sub(lambda match: match.group(1).strip(), value))
     for mount in mounts:
         ET.SubElement(root, "link", name=mount.name)
         joint = ET.SubElement(root, "joint", name=f"{mount.name}_joint", type="fixed")

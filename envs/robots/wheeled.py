@@ -22,6 +22,7 @@ import numpy as np
 from clutter_gym.assets import asset_path
 from clutter_gym.collision.urdf_geometry import CollisionElement
 from clutter_gym.robots.spec_reading import check_keys, joint_names, load_spec_urdf, number, spec_mounts
+from clutter_gym.robots.wheel_checks import check_wheel_geometry, check_wheel_joints, check_wheel_links
 from clutter_gym.util.transforms import quat_to_matrix
 
 #: The links the sensors sit on.
@@ -78,8 +79,9 @@ def wheeled_base_from_spec(spec: Mapping[str, object], where: str, folder: Path 
     """The base a ``diff_drive`` spec describes (keys :data:`SPEC_KEYS`); ``urdf`` relative to ``folder``.
 
     Raises:
-        ValueError: a key is missing, unknown or out of range, or names a joint or link the URDF does not have; the
-            message names the key, the URDF and what the URDF offers.
+        ValueError: a key is missing, unknown or out of range, or names a joint or link the URDF does not have, or
+            the base does not fit the wheel convention or cannot drive as the unicycle model says
+            (``robots/wheel_checks.py``); the message names the key, the URDF and what the URDF offers.
     """
     check_keys(spec, SPEC_KEYS, 3, "diff_drive", where)
     urdf = load_spec_urdf(spec, where, folder, spec_mounts(spec, where))
@@ -91,16 +93,22 @@ def wheeled_base_from_spec(spec: Mapping[str, object], where: str, folder: Path 
     if "lidar_link" in absent or "imu_link" in absent:
         raise ValueError(f"{where}: {source} has no {absent}; add them with mounts, e.g. mounts: {{lidar_link: "
                          f"{{parent: {kinematics.root}, xyz: [0, 0, 0.3]}}}} (its links: {kinematics.links})")
+    check_wheel_joints(kinematics, sides, urdf.urdf, source, where)
     child = {j.name: j.child for j in kinematics.joints}
     wheel_links = [child[j] for j in (*sides["left_wheels"], *sides["right_wheels"])]
+    check_wheel_links(urdf.masses, elements, kinematics.root, wheel_links, source, where)
     frames = kinematics.forward(np.zeros((1, len(moving))))
-    radius = number(spec, "wheel_radius", where, _wheel_radius(elements, wheel_links), 0.005, 2.0)
+    radius = number(spec, "wheel_radius", where, _wheel_radius(elements, wheel_links), 0.005, 2.0,
+                    derived=f"the wheel links' collision cylinders in {source}")
+    check_wheel_geometry(kinematics, elements, wheel_links, radius, "wheel_radius" in spec, source, where)
     lateral = [frames[link][0, 1, 3] for link in wheel_links]
     left, right = lateral[:len(sides["left_wheels"])], lateral[len(sides["left_wheels"]):]
-    track = number(spec, "wheel_separation", where, float(np.mean(left) - np.mean(right)), 0.01, 5.0)
+    track = number(spec, "wheel_separation", where, float(np.mean(left) - np.mean(right)), 0.01, 5.0,
+                   derived=f"the wheel joints' positions in {source} (the left wheels' mean y less the right's)")
     axle = float(np.mean([frames[link][0, 2, 3] for link in wheel_links]))
     geometric = sorted({e.link for e in elements} - {kinematics.root}, key=kinematics.links.index)
-    footprint = number(spec, "footprint_radius", where, _footprint(elements, frames), 0.01, 5.0)
+    footprint = number(spec, "footprint_radius", where, _footprint(elements, frames), 0.01, 5.0,
+                       derived=f"the collision shapes of {source} seen from above")
     return WheeledBase(
         name=urdf.name, urdf=urdf.urdf, base_link=kinematics.root, left_wheels=sides["left_wheels"],
         right_wheels=sides["right_wheels"], wheel_radius=radius, wheel_separation=track, footprint_radius=footprint,
@@ -112,7 +120,7 @@ def wheeled_base_from_spec(spec: Mapping[str, object], where: str, folder: Path 
 
 def _wheel_radius(elements: list[CollisionElement], wheel_links: list[str]) -> float:
     cylinders = [e.size[0] for e in elements if e.link in wheel_links and e.kind == "cylinder"]
-    return max(cylinders) if cylinders else math.nan  # nan: _number then asks for wheel_radius in the spec
+    return max(cylinders) if cylinders else math.nan  # nan: number() then asks for wheel_radius in the spec
 
 
 def _footprint(elements: list[CollisionElement], frames: dict[str, np.ndarray], samples: int = 256) -> float:

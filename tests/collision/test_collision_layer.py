@@ -192,7 +192,8 @@ def _ball_urdf(radius: float):
 
     path = Path(tempfile.mkdtemp()) / "ball.urdf"
     path.write_text(f'<robot name="b"><link name="base"/><link name="ball"><collision><geometry>'
-                    f'<sphere radius="{radius}"/></geometry></collision></link></robot>')
+                    f'<sphere radius="{radius}"/></geometry></collision></link><joint name="j" type="floating">'
+                    '<parent link="base"/><child link="ball"/></joint></robot>')
     return path
 
 

@@ -192,7 +192,8 @@ def test_an_arm_beside_dense_clutter_widens_onto_many_obstacles(monkeypatch, fid
 def one_link_robot(path, geometry: str) -> RobotCollisionModel:
     """A robot that is one link "body" of the URDF collision ``geometry`` (elements centred on its origin), padded
     by ``EDGE_PADDING``."""
-    path.write_text(f'<robot name="r"><link name="base"/><link name="body">{geometry}</link></robot>')
+    path.write_text(f'<robot name="r"><link name="base"/><link name="body">{geometry}</link><joint name="j" '
+                    'type="floating"><parent link="base"/><child link="body"/></joint></robot>')
     shapes = build_link_shapes(load_collision_elements(path), "primitive")
     return RobotCollisionModel(shapes, ("base", "body"), EDGE_PADDING)
 

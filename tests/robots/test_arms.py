@@ -138,6 +138,52 @@ def test_a_bad_arm_spec_is_refused_naming_the_key(change, message):
         arm_from_spec({**SPEC, **change}, "spec")
 
 
+JOINT_7 = '<limit effort="300" lower="-3.05432619099" upper="3.05432619099" velocity="10"/>'
+
+
+def kuka_with(tmp_path, old: str, new: str) -> str:
+    """pybullet_data's iiwa with ``old`` (found once) replaced by ``new``, its meshes named by absolute paths."""
+    source = pybullet_data_file("kuka_iiwa/model.urdf")
+    text = source.read_text().replace('filename="meshes/', f'filename="{source.parent}/meshes/')
+    assert text.count(old) == 1
+    path = tmp_path / "kuka.urdf"
+    path.write_text(text.replace(old, new))
+    return str(path)
+
+
+@pytest.mark.parametrize("old, new, message", [
+    ('<joint name="lbr_iiwa_joint_7" type="revolute">', '<joint name="lbr_iiwa_joint_7" type="prismatic">',
+     r"arm_joints 'lbr_iiwa_joint_7' of .*kuka.urdf is prismatic; an arm spec takes revolute and continuous joints"),
+    (JOINT_7, JOINT_7.replace('lower="-3.05432619099" upper="3.05432619099"', 'lower="3.05" upper="-3.05"'),
+     r"arm_joints 'lbr_iiwa_joint_7' of .*kuka.urdf has <limit lower=3.05 upper=-3.05> \(0 where not given\): an arm "
+     r"joint needs lower < upper, in radians"),
+    (JOINT_7, JOINT_7.replace('lower="-3.05432619099"', 'lower="nan"'),
+     r"the URDF was refused: .*kuka.urdf: joint 'lbr_iiwa_joint_7' <limit> lower: expected 1 finite number, got "
+     r"'nan'"),
+    (JOINT_7, JOINT_7.replace(' velocity="10"', ""),
+     r"speed_limits was not given, and .*kuka.urdf gives no <limit velocity=...> for \['lbr_iiwa_joint_7'\]: give "
+     r"speed_limits in the spec"),
+])
+def test_an_arm_joint_the_arm_cannot_drive_is_refused_naming_it(tmp_path, old, new, message):
+    """Before: a prismatic joint was accepted (its observations left the observation space), a NaN limit was
+    accepted, inverted limits were blamed on the ready pose, and a missing velocity limit gave speed_limits "got
+    [..., nan]" for a key the spec never wrote."""
+    with pytest.raises(ValueError, match=rf"^spec: {message}"):
+        arm_from_spec({**SPEC, "urdf": kuka_with(tmp_path, old, new)}, "spec")
+
+
+@pytest.mark.parametrize("ee_link, what", [("lbr_iiwa_link_0", "the root link"),
+                                           ("tool", "bolted to the root link")])
+def test_an_end_effector_no_arm_joint_moves_is_refused_at_make(ee_link, what):
+    """Before: an ``ee_link`` at the root was accepted at make and failed only at reset."""
+    spec = {**SPEC, "ee_link": ee_link}
+    if ee_link == "tool":
+        spec["ee_mount"] = {"parent": "lbr_iiwa_link_0", "xyz": [0.0, 0.0, 0.1]}
+    with pytest.raises(ValueError, match=rf"^spec: ee_link '{ee_link}' is {what} of .*model.urdf: no arm joint moves "
+                                         r"it; pick a link past the last arm joint"):
+        arm_from_spec(spec, "spec")
+
+
 def test_an_arm_whose_urdf_has_more_moving_joints_is_refused():
     with pytest.raises(ValueError, match=r"has moving joints \['panda_finger_joint1', 'panda_finger_joint2'\] "
                                          r"besides arm_joints"):

@@ -334,15 +334,13 @@ def test_an_airframe_without_mass_is_refused(tmp_path):
         rigid_body(urdf)
 
 
-def test_a_urdf_pybullet_refuses_is_reported_as_such(tmp_path, make_env):
-    """A mass element without its value: the spec reader takes it as 0 kg, pybullet refuses the file when the env
-    loads it, and the message says so."""
+def test_a_mass_without_its_value_is_refused_when_the_spec_is_read(tmp_path):
+    """A mass element without its value: pybullet refuses the file only when the env loads it (the spec reader took
+    it as 0 kg until the URDF reader checked it), so the spec reader refuses it, naming the link."""
     urdf = edited_urdf(tmp_path, r'(<link name="battery">\s*<inertial>)<mass value="0"/>', r"\1<mass/>")
-    spec = {**hexarotor_spec(), "urdf": urdf}
-    assert multirotor_from_spec(spec, "spec").rotor_links
-    with pytest.raises(ValueError, match=r"robot 'hexarotor': pybullet could not load URDF .*hexarotor.urdf: Cannot "
-                                         r"load URDF file"):
-        make_env("ClutterFly-v0", robot=spec, volume_size=SIZE)
+    with pytest.raises(ValueError, match=r"the URDF was refused: .*edited.urdf: link 'battery' <inertial> needs "
+                                         r"<mass value=\.\.\.> and <inertia \.\.\.>"):
+        multirotor_from_spec({**hexarotor_spec(), "urdf": urdf}, "spec")
 
 
 def test_a_yaml_spec_that_is_not_a_mapping_is_refused(tmp_path):

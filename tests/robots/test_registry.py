@@ -164,6 +164,31 @@ def test_a_yaml_spec_file_with_a_relative_urdf_drives_in_clutternav(tmp_path):
         gym.make("ClutterNav-v0", robot=str(tmp_path / "nope.yaml"))
 
 
+def test_a_spec_file_in_capitals_is_read_and_a_binary_one_refused_in_one_line(tmp_path):
+    """Before: ``robot.YAML`` was an "unknown robot", a binary file gave a raw UnicodeDecodeError, and a YAML error
+    spread over several lines."""
+    spec = tmp_path / "MYBOT.YAML"
+    spec.write_text(f"kind: diff_drive\nurdf: {asset_path('robots/diffbot.urdf')}\nleft_wheels: [left_wheel_joint]\n"
+                    "right_wheels: [right_wheel_joint]\n")
+    env = gym.make("ClutterNav-v0", robot=str(spec))
+    assert env.unwrapped.robot.name == "diffbot"
+    env.close()
+    spec.write_bytes(bytes(range(256)))
+    with pytest.raises(ValueError, match=r"^robot spec .*MYBOT.YAML: not UTF-8 text; a spec is a YAML mapping of "
+                                         r"keys \(docs/robots.md\)$"):
+        gym.make("ClutterNav-v0", robot=str(spec))
+    spec.write_text("kind: [diff_drive\n")
+    with pytest.raises(ValueError, match=r"^robot spec .*MYBOT.YAML: not valid YAML: while parsing a flow sequence "
+                                         r"[^\n]*$"):
+        gym.make("ClutterNav-v0", robot=str(spec))
+
+
+def test_a_urdf_given_as_the_robot_is_pointed_to_a_spec():
+    with pytest.raises(ValueError, match=r"robot '.*diffbot.urdf' is a URDF: robot= takes its spec, e.g. \{'kind': "
+                                         r"'diff_drive', 'urdf': '.*diffbot.urdf', ...\} \(docs/robots.md\)"):
+        gym.make("ClutterNav-v0", robot=str(asset_path("robots/diffbot.urdf")))
+
+
 def test_a_sensor_without_its_link_is_refused_at_make():
     spec = {**DIFFBOT_SPEC, "urdf": str(HUSKY), "left_wheels": ["front_left_wheel", "rear_left_wheel"],
             "right_wheels": ["front_right_wheel", "rear_right_wheel"],
