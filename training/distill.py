@@ -54,6 +54,13 @@ class Dataset:
         return obs, labels
 
 
+def error(model: PPO, obs: dict[str, np.ndarray], labels: np.ndarray) -> float:
+    """Mean squared error of the actor's mean action against ``labels`` (no gradient)."""
+    with th.no_grad():
+        inputs = {key: th.as_tensor(value) for key, value in obs.items()}
+        return float(((mean_actions(model.policy, inputs) - th.as_tensor(labels)) ** 2).mean())
+
+
 def fit(model: PPO, dataset: Dataset, settings: DistillSettings, optimizer: th.optim.Optimizer) -> float:
     """``settings.epochs`` passes of regression of the actor's mean action on the labels; the last pass's mean
     squared error."""
@@ -72,7 +79,7 @@ def fit(model: PPO, dataset: Dataset, settings: DistillSettings, optimizer: th.o
             optimizer.zero_grad()
             loss.backward()
             optimizer.step()
-            total += float(loss) * len(rows)
+            total += float(loss.detach()) * len(rows)
     policy.set_training_mode(False)
     return total / len(target)
 
@@ -112,10 +119,11 @@ class Distiller:
             self.keeper.on_training_start({}, {})
         normalizer = _normalizer(self.venv)
         try:
-            self.obs = self.venv.reset()
-            if done == 0 and self.settings.warmup_steps:
-                self.venv.env_method("set_teacher_share", 1.0)
-                self._collect(self.settings.warmup_steps, store=False)
+            warmup = self.settings.warmup_steps if done == 0 else 0
+            self.venv.env_method("set_teacher_share", 1.0 if warmup else self.settings.share(done))
+            self.obs = self.venv.reset()  # after the share is set: it is drawn as each episode starts
+            if warmup:
+                self._collect(warmup, store=False)
             if normalizer is not None:
                 normalizer.training = False  # frozen: every stored observation is normalised alike
             for index in range(done, self.settings.rounds):
@@ -132,10 +140,14 @@ class Distiller:
         share = self.settings.share(index)
         self.venv.env_method("set_teacher_share", share)
         episodes = self._collect(self.settings.round_steps, store=True)
+        obs, labels = self.dataset.arrays()
+        n = self.venv.num_envs
+        fresh = min(-(-self.settings.round_steps // n) * n, len(labels))  # the states it has not been fitted on
+        unseen = error(self.model, {k: v[-fresh:] for k, v in obs.items()}, labels[-fresh:]) if index else float("nan")
         loss = fit(self.model, self.dataset, self.settings, self.optimizer)
         row: dict[str, float] = {"round": float(index), "step": float(self.model.num_timesteps),
-                                 "samples": float(self.dataset.size), "teacher_share": share, "loss": loss,
-                                 **_rates(episodes)}
+                                 "samples": float(self.dataset.size), "teacher_share": share,
+                                 "unseen_loss": unseen, "loss": loss, **_rates(episodes)}
         if self.keeper is not None:
             self.keeper.num_timesteps = self.model.num_timesteps
             validation = self.keeper.validate()
