@@ -28,6 +28,24 @@ def run_benchmark(module: str, *args: str, timeout: float = 300.0) -> subprocess
                           cwd=ROOT)
 
 
+def run_capped(code: str, *args: str, memory: int = 3 << 30, timeout: float = 300.0,
+               env: dict[str, str] | None = None) -> subprocess.CompletedProcess:
+    """``python -c code args`` in a process of its own: its address space capped at ``memory`` bytes, so a runaway
+    allocation ends there (a MemoryError) instead of taking the machine, and killed after ``timeout`` s. On exit it
+    writes its peak resident memory to stderr (read it with :func:`peak_mib`). Its exit code, stdout and stderr."""
+    prelude = ("import atexit, resource, sys\n"
+               f"resource.setrlimit(resource.RLIMIT_AS, ({memory}, {memory}))\n"
+               "atexit.register(lambda: sys.stderr.write("
+               "f'peak MiB: {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f}\\n'))\n")
+    return subprocess.run([sys.executable, "-c", prelude + code, *args], capture_output=True, text=True,
+                          timeout=timeout, env=env)
+
+
+def peak_mib(result: subprocess.CompletedProcess) -> float:
+    """The peak resident memory, MiB, a :func:`run_capped` process reported."""
+    return float(result.stderr.rpartition("peak MiB: ")[2].split()[0])
+
+
 def markdown_rows(text: str) -> list[list[str]]:
     """The cells of every markdown table row in ``text`` (header rows included, separator rows left out)."""
     return [[cell.strip() for cell in line.strip()[1:-1].split(" | ")] for line in text.splitlines()
