@@ -14,8 +14,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from clutter_gym.robots.arm import Arm
 from clutter_gym.robots.arm_model import arm_from_spec
 from clutter_gym.robots.multirotor import Multirotor
@@ -24,6 +22,8 @@ from clutter_gym.robots.panda import PandaArm
 from clutter_gym.robots.quadrotor import Quadrotor
 from clutter_gym.robots.wheeled import diffbot, wheeled_base_from_spec
 from clutter_gym.sim import pybullet_data_file
+from clutter_gym.util.checks import short_repr
+from clutter_gym.util.safe_yaml import read_yaml
 
 #: What each kind is, in words, for error messages.
 KINDS = {"diff_drive": "wheeled base", "arm": "fixed-base arm", "multirotor": "multirotor"}
@@ -84,20 +84,17 @@ def resolve_robot(robot: str | Path | Mapping[str, Any], kind: str, env_id: str)
         path = Path(robot).expanduser()
         if not path.is_file():
             raise ValueError(f"robot spec file {str(path)!r} not found; {takes}")
-        try:
-            robot = yaml.safe_load(path.read_text())
-        except yaml.YAMLError as error:
-            raise ValueError(f"robot spec file {path} is not valid YAML: {error}") from None
+        robot = read_yaml(path, f"robot spec file {path}")
         where, folder = f"robot spec {path}", path.parent
         if not isinstance(robot, Mapping):
             raise ValueError(f"{where}: expected a mapping of keys, got {type(robot).__name__}")
     if isinstance(robot, Mapping):
         spec_kind = robot.get("kind")
         if spec_kind != kind:
-            raise ValueError(f"{where}: kind {spec_kind!r} does not fit; {takes}")
+            raise ValueError(f"{where}: kind {short_repr(spec_kind)} does not fit; {takes}")
         return SPEC_READERS[kind](robot, where, folder)
     if not isinstance(robot, str) or robot not in _ROBOTS:
-        raise ValueError(f"unknown robot {robot!r}; {takes}")
+        raise ValueError(f"unknown robot {short_repr(robot)}; {takes}")
     entry = _ROBOTS[robot]
     if entry.kind != kind:
         raise ValueError(f"robot {robot!r} is a {KINDS[entry.kind]}; {takes}")
