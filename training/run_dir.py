@@ -39,6 +39,7 @@ import yaml
 from clutter_gym.training.config import TrainConfig
 from clutter_gym.training.normalizer import NORMALIZER_FILE, save_normalizer
 from clutter_gym.util.atomic import atomic_folder, atomic_path, write_text_atomically
+from clutter_gym.util.safe_yaml import read_yaml
 
 MODEL_FILE = "model.zip"
 _STEP_DIR = re.compile(r"^step_(\d+)$")
@@ -147,9 +148,9 @@ class RunDir:
         if not self.config_file.is_file():
             raise FileNotFoundError(f"{self.root} is not a run folder: it has no config.yaml")
         try:
-            data = yaml.safe_load(self.config_file.read_text())
-        except yaml.YAMLError as exc:
-            raise IncompatibleRunError(f"{self.config_file} is not valid YAML: {exc}") from None
+            data = read_yaml(self.config_file)
+        except ValueError as exc:
+            raise IncompatibleRunError(str(exc)) from None
         if not isinstance(data, dict):
             raise IncompatibleRunError(f"{self.config_file} is not a mapping of settings")
         return data
