@@ -29,7 +29,7 @@ from clutter_gym.util.atomic import atomic_path
 
 #: the formats pybullet reads a URDF's meshes in
 MESH_SUFFIXES = (".obj", ".stl", ".dae")
-#: bytes: the largest mesh file read (pybullet_data's largest is about 5 MB)
+#: bytes: the largest mesh file read (docs/robots.md, "The cache, names and meshes")
 MAX_MESH_BYTES = 64 << 20
 _CHUNK = 1 << 20
 

@@ -18,7 +18,7 @@ from clutter_gym.training.commands import env_kwarg
 from clutter_gym.training.config import config_for
 from clutter_gym.training.run_dir import RUN_FORMAT
 
-#: 533 bytes of aliases of aliases that stand for 9^9 strings
+#: 475 bytes of aliases of aliases that stand for 9^9 strings
 BOMB = ", ".join(['&a0 ["lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol"]']
                  + [f"&a{i} [{', '.join([f'*a{i - 1}'] * 9)}]" for i in range(1, 9)])
 TETRA = "v 0 0 0\nv 0.05 0 0\nv 0 0 0.05\nv 0 0.05 0\nf 1 2 3\nf 1 3 4\nf 1 4 2\nf 2 4 3\n"
