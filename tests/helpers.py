@@ -6,6 +6,7 @@ which pytest loads by itself and which is never imported.
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -39,6 +40,17 @@ def run_capped(code: str, *args: str, memory: int = 3 << 30, timeout: float = 30
                "f'peak MiB: {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f}\\n'))\n")
     return subprocess.run([sys.executable, "-c", prelude + code, *args], capture_output=True, text=True,
                           timeout=timeout, env=env)
+
+
+def make_refusal(robot: object, cache: Path, timeout: float = 120.0) -> subprocess.CompletedProcess:
+    """``gym.make("ClutterNav-v0", robot=robot)`` in a :func:`run_capped` process caching in ``cache``; it prints the
+    ValueError's message, if the make raised one, and exits 0 unless something else went wrong."""
+    code = ("import gymnasium as gym, clutter_gym\n"
+            "try:\n"
+            f"    gym.make('ClutterNav-v0', robot={robot!r})\n"
+            "except ValueError as error:\n"
+            "    print(error)\n")
+    return run_capped(code, timeout=timeout, env={**os.environ, "XDG_CACHE_HOME": str(cache)})
 
 
 def peak_mib(result: subprocess.CompletedProcess) -> float:

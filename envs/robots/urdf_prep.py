@@ -33,7 +33,7 @@ from clutter_gym.collision.urdf_geometry import parse_urdf
 from clutter_gym.util.atomic import atomic_path
 from clutter_gym.util.cache_dir import user_cache_dir
 from clutter_gym.util.checks import check_file_name
-from clutter_gym.util.mesh_files import MeshFile, checked_mesh, confined_mesh, copy_checked, file_digest
+from clutter_gym.util.mesh_files import MeshFile, checked_mesh, confined_mesh, copy_checked, file_digest, mesh_label
 
 #: kg of a link the URDF gives no mass (pybullet's default would be 1 kg)
 TOKEN_MASS = 1e-3
@@ -79,7 +79,8 @@ def prepared_urdf(source: str | Path, name: str, mounts: tuple[Mount, ...] = (),
     for relative, mesh in meshes.items():  # each file whole or not at all: another process may load this copy
         if not _holds(folder / relative, mesh.size, mesh.digest):
             copy_checked(mesh, folder / relative, f"{source}: mesh {relative}")
-    if not _holds(target, len(text), hashlib.sha256(text).hexdigest()):  # last: the URDF says its meshes are there
+    text_digest = hashlib.sha256(text).hexdigest()
+    if not _holds(target, len(text), text_digest):  # last: the URDF's presence says its meshes are there
         with atomic_path(target) as tmp:
             tmp.write_bytes(text)
             os.chmod(tmp, stat.S_IMODE(os.stat(tmp).st_mode) & stat.S_IMODE(os.stat(source).st_mode))
@@ -113,7 +114,7 @@ def _mesh_copies(root: ET.Element, source: Path, package_roots: Mapping[str, Pat
         else:  # in a granted package root: keep its name, made unique by its folder's
             relative = f"meshes/{hashlib.sha256(str(path.parent).encode()).hexdigest()[:8]}/{path.name}"
         if relative not in copies:
-            copies[relative] = checked_mesh(path, f"{source}: <mesh filename={filename!r}>")
+            copies[relative] = checked_mesh(path, mesh_label(source, filename))
         element.set("filename", relative)
     return copies
 

@@ -45,17 +45,21 @@ class MeshFile:
     digest: str
 
 
+def mesh_label(urdf: Path, filename: str) -> str:
+    """How messages name a mesh: the URDF, and the name as the URDF writes it."""
+    return f"{urdf}: <mesh filename={filename!r}>"
+
+
 def confined_mesh(filename: str, urdf: Path, package_roots: Mapping[str, Path] | None = None) -> Path:
     """The file a URDF ``<mesh filename>`` names: ``package://<name>/rest`` in the granted root of ``<name>`` (the
     folder ``package_roots`` maps it to), else as ``<name>/rest`` or ``rest`` in the URDF's folder (the layouts of
     pybullet_data's URDFs); a relative name in the URDF's folder; ``file://`` and absolute paths as they are. The
-    file found must lie inside the URDF's folder or a granted root, and pass :func:`check_mesh_file`.
+    file found must lie inside the URDF's folder or a granted root; :func:`checked_mesh` checks what it is.
 
     Raises:
-        ValueError: the mesh lies outside those folders, is missing, or fails a check (one line naming the mesh and
-            the URDF).
+        ValueError: the mesh lies outside those folders, or is missing (one line naming the mesh and the URDF).
     """
-    where = f"{urdf}: <mesh filename={filename!r}>"
+    where = mesh_label(urdf, filename)
     home = urdf.parent.resolve()
     roots = {name: Path(root).resolve() for name, root in (package_roots or {}).items()}
     package = ""
@@ -74,12 +78,18 @@ def confined_mesh(filename: str, urdf: Path, package_roots: Mapping[str, Path] |
                                  f"roots {sorted(roots)}; grant its package with package_roots")
             continue
         if _exists(path):
-            check_mesh_file(path, where)
             return path
     hint = ""
     if package and package not in roots:
         hint = f"; a package outside the URDF's folder needs its folder granted: package_roots: {{{package}: ...}}"
     raise ValueError(f"{where} not found (looked at {[str(p) for p in candidates]}){hint}")
+
+
+def _exists(path: Path) -> bool:
+    try:
+        return path.exists()
+    except OSError:  # a folder on the way that may not be searched: nothing to find there
+        return False
 
 
 def check_mesh_file(path: Path, where: str) -> os.stat_result:
@@ -102,13 +112,6 @@ def checked_mesh(path: Path, where: str) -> MeshFile:
         return MeshFile(path, info.st_size, stat.S_IMODE(info.st_mode), file_digest(path, info.st_size, where))
     except OSError as error:
         raise ValueError(f"{where}: cannot read {path}: {error.strerror or error}") from None
-
-
-def _exists(path: Path) -> bool:
-    try:
-        return path.exists()
-    except OSError:  # a folder on the way that may not be searched: nothing to find there
-        return False
 
 
 def file_digest(path: Path, size: int, where: str) -> str:

@@ -12,7 +12,7 @@ from pathlib import Path
 import gymnasium as gym
 import pybullet_data
 import pytest
-from helpers import peak_mib, run_capped
+from helpers import make_refusal, peak_mib, run_capped
 
 from clutter_gym.assets import asset_path
 from clutter_gym.collision import acm as acm_module
@@ -133,12 +133,7 @@ def test_a_mesh_that_is_no_small_regular_mesh_file_is_refused_without_reading_it
     folder.mkdir()
     make(folder / name)
     urdf = diffbot_with(folder, name)
-    code = ("import sys, gymnasium as gym, clutter_gym\n"
-            "try:\n"
-            f"    gym.make('ClutterNav-v0', robot={spec(urdf)!r})\n"
-            "except ValueError as error:\n"
-            "    print(error)\n")
-    result = run_capped(code, timeout=60, env={**os.environ, "XDG_CACHE_HOME": str(tmp_path / "cache")})
+    result = make_refusal(spec(urdf), tmp_path / "cache", timeout=60)
     assert result.returncode == 0, result.stderr[-2000:]
     assert result.stdout.startswith(f"robot: the URDF was refused: {urdf}: <mesh filename='{name}'> is ")
     assert why in result.stdout and result.stdout.count("\n") == 1
@@ -214,18 +209,14 @@ def test_an_unwritable_cache_falls_back_to_a_temporary_folder_and_says_so_once(t
 
 
 def test_a_yaml_spec_of_nested_aliases_is_refused_in_bounded_memory(tmp_path):
-    """524 bytes of aliases of aliases stand for 9^9 strings: on main the make reached 3.5 GB and a MemoryError."""
+    """524 bytes of aliases of aliases stand for 9^9 strings: on main the make ran into a MemoryError (at 6.4 GB under
+    an 8 GB cap)."""
     items = ['&a0 ["lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol"]']
     items += [f"&a{i} [{', '.join([f'*a{i - 1}'] * 9)}]" for i in range(1, 9)]
     bomb = tmp_path / "bomb.yaml"
     bomb.write_text(f"kind: diff_drive\nurdf: {DIFFBOT}\nleft_wheels: [left_wheel_joint]\n"
                     f"right_wheels: [right_wheel_joint]\nwheel_radius: [{', '.join(items)}]\n")
-    code = ("import gymnasium as gym, clutter_gym\n"
-            "try:\n"
-            f"    gym.make('ClutterNav-v0', robot={str(bomb)!r})\n"
-            "except ValueError as error:\n"
-            "    print(error)\n")
-    result = run_capped(code, timeout=120, env={**os.environ, "XDG_CACHE_HOME": str(tmp_path / "cache")})
+    result = make_refusal(str(bomb), tmp_path / "cache")
     assert result.returncode == 0, result.stderr[-2000:]
     assert result.stdout == (f"robot spec file {bomb} stands for more than 1,048,576 nodes and characters with its "
                              "aliases expanded (aliases of aliases multiply)\n")

@@ -3,11 +3,9 @@ alias bombs themselves: tests/robots/test_untrusted_specs.py and tests/training/
 
 from __future__ import annotations
 
-import os
-
 import gymnasium as gym
 import pytest
-from helpers import peak_mib, run_capped
+from helpers import make_refusal, peak_mib
 
 from clutter_gym.assets import asset_path
 
@@ -36,12 +34,7 @@ def test_a_spec_file_nested_too_deep_is_refused_before_the_parser_recurses(tmp_p
     """On main 20,000 nested lists (40 KB) ran PyYAML's composer into a RecursionError; in a process of its own."""
     path = tmp_path / "bot.yaml"
     path.write_text(SPEC + "wheel_radius: " + "[" * 20_000 + "]" * 20_000 + "\n")
-    code = ("import gymnasium as gym, clutter_gym\n"
-            "try:\n"
-            f"    gym.make('ClutterNav-v0', robot={str(path)!r})\n"
-            "except ValueError as error:\n"
-            "    print(error)\n")
-    result = run_capped(code, timeout=120, env={**os.environ, "XDG_CACHE_HOME": str(tmp_path / "cache")})
+    result = make_refusal(str(path), tmp_path / "cache")
     assert result.returncode == 0, result.stderr[-2000:]
     assert result.stdout == f"robot spec file {path} nests deeper than 64 levels (line 5)\n"
     assert peak_mib(result) < 1024
