@@ -24,6 +24,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+import os
 import platform
 import re
 import shutil
@@ -154,6 +155,19 @@ class RunDir:
         if not isinstance(data, dict):
             raise IncompatibleRunError(f"{self.config_file} is not a mapping of settings")
         return data
+
+    def check_own_files(self) -> None:
+        """Refuse a run folder whose entries are symbolic links: training writes into ``tb/``, ``checkpoints/`` and
+        the logs, and a link (in a run folder from someone else) would carry those writes out of the folder.
+
+        Raises:
+            IncompatibleRunError: naming the link and where it points.
+        """
+        for path in (self.config_file, self.episodes_file, self.tb_dir, self.checkpoints_dir, self.model_dir,
+                     self.best_dir, self.validation_file, self.eval_file, self.training_file):
+            if path.is_symlink():
+                raise IncompatibleRunError(f"{path} is a symbolic link (to {os.readlink(path)}); training writes "
+                                           "there, so a run folder's files must be its own")
 
     # -- checkpoints ----------------------------------------------------------------------------------------
     def checkpoints(self) -> list[tuple[int, Path]]:

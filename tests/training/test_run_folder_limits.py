@@ -82,6 +82,23 @@ def test_a_crafted_run_folder_writes_and_copies_nothing_outside(command, attack,
     assert ("robot: name must be a plain file name" if attack == "name" else "outside the URDF's folder") in lines[0]
 
 
+def test_a_run_folder_whose_logs_link_out_of_it_is_not_trained_in(tmp_path):
+    """On main ``train --resume`` wrote its TensorBoard events through ``tb -> elsewhere`` (and would its
+    checkpoints through ``checkpoints -> elsewhere``)."""
+    run, elsewhere = tmp_path / "run", tmp_path / "elsewhere"
+    run.mkdir()
+    elsewhere.mkdir()
+    (run / "config.yaml").write_text(config_text())
+    (run / "tb").symlink_to(elsewhere)
+    result = run_capped(CLI, "train", "--resume", str(run), "--no-progress", timeout=300,
+                        env={**os.environ, "XDG_CACHE_HOME": str(tmp_path / "cache"), "PYTHONWARNINGS": "ignore"})
+    assert list(elsewhere.iterdir()) == []
+    assert result.returncode == 2, result.stderr[-3000:]
+    assert result.stderr.splitlines()[0] == (f"clutter-gym train: error: {run / 'tb'} is a symbolic link (to "
+                                             f"{elsewhere}); training writes there, so a run folder's files must be "
+                                             "its own")
+
+
 def test_a_config_yaml_of_nested_aliases_is_refused_in_bounded_memory(tmp_path):
     """On main ``clutter-gym eval`` of this run reached the 3 GB cap (a MemoryError) expanding the aliases."""
     run = tmp_path / "run"
