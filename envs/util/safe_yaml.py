@@ -42,34 +42,36 @@ class _BoundedLoader(yaml.SafeLoader):
         if isinstance(event, (yaml.SequenceStartEvent, yaml.MappingStartEvent)):
             if len(self._open) >= MAX_DEPTH:
                 raise _Refused(f"nests deeper than {MAX_DEPTH} levels (line {event.start_mark.line + 1})")
-            self._add(1)
+            self._count(1)
             self._open.append([event.anchor, 1])
         elif isinstance(event, (yaml.SequenceEndEvent, yaml.MappingEndEvent)):
             anchor, size = self._open.pop()
-            self._name(anchor, size)
-            if self._open:
-                self._open[-1][1] += size
+            self._finish(anchor, size)
         elif isinstance(event, yaml.ScalarEvent):
-            self._name(event.anchor, 1 + len(event.value))
-            self._add(1 + len(event.value))
+            self._count(1 + len(event.value))
+            self._finish(event.anchor, 1 + len(event.value))
         elif isinstance(event, yaml.AliasEvent):
             if any(anchor == event.anchor for anchor, _ in self._open):
                 raise _Refused(f"alias *{event.anchor} inside the node &{event.anchor} names (line "
                                f"{event.start_mark.line + 1}): a structure that contains itself")
-            self._add(self._sizes.get(event.anchor, 0))  # an undefined alias: the composer says so
+            size = self._sizes.get(event.anchor, 0)  # an undefined alias: the composer says so
+            self._count(size)
+            self._finish(None, size)
         return event
 
-    def _name(self, anchor: str | None, size: int) -> None:
-        if anchor is not None:
-            self._sizes[anchor] = size
-
-    def _add(self, size: int) -> None:
+    def _count(self, size: int) -> None:
+        """Count ``size`` more of the expanded document, and refuse it past the bound."""
         self._expanded += size
-        if self._open:
-            self._open[-1][1] += size
         if self._expanded > MAX_EXPANDED:
             raise _Refused(f"stands for more than {MAX_EXPANDED:,} nodes and characters with its aliases expanded "
                            "(aliases of aliases multiply)")
+
+    def _finish(self, anchor: str | None, size: int) -> None:
+        """A node of expanded ``size`` is complete: remember it under its anchor, and add it to its parent's size."""
+        if anchor is not None:
+            self._sizes[anchor] = size
+        if self._open:
+            self._open[-1][1] += size
 
 
 class _Refused(Exception):
