@@ -149,8 +149,8 @@ def number(spec: Mapping[str, object], key: str, where: str, default: float, low
     try:
         return numbers([value], 1, "", low, high)[0]
     except ValueError:
-        raise ValueError(f"{where}: {key} must be a number in [{low:g}, {high:g}], got {short_repr(value)}{_typed(value)}") \
-            from None
+        raise ValueError(f"{where}: {key} must be a number in [{low:g}, {high:g}], got "
+                         f"{short_repr(value)}{_typed(value)}") from None
 
 
 def spec_mounts(spec: Mapping[str, object], where: str) -> tuple[Mount, ...]:
