@@ -45,7 +45,7 @@ def read_spec_file(path: Path) -> Mapping[str, object]:
         ValueError: the file is not UTF-8 text, not YAML, over the loader's bounds, or not a mapping (one line naming
             the file).
     """
-    spec = read_yaml(path, f"robot spec {path}")
+    spec = read_yaml(path, f"robot spec file {path}")
     if not isinstance(spec, Mapping):
         raise ValueError(f"robot spec {path}: expected a mapping of keys, got {type(spec).__name__}")
     return spec
