@@ -6,6 +6,7 @@ which pytest loads by itself and which is never imported.
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -26,6 +27,37 @@ def run_benchmark(module: str, *args: str, timeout: float = 300.0) -> subprocess
     process of their own rather than import them. Its exit code, stdout and stderr (text)."""
     return subprocess.run([sys.executable, "-m", module, *args], capture_output=True, text=True, timeout=timeout,
                           cwd=ROOT)
+
+
+def run_capped(code: str, *args: str, memory: int = 3 << 30, timeout: float = 300.0,
+               env: dict[str, str] | None = None) -> subprocess.CompletedProcess:
+    """``python -c code args`` in a process of its own: its address space capped at ``memory`` bytes, so a runaway
+    allocation ends there (a MemoryError) instead of taking the machine, and killed after ``timeout`` s. On exit it
+    writes its peak resident memory to stderr (read it with :func:`peak_mib`): the kernel's VmHWM of its own memory,
+    as getrusage's maxrss also counts the parent's at the fork (pytest's, near 1 GB late in the suite). Its exit
+    code, stdout and stderr."""
+    prelude = ("import atexit, re, resource, sys\n"
+               f"resource.setrlimit(resource.RLIMIT_AS, ({memory}, {memory}))\n"
+               "atexit.register(lambda: sys.stderr.write('peak MiB: %.0f\\n' % (int(re.search("
+               "r'VmHWM:\\s+(\\d+)', open('/proc/self/status').read()).group(1)) / 1024)))\n")
+    return subprocess.run([sys.executable, "-c", prelude + code, *args], capture_output=True, text=True,
+                          timeout=timeout, env=env)
+
+
+def make_refusal(robot: object, cache: Path, timeout: float = 120.0) -> subprocess.CompletedProcess:
+    """``gym.make("ClutterNav-v0", robot=robot)`` in a :func:`run_capped` process caching in ``cache``; it prints the
+    ValueError's message, if the make raised one, and exits 0 unless something else went wrong."""
+    code = ("import gymnasium as gym, clutter_gym\n"
+            "try:\n"
+            f"    gym.make('ClutterNav-v0', robot={robot!r})\n"
+            "except ValueError as error:\n"
+            "    print(error)\n")
+    return run_capped(code, timeout=timeout, env={**os.environ, "XDG_CACHE_HOME": str(cache)})
+
+
+def peak_mib(result: subprocess.CompletedProcess) -> float:
+    """The peak resident memory, MiB, a :func:`run_capped` process reported."""
+    return float(result.stderr.rpartition("peak MiB: ")[2].split()[0])
 
 
 def markdown_rows(text: str) -> list[list[str]]:

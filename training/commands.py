@@ -17,11 +17,11 @@ from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from clutter_gym import ENV_IDS
 from clutter_gym.noise.profiles import PROFILE_NAMES
 from clutter_gym.training.config import EVAL_SEED, PPOHyperparams, deep_merge
+from clutter_gym.util.checks import short_repr
+from clutter_gym.util.safe_yaml import load_yaml
 
 
 class UserError(Exception):
@@ -39,13 +39,13 @@ def user_errors(*kinds: type[BaseException]) -> Iterator[None]:
 
 
 def run_errors() -> AbstractContextManager[None]:
-    """Treat what stops training on a run folder as one line: a file it cannot write (a full disk), or
-    normalisation statistics that are missing or in a pickle nobody said to trust. Other errors of training keep
-    their tracebacks."""
+    """Treat what stops training on a run folder as one line: a file it cannot write (a full disk), normalisation
+    statistics that are missing or in a pickle nobody said to trust, or a folder it may not train in (a link out of
+    it). Other errors of training keep their tracebacks."""
     from clutter_gym.training.normalizer import UntrustedFileError
-    from clutter_gym.training.run_dir import RunWriteError
+    from clutter_gym.training.run_dir import IncompatibleRunError, RunWriteError
 
-    return user_errors(RunWriteError, UntrustedFileError, FileNotFoundError)
+    return user_errors(RunWriteError, UntrustedFileError, FileNotFoundError, IncompatibleRunError)
 
 
 def interrupted(args: argparse.Namespace, exc: KeyboardInterrupt) -> str:
@@ -91,9 +91,9 @@ def env_kwarg(text: str) -> tuple[str, Any]:
         raise argparse.ArgumentTypeError(f"must be KEY=VALUE such as obstacle_density=0.05 or "
                                          f"noise.lidar.range_sigma=0.02, got {text!r}")
     try:
-        return key, yaml.safe_load(value)
-    except yaml.YAMLError:
-        raise argparse.ArgumentTypeError(f"{key}: {value!r} is not a YAML value") from None
+        return key, load_yaml(value, f"{key}: {short_repr(value)}")
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def nest(pairs: list[tuple[str, Any]] | None) -> dict[str, Any]:
@@ -262,7 +262,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
 def run_train(args: argparse.Namespace) -> int:
     from clutter_gym.training.config import config_for
     from clutter_gym.training.run_dir import RunDir
-    from clutter_gym.training.train import start, train
+    from clutter_gym.training.train import check_env_builds, start, train
 
     with user_errors():
         if args.resume is not None:
@@ -272,7 +272,7 @@ def run_train(args: argparse.Namespace) -> int:
                 raise UserError(f"--resume continues the run with its saved settings; only --timesteps may "
                                 f"change, so drop {flags}")
             run = RunDir(args.resume)
-            run.read_config()
+            check_env_builds(run.read_config())  # a run from someone else: its env is refused here, in one line
         else:
             args.env = args.env or "ClutterNav-v0"
             config = config_for(args.env, train_overrides(args))

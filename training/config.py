@@ -20,6 +20,8 @@ import yaml
 
 from clutter_gym.training.distill_config import DistillSettings, TeacherSettings
 from clutter_gym.training.residual import MAPLESS_ENVS, PURSUIT_ENVS, check_residual_base, check_residual_space
+from clutter_gym.util.checks import short_repr
+from clutter_gym.util.safe_yaml import read_yaml
 
 HYPERPARAMS_FILE = "ppo.yml"
 #: First evaluation seed by default: far from the seeds training starts its envs with (seed, seed + 1, ...).
@@ -81,7 +83,8 @@ class PPOHyperparams:
         _check_range("ppo.max_grad_norm", self.max_grad_norm, 0.0, 100.0, low_open=True)
         _check_range("ppo.log_std_init", self.log_std_init, -5.0, 2.0)
         if not self.net_arch or any(not isinstance(n, int) or not 1 <= n <= 4096 for n in self.net_arch):
-            raise ValueError(f"ppo.net_arch must be 1 or more layer sizes in [1, 4096], got {self.net_arch!r}")
+            raise ValueError("ppo.net_arch must be 1 or more layer sizes in [1, 4096], got "
+                             f"{short_repr(self.net_arch)}")
 
     def sb3_kwargs(self) -> dict[str, Any]:
         """Keyword arguments for ``stable_baselines3.PPO`` (normalisation is applied to the env, not here)."""
@@ -172,9 +175,9 @@ class TrainConfig:
         from clutter_gym.noise.profiles import PROFILE_NAMES
 
         if self.env_id not in ENV_IDS:
-            raise ValueError(f"env_id must be one of {ENV_IDS}, got {self.env_id!r}")
+            raise ValueError(f"env_id must be one of {ENV_IDS}, got {short_repr(self.env_id)}")
         if self.noise not in PROFILE_NAMES:
-            raise ValueError(f"noise must be one of {PROFILE_NAMES}, got {self.noise!r}")
+            raise ValueError(f"noise must be one of {PROFILE_NAMES}, got {short_repr(self.noise)}")
         _check_range("seed", self.seed, 0, 2**31 - 1)
         _check_range("timesteps", self.timesteps, 1, 10**10)
         _check_range("n_envs", self.n_envs, 1, 256)
@@ -281,13 +284,13 @@ def _check_range(name: str, value: Any, low: float, high: float, low_open: bool 
         number = False
     if not number or not (low < value <= high if low_open else low <= value <= high):
         bracket = "(" if low_open else "["
-        raise ValueError(f"{name} must be a number in {bracket}{low}, {high}], got {value!r}")
+        raise ValueError(f"{name} must be a number in {bracket}{low}, {high}], got {short_repr(value)}")
 
 
 def _reject_unknown(what: str, data: dict[str, Any], known: set[str]) -> None:
     unknown = sorted(set(data) - known)
     if unknown:
-        raise ValueError(f"unknown {what} {unknown}; allowed: {sorted(known)}")
+        raise ValueError(f"unknown {what} {short_repr(unknown)}; allowed: {sorted(known)}")
 
 
 def env_arguments(env_id: str) -> list[str]:
@@ -309,26 +312,28 @@ def check_env_kwargs(env_id: str, noise: str, env_kwargs: Any) -> None:
     from clutter_gym.noise.profiles import resolve_noise
 
     if not isinstance(env_kwargs, dict):
-        raise ValueError(f"env_kwargs must be a mapping of gym.make keyword arguments, got {env_kwargs!r}")
+        raise ValueError(f"env_kwargs must be a mapping of gym.make keyword arguments, got {short_repr(env_kwargs)}")
     _reject_unknown(f"env_kwargs key(s) for {env_id}", env_kwargs, set(env_arguments(env_id)))
     sections = env_kwargs.get("noise")
     if sections is None:
         return
     if not isinstance(sections, dict) or "profile" in sections:
         raise ValueError("env_kwargs.noise takes noise-section overrides such as noise.lidar.range_sigma=0.02, "
-                         f"applied on top of the profile (the profile is the 'noise' option), got {sections!r}")
+                         "applied on top of the profile (the profile is the 'noise' option), got "
+                         f"{short_repr(sections)}")
     resolve_noise({"profile": noise, **sections})
 
 
 def _check_mix(env_id: str, mix: Any) -> None:
     if not isinstance(mix, dict) or not all(isinstance(v, list) and v for v in mix.values()):
         raise ValueError("train_env_mix must map gym.make arguments to non-empty lists of values "
-                         f"({{obstacle_density: [0.05, 0.12, 0.2]}}), got {mix!r}")
+                         f"({{obstacle_density: [0.05, 0.12, 0.2]}}), got {short_repr(mix)}")
     _reject_unknown(f"train_env_mix key(s) for {env_id}", mix, set(env_arguments(env_id)))
     from clutter_gym.noise.profiles import PROFILE_NAMES
 
     if any(profile not in PROFILE_NAMES for profile in mix.get("noise", [])):
-        raise ValueError(f"train_env_mix noise takes profile names, each one of {PROFILE_NAMES}, got {mix['noise']!r}")
+        raise ValueError(f"train_env_mix noise takes profile names, each one of {PROFILE_NAMES}, got "
+                         f"{short_repr(mix['noise'])}")
 
 
 def deep_merge(base: dict[str, Any], top: dict[str, Any]) -> dict[str, Any]:
@@ -372,10 +377,7 @@ def read_hyperparams_file(path: str | Path) -> dict[str, Any]:
     if not path.is_file():
         raise FileNotFoundError(f"hyperparameter file {name!r} does not exist (nor is it a shipped name: "
                                 f"{', '.join(shipped_hyperparams())})")
-    try:
-        table = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as exc:
-        raise ValueError(f"hyperparameter file {str(path)!r} is not valid YAML: {exc}".replace("\n", " ")) from None
+    table = read_yaml(path, f"hyperparameter file {str(path)!r}")
     if table is None:
         return {}
     if not isinstance(table, dict) or not all(isinstance(block, dict | None) for block in table.values()):

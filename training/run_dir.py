@@ -26,6 +26,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+import os
 import platform
 import re
 import shutil
@@ -41,6 +42,7 @@ import yaml
 from clutter_gym.training.config import TrainConfig
 from clutter_gym.training.normalizer import NORMALIZER_FILE, save_normalizer
 from clutter_gym.util.atomic import atomic_folder, atomic_path, write_text_atomically
+from clutter_gym.util.safe_yaml import read_yaml
 
 MODEL_FILE = "model.zip"
 _STEP_DIR = re.compile(r"^step_(\d+)$")
@@ -150,12 +152,25 @@ class RunDir:
         if not self.config_file.is_file():
             raise FileNotFoundError(f"{self.root} is not a run folder: it has no config.yaml")
         try:
-            data = yaml.safe_load(self.config_file.read_text())
-        except yaml.YAMLError as exc:
-            raise IncompatibleRunError(f"{self.config_file} is not valid YAML: {exc}") from None
+            data = read_yaml(self.config_file)
+        except ValueError as exc:
+            raise IncompatibleRunError(str(exc)) from None
         if not isinstance(data, dict):
             raise IncompatibleRunError(f"{self.config_file} is not a mapping of settings")
         return data
+
+    def check_own_files(self) -> None:
+        """Refuse a run folder whose entries are symbolic links: training writes into ``tb/``, ``checkpoints/`` and
+        the logs, and a link (in a run folder from someone else) would carry those writes out of the folder.
+
+        Raises:
+            IncompatibleRunError: naming the link and where it points.
+        """
+        for path in (self.config_file, self.episodes_file, self.tb_dir, self.checkpoints_dir, self.model_dir,
+                     self.best_dir, self.validation_file, self.eval_file, self.training_file):
+            if path.is_symlink():
+                raise IncompatibleRunError(f"{path} is a symbolic link (to {os.readlink(path)}); training writes "
+                                           "there, so a run folder's files must be its own")
 
     # -- checkpoints ----------------------------------------------------------------------------------------
     def checkpoints(self) -> list[tuple[int, Path]]:

@@ -32,6 +32,8 @@ import yaml
 
 from clutter_gym.training.config import EVAL_SEED, TrainConfig, config_for, deep_merge
 from clutter_gym.util.atomic import atomic_path, write_text_atomically
+from clutter_gym.util.checks import short_repr
+from clutter_gym.util.safe_yaml import read_yaml
 
 
 @dataclass(frozen=True)
@@ -160,9 +162,10 @@ def check_spec(spec: SweepSpec, out: Path) -> None:
         check_env_builds(spec.cell_config(noise, 0))
     spec_file = out / "sweep.yaml"
     if spec_file.is_file():
-        saved = {"settings": {}, **yaml.safe_load(spec_file.read_text())}  # sweeps older than settings had none
+        saved = read_yaml(spec_file)
+        saved = {"settings": {}, **saved} if isinstance(saved, dict) else saved  # sweeps older than settings had none
         if saved != spec.to_dict():
-            raise ValueError(f"{out} holds a sweep with another spec ({saved}); use a new --out")
+            raise ValueError(f"{out} holds a sweep with another spec ({short_repr(saved)}); use a new --out")
 
 
 def _run_on_pool(spec: SweepSpec, out: Path, todo: list[tuple[str, int]], workers: int | None) -> None:

@@ -113,8 +113,10 @@ def train(run: RunDir, progress: bool = True, timesteps: int | None = None, trus
         UntrustedFileError: they are a pickle and ``trust_pickle`` is False.
         RunWriteError: a checkpoint or the final model could not be written.
         TrainingInterrupted: training was interrupted; the checkpoint of its step was written.
+        IncompatibleRunError: the run cannot be read, or an entry of its folder is a symbolic link.
     """
     config = run.read_config()
+    run.check_own_files()
     if timesteps is not None and timesteps != config.timesteps:
         config = TrainConfig.from_dict({**config.to_dict(), "timesteps": timesteps})
         run.write_config(config)

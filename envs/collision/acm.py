@@ -19,9 +19,10 @@ samples would leave pairs enabled that the links themselves touch in few poses o
 ``mesh``'s. Results are cached as JSON keyed by the URDF's content (and its meshes'), the fidelity and the sampling
 settings: first among the files shipped in ``clutter_gym/assets/acm/``, then in the user cache
 (``$XDG_CACHE_HOME/clutter-gym/acm``, default ``~/.cache/clutter-gym/acm``), else generated (seconds) and written
-there atomically. The shipped files (the Panda's and the diffbot's at ``convex`` and ``mesh``, the two levels
-:func:`load_acm` reads) are regenerated with ``save_acm(generate_acm(urdf, level), urdf, SHIPPED_DIR)``; a test
-fails when they no longer match their URDFs.
+there atomically; a cached file that does not read back as the matrix of its key is generated again. The shipped
+files (the Panda's and the diffbot's at ``convex`` and ``mesh``, the two levels :func:`load_acm` reads) are
+regenerated with ``save_acm(generate_acm(urdf, level), urdf, SHIPPED_DIR)``; a test fails when they no longer match
+their URDFs.
 """
 
 from __future__ import annotations
@@ -199,17 +200,29 @@ def load_acm(urdf: str | Path, fidelity: str, samples: int = ACM_SAMPLES,
     key = acm_key(urdf, fidelity, samples, seed)
     name = f"{Path(urdf).stem}-{key}.json"
     for folder in (SHIPPED_DIR, user_cache_dir("acm")):
-        path = folder / name
-        if path.is_file():
-            acm = AllowedCollisionMatrix.from_json(path.read_text())
-            if acm.key == key:
-                return acm
+        acm = _read_acm(folder / name, key)
+        if acm is not None:
+            return acm
     acm = generate_acm(urdf, fidelity, samples, seed)
     try:
-        save_acm(acm, urdf, user_cache_dir("acm"))
-    except OSError:  # a read-only home still gets a working (uncached) ACM
+        save_acm(acm, urdf, user_cache_dir("acm"))  # over a corrupt file of the same name, if there was one
+    except OSError:  # a full disk still gets a working (uncached) ACM
         pass
     return acm
+
+
+def _read_acm(path: Path, key: str) -> AllowedCollisionMatrix | None:
+    """The ACM cached at ``path`` when it is one of ``key`` whose pairs are pairs of its links; None when there is
+    no such file, or it is corrupt (cut short, edited, of another layout): it is then generated again."""
+    try:
+        acm = AllowedCollisionMatrix.from_json(path.read_text())
+        links = set(acm.links)
+        pairs_known = all(a in links and b in links for a, b in (*acm.disabled, *acm.fraction))
+        reasons_known = set(acm.disabled.values()) <= {"adjacent", "always", "never"}
+    # missing, or not what to_json writes (a JSONDecodeError or UnicodeDecodeError is a ValueError)
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    return acm if acm.key == key and pairs_known and reasons_known else None
 
 
 def save_acm(acm: AllowedCollisionMatrix, urdf: str | Path, folder: Path) -> Path:

@@ -23,6 +23,7 @@ from clutter_gym.robots.quadrotor import Quadrotor
 from clutter_gym.robots.spec_reading import read_spec_file
 from clutter_gym.robots.wheeled import diffbot, wheeled_base_from_spec
 from clutter_gym.sim import pybullet_data_file
+from clutter_gym.util.checks import short_repr
 
 #: What each kind is, in words, for error messages.
 KINDS = {"diff_drive": "wheeled base", "arm": "fixed-base arm", "multirotor": "multirotor"}
@@ -87,13 +88,13 @@ def resolve_robot(robot: str | Path | Mapping[str, Any], kind: str, env_id: str)
     if isinstance(robot, Mapping):
         spec_kind = robot.get("kind")
         if spec_kind != kind:
-            raise ValueError(f"{where}: kind {spec_kind!r} does not fit; {takes}")
+            raise ValueError(f"{where}: kind {short_repr(spec_kind)} does not fit; {takes}")
         return SPEC_READERS[kind](robot, where, folder)
     if isinstance(robot, (str, Path)) and Path(robot).suffix.lower() == ".urdf":
         raise ValueError(f"robot {str(robot)!r} is a URDF: robot= takes its spec, e.g. {{'kind': {kind!r}, 'urdf': "
                          f"{str(robot)!r}, ...}} (docs/robots.md); {takes}")
     if not isinstance(robot, str) or robot not in _ROBOTS:
-        raise ValueError(f"unknown robot {robot!r}; {takes}")
+        raise ValueError(f"unknown robot {short_repr(robot)}; {takes}")
     entry = _ROBOTS[robot]
     if entry.kind != kind:
         raise ValueError(f"robot {robot!r} is a {KINDS[entry.kind]}; {takes}")

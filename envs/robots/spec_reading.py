@@ -11,12 +11,13 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import yaml
 
 from clutter_gym.collision.kinematics import UrdfKinematics
 from clutter_gym.collision.urdf_geometry import CollisionElement, load_collision_elements, parse_urdf
+from clutter_gym.robots.spec_paths import SHARED_KEYS, spec_name, spec_package_roots
 from clutter_gym.robots.urdf_prep import Mount, prepared_urdf
-from clutter_gym.util.checks import is_number
+from clutter_gym.util.checks import is_number, short_repr
+from clutter_gym.util.safe_yaml import read_yaml
 
 #: A number in exponent notation with no dot or no exponent sign (3e-8, 1.0e3): YAML 1.2 reads it as a number, but
 #: PyYAML (YAML 1.1) leaves it a string, so a spec file's number may arrive as this text. No other text is a number.
@@ -38,29 +39,26 @@ class SpecUrdf:
 
 
 def read_spec_file(path: Path) -> Mapping[str, object]:
-    """The mapping of keys a YAML spec file holds.
+    """The mapping of keys a YAML spec file holds, read with the bounded loader (:mod:`clutter_gym.util.safe_yaml`).
 
     Raises:
-        ValueError: the file is not UTF-8 text, not YAML, or not a mapping (one line naming the file).
+        ValueError: the file is not UTF-8 text, not YAML, over the loader's bounds, or not a mapping (one line naming
+            the file).
     """
-    try:
-        spec = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except UnicodeDecodeError:
-        raise ValueError(f"robot spec {path}: not UTF-8 text; a spec is a YAML mapping of keys (docs/robots.md)") \
-            from None
-    except yaml.YAMLError as error:
-        raise ValueError(f"robot spec {path}: not valid YAML: {' '.join(str(error).split())}") from None
+    spec = read_yaml(path, f"robot spec file {path}")
     if not isinstance(spec, Mapping):
         raise ValueError(f"robot spec {path}: expected a mapping of keys, got {type(spec).__name__}")
     return spec
 
 
 def check_keys(spec: Mapping[str, object], keys: Sequence[str], required: int, kind: str, where: str) -> None:
-    """Refuse keys outside ``keys`` (and ``kind``) and a missing one of the first ``required``."""
+    """Refuse keys outside ``keys`` (and ``kind`` and the keys every kind takes) and a missing one of the first
+    ``required``."""
     a = "an" if kind[0] in "aeiou" else "a"
-    unknown = sorted(set(spec) - set(keys) - {"kind"})
+    unknown = sorted(set(spec) - set(keys) - {"kind", *SHARED_KEYS}, key=str)
     if unknown:
-        raise ValueError(f"{where}: unknown keys {unknown}; {a} {kind} spec takes {list(keys)}")
+        raise ValueError(f"{where}: unknown keys {short_repr(unknown)}; {a} {kind} spec takes "
+                         f"{list(keys) + list(SHARED_KEYS)}")
     for key in keys[:required]:
         if key not in spec:
             raise ValueError(f"{where}: missing {key!r} ({a} {kind} spec needs {list(keys[:required])})")
@@ -82,7 +80,7 @@ def load_spec_urdf(spec: Mapping[str, object], where: str, folder: Path | None,
     says what it refuses) is reported as such, and so is one whose links weigh nothing in all: pybullet would fly or
     drive the prepared copy's token grams."""
     source = spec_source(spec, where, folder)
-    name = str(spec.get("name", source.stem))
+    name, roots = spec_name(spec, where, source), spec_package_roots(spec, where, folder)
     try:
         masses = {str(link.get("name")): float(mass.get("value", "nan")) for link in parse_urdf(source).findall("link")
                   if (mass := link.find("inertial/mass")) is not None}
@@ -90,7 +88,7 @@ def load_spec_urdf(spec: Mapping[str, object], where: str, folder: Path | None,
             given = f"gives its links {sum(masses.values()):g} kg in all" if masses else "has no <inertial> element"
             raise ValueError(f"{source} {given}, so the robot's mass and inertia are unknown (pybullet would take a "
                              "token gram a link): give each link an <inertial> with its mass and inertia")
-        urdf = prepared_urdf(source, name, mounts)
+        urdf = prepared_urdf(source, name, mounts, roots)
         return SpecUrdf(source, urdf, UrdfKinematics(urdf), load_collision_elements(urdf), name, masses)
     except ValueError as error:
         raise ValueError(f"{where}: the URDF was refused: {error}") from None
@@ -101,7 +99,7 @@ def joint_names(spec: Mapping[str, object], key: str, urdf: SpecUrdf, where: str
     """``spec[key]``: a list of ``low`` to ``high`` names of the URDF's moving joints."""
     joints = spec[key]
     if isinstance(joints, str) or not isinstance(joints, (list, tuple)) or not low <= len(joints) <= high:
-        raise ValueError(f"{where}: {key} must be a list of {low} to {high} joint names, got {joints!r}")
+        raise ValueError(f"{where}: {key} must be a list of {low} to {high} joint names, got {short_repr(joints)}")
     moving = [j.name for j in urdf.kinematics.joints]
     missing = [j for j in joints if j not in moving]
     if missing:
@@ -126,7 +124,7 @@ def numbers(value: object, n: int, where: str, low: float, high: float) -> list[
     out = [as_number(v) for v in items]
     if len(out) != n or not all(v is not None and math.isfinite(v) and low <= v <= high for v in out):
         raise ValueError(f"{where} must be {n} number{'s' if n > 1 else ''} in [{low:g}, {high:g}], got "
-                         f"{value!r}{_typed(value)}")
+                         f"{short_repr(value)}{_typed(value)}")
     return [v for v in out if v is not None]  # all of them: None was refused above
 
 
@@ -151,22 +149,22 @@ def number(spec: Mapping[str, object], key: str, where: str, default: float, low
     try:
         return numbers([value], 1, "", low, high)[0]
     except ValueError:
-        raise ValueError(f"{where}: {key} must be a number in [{low:g}, {high:g}], got {value!r}{_typed(value)}") \
-            from None
+        raise ValueError(f"{where}: {key} must be a number in [{low:g}, {high:g}], got "
+                         f"{short_repr(value)}{_typed(value)}") from None
 
 
 def spec_mounts(spec: Mapping[str, object], where: str) -> tuple[Mount, ...]:
     """The links a spec's ``mounts`` (``{link: {"parent": ..., "xyz": [...], "rpy": [...]}}``) adds, if any."""
     mounts = spec.get("mounts") or {}
     if not isinstance(mounts, Mapping):
-        raise ValueError(f"{where}: mounts must be a mapping of link names to mounts, got {mounts!r}")
+        raise ValueError(f"{where}: mounts must be a mapping of link names to mounts, got {short_repr(mounts)}")
     return tuple(mount(str(link), entry, f"{where}: mounts.{link}") for link, entry in mounts.items())
 
 
 def mount(link: str, entry: object, where: str) -> Mount:
     """A link to add, from ``{"parent": link, "xyz": [...], "rpy": [...]}``."""
     if not isinstance(entry, Mapping) or "parent" not in entry:
-        raise ValueError(f"{where} must be a mapping with a 'parent' link, got {entry!r}")
+        raise ValueError(f"{where} must be a mapping with a 'parent' link, got {short_repr(entry)}")
     unknown = set(entry) - {"parent", "xyz", "rpy"}
     if unknown:
         raise ValueError(f"{where} has unknown keys {sorted(unknown)}; allowed: parent, xyz, rpy")

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import shutil
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -142,10 +144,12 @@ JOINT_7 = '<limit effort="300" lower="-3.05432619099" upper="3.05432619099" velo
 
 
 def kuka_with(tmp_path, old: str, new: str) -> str:
-    """pybullet_data's iiwa with ``old`` (found once) replaced by ``new``, its meshes named by absolute paths."""
+    """pybullet_data's iiwa with ``old`` (found once) replaced by ``new``, beside a copy of its meshes (a spec's
+    meshes must lie in its URDF's folder)."""
     source = pybullet_data_file("kuka_iiwa/model.urdf")
-    text = source.read_text().replace('filename="meshes/', f'filename="{source.parent}/meshes/')
+    text = source.read_text()
     assert text.count(old) == 1
+    shutil.copytree(source.parent / "meshes", tmp_path / "meshes")
     path = tmp_path / "kuka.urdf"
     path.write_text(text.replace(old, new))
     return str(path)
