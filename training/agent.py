@@ -23,6 +23,7 @@ runs no code from the files.
 
 from __future__ import annotations
 
+import copy
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -31,12 +32,14 @@ import numpy as np
 from gymnasium import spaces
 from stable_baselines3.common.vec_env.stacked_observations import StackedObservations
 
+from clutter_gym.training.binned_actions import binned_space, decode
 from clutter_gym.training.config import TrainConfig, deep_merge
 from clutter_gym.training.memory import frame_space, push_frame
 from clutter_gym.training.normalizer import NORMALIZER_FILE, detached, normalizer_path
 from clutter_gym.training.policy_file import load_ppo
 from clutter_gym.training.residual import policy_action_space, residual_map, subgoal_pursuit
 from clutter_gym.training.run_dir import MODEL_FILE, IncompatibleRunError, RunDir
+from clutter_gym.training.scan_memory import ScanMemory, memory_for
 
 if TYPE_CHECKING:
     from stable_baselines3 import PPO
@@ -60,9 +63,13 @@ class Agent:
         self.run, self.config, self.model, self.folder = run, config, model, folder
         self.step = int(model.num_timesteps)
         # a student with a privileged critic acts on the student's entries alone
-        self.observation_space = frame_space(getattr(model.policy, "actor_space", model.observation_space),
-                                             config.frame_stack)
-        self._normalizer = _for_entries(normalizer, self.observation_space)
+        self._policy_space = frame_space(getattr(model.policy, "actor_space", model.observation_space),
+                                         config.frame_stack)
+        self.observation_space = self._policy_space
+        self._memory = _memory(config) if config.scan_memory else None
+        if self._memory is not None:  # the agent keeps the memory entry itself, from the observations
+            self.observation_space = spaces.Dict({k: v for k, v in self._policy_space.spaces.items() if k != "memory"})
+        self._normalizer = _for_entries(normalizer, self._policy_space)
         self._residual = _residual(config) if config.uses_base else None
 
     def predict(self, obs: dict[str, np.ndarray] | np.ndarray, state: Any = None,
@@ -72,8 +79,9 @@ class Agent:
         Args:
             obs: an observation as the env returns it.
             state: the agent's memory; None at the start of an episode, then what the previous call returned.
-                It holds the frame stack of a run trained with ``frame_stack`` above 1 (for a batch, one per
-                row; the rows start their episodes together) and is None for a memoryless policy.
+                It holds the frame stack of a run trained with ``frame_stack`` above 1 and the LIDAR's memory of a
+                run trained with a ``scan_memory`` (for a batch, one per row; the rows start their episodes
+                together), and is None for a memoryless policy.
             deterministic: the mean action (True) or a sample from the policy's distribution.
 
         Returns:
@@ -81,18 +89,35 @@ class Agent:
         """
         single = self._check_obs(obs)
         raw = obs
+        if self._memory is not None:
+            obs, memories = self._remember(obs, single, None if state is None else state[0])
+            state = None if state is None else state[1]
         if self._normalizer is not None:
             obs = self._normalizer.normalize_obs(obs)
         if self.config.frame_stack > 1:
             batch = _as_batch(obs) if single else obs
-            stacked, state = push_frame(batch, state, self.config.frame_stack, self.observation_space)
+            stacked, state = push_frame(batch, state, self.config.frame_stack, self._policy_space)
             action, _ = self.model.predict(stacked, deterministic=deterministic)
             action = action[0] if single else action
         else:
             action, _ = self.model.predict(obs, deterministic=deterministic)
+        if self.config.action_bins:
+            action = decode(action, self.config.action_bins)
         if self._residual is not None:
             action = self._residual(raw, action)
+        if self._memory is not None:
+            state = (memories, state)
         return action, state
+
+    def _remember(self, obs: dict[str, np.ndarray], single: bool, memories: list | None) -> tuple[dict, list]:
+        """``obs`` with its ``memory`` entry, each row's memory moved on by its observation (new ones at an
+        episode's start)."""
+        rows = [obs] if single else [{k: v[i] for k, v in obs.items()} for i in range(len(obs["lidar"]))]
+        start = memories is None
+        if start:
+            memories = [copy.deepcopy(self._memory) for _ in rows]
+        entries = [m.update(row["lidar"], None if start else row["velocity"]) for m, row in zip(memories, rows)]
+        return {**obs, "memory": entries[0] if single else np.stack(entries)}, memories
 
     def make_env(self, noise: str | dict[str, Any] | None = None, render_mode: str | None = None,
                  **overrides: Any) -> gym.Env:
@@ -157,6 +182,15 @@ def _for_entries(normalizer: Any | None, space: spaces.Space) -> Any | None:
     narrowed.norm_obs_keys = [key for key in normalizer.norm_obs_keys if key in space.spaces]
     narrowed.obs_rms = {key: normalizer.obs_rms[key] for key in narrowed.norm_obs_keys}
     return narrowed
+
+
+def _memory(config: TrainConfig) -> ScanMemory:
+    """An empty LIDAR memory of the run's kind, for the LIDAR of the env its settings make."""
+    env = gym.make(config.env_id, **config.make_kwargs())
+    try:
+        return memory_for(env, config.scan_memory)
+    finally:
+        env.close()
 
 
 def _residual(config: TrainConfig):
@@ -246,6 +280,12 @@ def policy_spaces(config: TrainConfig) -> tuple[spaces.Space, spaces.Space]:
     observation_space = env.observation_space
     action_space = policy_action_space(env.action_space, config.residual_space)
     env.close()
+    if config.action_bins:
+        action_space = binned_space(action_space, config.action_bins)
+    if config.scan_memory:
+        size = _memory(config).size
+        observation_space = spaces.Dict({**observation_space.spaces, "memory": spaces.Box(0.0, 1.0, (size,),
+                                                                                        np.float32)})
     if config.critic_inputs:  # the critic's entries, from the teacher's env as made (it is never reset here)
         teacher_env = gym.make(config.env_id, **config.teacher_kwargs())
         critic = {key: teacher_env.observation_space[key] for key in config.critic_inputs}

@@ -75,6 +75,20 @@ class PotentialFieldNavigator:
                    forward_only=forward_only)
 
     def __call__(self, obs: Mapping[str, np.ndarray]) -> np.ndarray:
+        return self.command(*self.steer(obs))
+
+    def toward(self, obs: Mapping[str, np.ndarray], bearing: float) -> np.ndarray:
+        """The action steering for a waypoint at ``bearing`` (radians from the robot's heading, counter-clockwise)
+        instead of the direction the goal entry gives; the LIDAR's push and the speed rule are the field's."""
+        bearing = min(max(bearing, -math.pi + 1e-6), math.pi - 1e-6)  # straight behind: left for +pi, right for -pi
+        target = np.array(obs[self.goal_key], dtype=float)
+        target[1], target[2] = math.sin(bearing), math.cos(bearing)
+        return self({**obs, self.goal_key: target})
+
+    def steer(self, obs: Mapping[str, np.ndarray]) -> tuple[float, float]:
+        """``(heading error, free space ahead)``: the angle (radians, counter-clockwise positive) from the robot's
+        heading to the field's direction, and the speed fraction the LIDAR's returns within 30 degrees of ahead
+        allow."""
         sin_b, cos_b = (float(v) for v in obs[self.goal_key][1:3])
         heading = np.array([cos_b, sin_b])
         ahead = 1.0
@@ -86,7 +100,11 @@ class PotentialFieldNavigator:
             heading -= self.repulsion * np.array([push @ np.cos(angles), push @ np.sin(angles)])
             front = np.abs(self.angles) < math.radians(30)
             ahead = float(np.clip((ranges[front].min() - 0.2) / 0.6, 0.0, 1.0)) if front.any() else 1.0
-        error = math.atan2(heading[1], heading[0])
+        return math.atan2(heading[1], heading[0]), ahead
+
+    def command(self, error: float, ahead: float) -> np.ndarray:
+        """The action for a heading ``error`` (radians; beyond pi it turns the long way round) and the speed
+        fraction ``ahead`` allows."""
         angular = float(np.clip(self.turn_gain * error, -1.0, 1.0))
         linear = float(np.clip(math.cos(error), 0.0, 1.0)) * max(ahead, 0.15)
         if self.forward_only:

@@ -9,7 +9,6 @@ env is built, naming the field.
 
 from __future__ import annotations
 
-import inspect
 import math
 from dataclasses import asdict, dataclass, field, fields
 from importlib import resources
@@ -19,7 +18,9 @@ from typing import Any
 import yaml
 
 from clutter_gym.training.distill_config import DistillSettings, TeacherSettings
+from clutter_gym.training.env_settings import check_env_kwargs, check_mix, reject_unknown
 from clutter_gym.training.residual import MAPLESS_ENVS, PURSUIT_ENVS, check_residual_base, check_residual_space
+from clutter_gym.training.scan_memory import MEMORY_KINDS
 from clutter_gym.util.checks import short_repr
 from clutter_gym.util.safe_yaml import read_yaml
 
@@ -115,6 +116,11 @@ class TrainConfig:
             ``validate_episodes`` deterministic episodes on held-out layouts; the best policy so far is kept in
             ``best/`` and is the one ``load()``, evaluation and the report use.
         validate_episodes: episodes per validation.
+        action_bins: 0: the policy's actions are the env's (continuous); n >= 2: each action entry takes one of n
+            values evenly from -1 to 1, picked from a categorical distribution
+            (:mod:`clutter_gym.training.binned_actions`: a student that cannot average the teacher's modes).
+        scan_memory: "" (none), or what the policy is told of every LIDAR return of the episode, kept by dead
+            reckoning: ``"polar"`` or ``"grid"`` (:mod:`clutter_gym.training.scan_memory`; ClutterNav-v0).
         frame_stack: the policy sees its episode's last ``frame_stack`` observations (every entry concatenated,
             oldest first; see :mod:`clutter_gym.training.memory`). 1: the current observation only.
         train_layouts: 0: every training reset samples a new layout; N > 0: the training envs share out N
@@ -158,6 +164,8 @@ class TrainConfig:
     final_eval_episodes: int = 20
     validate_every: int = 0
     validate_episodes: int = 20
+    action_bins: int = 0
+    scan_memory: str = ""
     frame_stack: int = 1
     train_layouts: int = 0
     residual_gain: float = 0.0
@@ -188,6 +196,11 @@ class TrainConfig:
         _check_range("validate_every", self.validate_every, 0, 10**10)
         _check_range("validate_episodes", self.validate_episodes, 1, 100_000)
         _check_range("frame_stack", self.frame_stack, 1, 32)
+        if self.action_bins and not 2 <= self.action_bins <= 101 or isinstance(self.action_bins, bool):
+            raise ValueError(f"action_bins must be 0 (continuous actions) or an integer in [2, 101], got "
+                             f"{short_repr(self.action_bins)}")
+        if self.scan_memory not in ("", *MEMORY_KINDS):
+            raise ValueError(f"scan_memory must be one of {MEMORY_KINDS} or empty (none), got {self.scan_memory!r}")
         _check_range("train_layouts", self.train_layouts, 0, 10**7)
         _check_range("residual_gain", self.residual_gain, 0.0, 1000.0)
         self.teacher.check(self.env_id)
@@ -216,7 +229,7 @@ class TrainConfig:
         if self.residual_base and not self.residual_gain:
             raise ValueError("residual_base needs residual_gain > 0 (it sets the gains of a residual's base)")
         check_env_kwargs(self.env_id, self.noise, self.env_kwargs)
-        _check_mix(self.env_id, self.train_env_mix)
+        check_mix(self.env_id, self.train_env_mix)
         if self.ppo.batch_size > self.ppo.n_steps * self.n_envs:
             raise ValueError(f"ppo.batch_size must be in [2, n_steps * n_envs = {self.ppo.n_steps * self.n_envs}], "
                              f"got {self.ppo.batch_size}")
@@ -260,9 +273,9 @@ class TrainConfig:
     def from_dict(cls, data: dict[str, Any]) -> TrainConfig:
         """Build from a plain mapping (a YAML block or a saved ``config.yaml``); unknown keys are errors."""
         data = dict(data)
-        _reject_unknown("config key(s)", data, {f.name for f in fields(cls)})
+        reject_unknown("config key(s)", data, {f.name for f in fields(cls)})
         ppo = dict(data.pop("ppo", {}) or {})
-        _reject_unknown("ppo key(s)", ppo, {f.name for f in fields(PPOHyperparams)})
+        reject_unknown("ppo key(s)", ppo, {f.name for f in fields(PPOHyperparams)})
         if "net_arch" in ppo:
             ppo["net_arch"] = tuple(ppo["net_arch"])
         data["env_kwargs"] = dict(data.get("env_kwargs") or {})
@@ -271,7 +284,7 @@ class TrainConfig:
         teacher = data.pop("teacher", None) or {}
         if not isinstance(teacher, dict):
             raise ValueError(f"teacher must be a mapping (name, env_kwargs), got {teacher!r}")
-        _reject_unknown("teacher key(s)", teacher, {"name", "env_kwargs"})
+        reject_unknown("teacher key(s)", teacher, {"name", "env_kwargs"})
         data["teacher"] = TeacherSettings(**teacher)
         data["distill"] = DistillSettings.from_dict(data.pop("distill", None) or {})
         data["critic_inputs"] = tuple(data.pop("critic_inputs", None) or ())
@@ -285,55 +298,6 @@ def _check_range(name: str, value: Any, low: float, high: float, low_open: bool 
     if not number or not (low < value <= high if low_open else low <= value <= high):
         bracket = "(" if low_open else "["
         raise ValueError(f"{name} must be a number in {bracket}{low}, {high}], got {short_repr(value)}")
-
-
-def _reject_unknown(what: str, data: dict[str, Any], known: set[str]) -> None:
-    unknown = sorted(set(data) - known)
-    if unknown:
-        raise ValueError(f"unknown {what} {short_repr(unknown)}; allowed: {sorted(known)}")
-
-
-def env_arguments(env_id: str) -> list[str]:
-    """The keys ``env_kwargs`` may hold for ``env_id``: its constructor's arguments, less ``render_mode`` (the
-    tools set it), plus gym.make's ``max_episode_steps``."""
-    import gymnasium as gym
-    from gymnasium.envs.registration import load_env_creator
-
-    creator = load_env_creator(gym.spec(env_id).entry_point)
-    return sorted({*inspect.signature(creator).parameters, "max_episode_steps"} - {"render_mode"})
-
-
-def check_env_kwargs(env_id: str, noise: str, env_kwargs: Any) -> None:
-    """Names and noise overrides of ``env_kwargs`` (their values are the env's to check, when it is made).
-
-    Raises:
-        ValueError: not a mapping, an unknown key (the message lists the allowed ones), or bad noise overrides.
-    """
-    from clutter_gym.noise.profiles import resolve_noise
-
-    if not isinstance(env_kwargs, dict):
-        raise ValueError(f"env_kwargs must be a mapping of gym.make keyword arguments, got {short_repr(env_kwargs)}")
-    _reject_unknown(f"env_kwargs key(s) for {env_id}", env_kwargs, set(env_arguments(env_id)))
-    sections = env_kwargs.get("noise")
-    if sections is None:
-        return
-    if not isinstance(sections, dict) or "profile" in sections:
-        raise ValueError("env_kwargs.noise takes noise-section overrides such as noise.lidar.range_sigma=0.02, "
-                         "applied on top of the profile (the profile is the 'noise' option), got "
-                         f"{short_repr(sections)}")
-    resolve_noise({"profile": noise, **sections})
-
-
-def _check_mix(env_id: str, mix: Any) -> None:
-    if not isinstance(mix, dict) or not all(isinstance(v, list) and v for v in mix.values()):
-        raise ValueError("train_env_mix must map gym.make arguments to non-empty lists of values "
-                         f"({{obstacle_density: [0.05, 0.12, 0.2]}}), got {short_repr(mix)}")
-    _reject_unknown(f"train_env_mix key(s) for {env_id}", mix, set(env_arguments(env_id)))
-    from clutter_gym.noise.profiles import PROFILE_NAMES
-
-    if any(profile not in PROFILE_NAMES for profile in mix.get("noise", [])):
-        raise ValueError(f"train_env_mix noise takes profile names, each one of {PROFILE_NAMES}, got "
-                         f"{short_repr(mix['noise'])}")
 
 
 def deep_merge(base: dict[str, Any], top: dict[str, Any]) -> dict[str, Any]:
@@ -383,7 +347,7 @@ def read_hyperparams_file(path: str | Path) -> dict[str, Any]:
     if not isinstance(table, dict) or not all(isinstance(block, dict | None) for block in table.values()):
         raise ValueError(f"hyperparameter file {str(path)!r} must map 'default' and env ids to blocks of settings "
                          "(the form of clutter_gym/training/hyperparams/ppo.yml)")
-    _reject_unknown(f"block name(s) in {str(path)!r}", table, {"default", *ENV_IDS})
+    reject_unknown(f"block name(s) in {str(path)!r}", table, {"default", *ENV_IDS})
     return table
 
 

@@ -6,7 +6,8 @@ stored observation is normalised alike and the saved statistics are the ones the
 round the envs run ``round_steps`` steps: the student's deterministic policy drives (the teacher a decaying share of
 the episodes, all of the first round's by default), the teacher's action at every visited state is its label
 (:class:`~clutter_gym.training.teachers.TeacherLabels`), the round's samples join the aggregated data set, and the
-actor is fitted to the whole set by regression of its mean action on the labels. After each round the student is
+actor is fitted to the whole set (regression of its mean action on the labels, or for binned actions the
+cross-entropy of its bins: :mod:`clutter_gym.training.binned_actions`). After each round the student is
 validated on held-out layouts (the best kept in ``best/``), checkpointed, and the round is a row of
 ``distill.csv``. A resumed run continues from its newest round's student with an empty data set, which the
 remaining rounds fill from its own rollouts.
@@ -15,6 +16,7 @@ remaining rounds fill from its own rollouts.
 from __future__ import annotations
 
 import time
+from math import nan
 from typing import Any
 
 import numpy as np
@@ -25,7 +27,7 @@ from stable_baselines3.common.vec_env import VecEnv, VecNormalize
 from clutter_gym.training.callbacks import BestPolicyKeeper, RunMonitor
 from clutter_gym.training.config import TrainConfig
 from clutter_gym.training.distill_config import DistillSettings
-from clutter_gym.training.privileged import mean_actions
+from clutter_gym.training.privileged import acted, imitation_loss
 from clutter_gym.training.run_dir import RunDir
 
 
@@ -54,16 +56,15 @@ class Dataset:
         return obs, labels
 
 
-def error(model: PPO, obs: dict[str, np.ndarray], labels: np.ndarray) -> float:
-    """Mean squared error of the actor's mean action against ``labels`` (no gradient)."""
-    with th.no_grad():
-        inputs = {key: th.as_tensor(value) for key, value in obs.items()}
-        return float(((mean_actions(model.policy, inputs) - th.as_tensor(labels)) ** 2).mean())
+def error(model: PPO, obs: dict[str, np.ndarray], labels: np.ndarray, bins: int) -> float:
+    """Mean squared error of the actions the student takes (deterministically) against ``labels``."""
+    actions = acted(model.policy, {key: th.as_tensor(value) for key, value in obs.items()}, bins)
+    return float(((actions - th.as_tensor(labels)) ** 2).mean())
 
 
-def fit(model: PPO, dataset: Dataset, settings: DistillSettings, optimizer: th.optim.Optimizer) -> float:
-    """``settings.epochs`` passes of regression of the actor's mean action on the labels; the last pass's mean
-    squared error."""
+def fit(model: PPO, dataset: Dataset, settings: DistillSettings, optimizer: th.optim.Optimizer, bins: int) -> float:
+    """``settings.epochs`` passes of the actor over the data set, lowering its :func:`imitation_loss`; the last
+    pass's mean loss."""
     obs, labels = dataset.arrays()
     policy = model.policy
     policy.set_training_mode(True)
@@ -75,7 +76,7 @@ def fit(model: PPO, dataset: Dataset, settings: DistillSettings, optimizer: th.o
         total = 0.0
         for start in range(0, len(target), settings.batch_size):
             rows = order[start:start + settings.batch_size]
-            loss = ((mean_actions(policy, {k: v[rows] for k, v in inputs.items()}) - target[rows]) ** 2).mean()
+            loss = imitation_loss(policy, {k: v[rows] for k, v in inputs.items()}, target[rows], bins)
             optimizer.zero_grad()
             loss.backward()
             optimizer.step()
@@ -143,8 +144,9 @@ class Distiller:
         obs, labels = self.dataset.arrays()
         n = self.venv.num_envs
         fresh = min(-(-self.settings.round_steps // n) * n, len(labels))  # the states it has not been fitted on
-        unseen = error(self.model, {k: v[-fresh:] for k, v in obs.items()}, labels[-fresh:]) if index else float("nan")
-        loss = fit(self.model, self.dataset, self.settings, self.optimizer)
+        bins = self.config.action_bins
+        unseen = error(self.model, {k: v[-fresh:] for k, v in obs.items()}, labels[-fresh:], bins) if index else nan
+        loss = fit(self.model, self.dataset, self.settings, self.optimizer, bins)
         row: dict[str, float] = {"round": float(index), "step": float(self.model.num_timesteps),
                                  "samples": float(self.dataset.size), "teacher_share": share,
                                  "unseen_loss": unseen, "loss": loss, **_rates(episodes)}

@@ -28,6 +28,8 @@ from stable_baselines3.common.preprocessing import get_flattened_obs_dim
 from stable_baselines3.common.torch_layers import BaseFeaturesExtractor
 from torch import nn
 
+from clutter_gym.training.binned_actions import decode, soft_targets
+
 
 class SelectKeys(BaseFeaturesExtractor):
     """The observation entries ``keys`` flattened and concatenated, in sorted order (as SB3's CombinedExtractor
@@ -103,9 +105,26 @@ class PrivilegedCriticPolicy(MultiInputActorCriticPolicy):
         return spaces.Dict({key: self.observation_space[key] for key in self.actor_keys})
 
 
-def mean_actions(policy: MultiInputActorCriticPolicy, obs: dict[str, th.Tensor]) -> th.Tensor:
-    """The policy's mean actions (before clipping) for a batch of (preprocessed-by-SB3) observations."""
-    return policy.get_distribution(obs).distribution.mean
+def imitation_loss(policy: MultiInputActorCriticPolicy, obs: dict[str, th.Tensor], labels: th.Tensor,
+                   bins: int = 0) -> th.Tensor:
+    """How far the policy is from the teacher's ``labels`` on a batch of observations: the squared error of its mean
+    action, or for binned actions (:mod:`clutter_gym.training.binned_actions`) the cross-entropy of its bins against
+    the two bins either side of each label."""
+    distribution = policy.get_distribution(obs)
+    if not bins:
+        return ((distribution.distribution.mean - labels) ** 2).mean()
+    log_probs = th.stack([d.logits for d in distribution.distribution], dim=1)  # (batch, entries, bins), normalised
+    return -(soft_targets(labels, bins) * log_probs).sum(-1).mean()
+
+
+def acted(policy: MultiInputActorCriticPolicy, obs: dict[str, th.Tensor], bins: int = 0) -> th.Tensor:
+    """The actions the policy takes deterministically, as the env's continuous actions (no gradient)."""
+    with th.no_grad():
+        distribution = policy.get_distribution(obs)
+        if bins:
+            return th.as_tensor(decode(distribution.mode().numpy(), bins))
+        low, high = (th.as_tensor(b, dtype=th.float32) for b in (policy.action_space.low, policy.action_space.high))
+        return th.clamp(distribution.distribution.mean, low, high)
 
 
 class LabelRecorder(BaseCallback):
@@ -131,9 +150,10 @@ class DistilledPPO(PPO):
     """
 
     def __init__(self, *args: Any, bc_weight: float = 0.0, bc_steps: int = 1, start_step: int = 0,
-                 recorder: LabelRecorder | None = None, **kwargs: Any) -> None:
+                 recorder: LabelRecorder | None = None, action_bins: int = 0, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
         self.bc_weight, self.bc_steps, self.start_step, self.recorder = bc_weight, bc_steps, start_step, recorder
+        self.action_bins = action_bins
 
     def _excluded_save_params(self) -> list[str]:
         return [*super()._excluded_save_params(), "recorder"]
@@ -159,7 +179,7 @@ class DistilledPPO(PPO):
             for start in range(0, len(labels), self.batch_size):
                 rows = order[start:start + self.batch_size]
                 batch = self.rollout_buffer._get_samples(rows.numpy())
-                loss = weight * ((mean_actions(self.policy, batch.observations) - labels[rows]) ** 2).mean()
+                loss = weight * imitation_loss(self.policy, batch.observations, labels[rows], self.action_bins)
                 self.policy.optimizer.zero_grad()
                 loss.backward()
                 th.nn.utils.clip_grad_norm_(self.policy.parameters(), self.max_grad_norm)

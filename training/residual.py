@@ -21,6 +21,7 @@ Training wraps each env in :class:`SubgoalResidual`; a loaded agent adds the sam
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from typing import Any
 
@@ -34,7 +35,9 @@ Pursuit = Callable[[dict[str, np.ndarray]], np.ndarray]
 PURSUIT_ENVS = ("ClutterReach-v0", "ClutterFly-v0")
 MAPLESS_ENVS = ("ClutterNav-v0", "ClutterReach-v0", "ClutterFly-v0")
 #: What a residual policy's action adds to (:func:`residual_map`).
-RESIDUAL_SPACES = ("action", "velocity")
+RESIDUAL_SPACES = ("action", "velocity", "waypoint")
+#: Turn gain of ClutterNav-v0's potential field when a policy picks its waypoint (its own default).
+TURN_GAIN = 1.5
 #: Yaw rate per radian between the nose and the velocity commanded, 1/s, of the velocity residual's flyer.
 FACING_GAIN = 2.0
 #: The gains of ClutterFly-v0's flyer a run may set (``residual_base``), each in (0, :data:`MAX_BASE_GAIN`]; its
@@ -64,6 +67,8 @@ def subgoal_pursuit(env_id: str, gain: float, env: gym.Env | None = None, maples
     if env_id == "ClutterNav-v0":
         if env is None:
             raise ValueError("ClutterNav-v0's potential field needs the env, for its LIDAR's beam angles and range")
+        if space == "waypoint":
+            return _field(env, gain or TURN_GAIN)
         return _batched(_field(env, gain))
     if env_id == "ClutterReach-v0" and not mapless:
         return lambda obs: np.clip(gain * np.asarray(obs["subgoal"], dtype=np.float32), -1.0, 1.0)
@@ -90,6 +95,9 @@ def check_residual_space(env_id: str, space: str) -> None:
     if space == "velocity" and env_id != "ClutterFly-v0":
         raise ValueError(f"residual_space 'velocity' is ClutterFly-v0's (a residual on its flyer's velocity "
                          f"command), got {env_id!r}")
+    if space == "waypoint" and env_id != "ClutterNav-v0":
+        raise ValueError(f"residual_space 'waypoint' is ClutterNav-v0's (the bearing its potential field steers "
+                         f"for), got {env_id!r}")
 
 
 def check_residual_base(env_id: str, base: dict[str, float]) -> None:
@@ -118,6 +126,14 @@ def _field(env: gym.Env, gain: float) -> Pursuit:
     return field
 
 
+def _rows(obs: dict[str, np.ndarray], action: Any, act: Callable[[dict, np.ndarray], np.ndarray]) -> np.ndarray:
+    """``act(obs, action)`` for one observation, or row by row for a batch."""
+    action = np.asarray(action, dtype=float)
+    if np.ndim(obs["goal"]) == 1:
+        return act(obs, action)
+    return np.stack([act({key: value[i] for key, value in obs.items()}, action[i]) for i in range(len(action))])
+
+
 def _batched(pursuit: Pursuit) -> Pursuit:
     """``pursuit`` of one observation, applied row by row to a batch."""
     def act(obs: dict[str, np.ndarray]) -> np.ndarray:
@@ -139,10 +155,17 @@ def residual_map(pursuit: Pursuit, space: str = "action") -> Callable[[dict[str,
     :class:`~clutter_gym.training.baselines.CascadedFlyer` commands, in units of its top speed along body x, y, z,
     and the sum, capped at that speed, goes to the flyer's inner loops, which also turn the nose towards it
     (``yaw_gain`` :data:`FACING_GAIN`): the policy steers, the flyer flies, and the LIDAR and the camera look where
-    the drone goes. A zero action is the pursuit's own action either way.
+    the drone goes. A zero action is the pursuit's own action either way. ``"waypoint"`` (ClutterNav-v0): the policy's
+    (1,) action is the bearing of the point to steer for, in units of pi, and the pursuit's
+    :class:`~clutter_gym.training.baselines.PotentialFieldNavigator` steers for it (the policy picks where to go, the
+    field how to get there past the obstacles its LIDAR sees).
     """
     if space == "action":
         return lambda obs, action: residual_action(obs, action, pursuit)
+    if space == "waypoint":
+        def steer(obs: dict[str, np.ndarray], action: np.ndarray) -> np.ndarray:
+            return pursuit.toward(obs, math.pi * float(np.clip(action[0], -1.0, 1.0)))
+        return lambda obs, action: _rows(obs, action, steer)
     from clutter_gym.training.baselines import _capped
 
     def act(obs: dict[str, np.ndarray], action: np.ndarray) -> np.ndarray:
@@ -155,6 +178,8 @@ def policy_action_space(env_action_space: gym.spaces.Box, space: str = "action")
     """The action space of a residual policy in ``space`` on an env with ``env_action_space``."""
     if space == "velocity":
         return gym.spaces.Box(-1.0, 1.0, (3,), np.float32)
+    if space == "waypoint":
+        return gym.spaces.Box(-1.0, 1.0, (1,), np.float32)
     return env_action_space
 
 

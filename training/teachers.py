@@ -3,10 +3,12 @@ visits (:mod:`clutter_gym.training.distill`).
 
 Each env has the map-based planner reference of docs/baselines.md as its teacher (``"planner"``): it reads the
 ``subgoal`` entry, the point a fixed length ahead on a path planned over the known layout, which the env adds when
-it is made with the teacher's :attr:`Teacher.env_kwargs` on top of the student's own. ClutterNav-v0 has a second
-one, ``"seen-map"``: the same planner on a map of only the obstacles the LIDAR has hit so far in the episode (free
-space elsewhere, as a robot's own map is), which a student with memory could in principle match; it measures how
-much of the student-teacher gap the map explains (docs/learning.md, "How much of the teacher a student can see").
+it is made with the teacher's env arguments (:data:`TEACHERS`) on top of the student's own. ClutterNav-v0's
+``"committed"`` is the same planner keeping the turn its robot has begun where both ways round are about as long
+(:class:`PlannerNavigator`). ``"seen-map"`` and ``"in-range"`` (ClutterNav-v0, ClutterFly-v0) plan on only the
+obstacles the LIDAR has hit this episode, or hits in its current scan (:mod:`clutter_gym.training.known_map`):
+what a student with a memory, or without one, could in principle match. They measure how much of the
+student-teacher gap the map explains (docs/learning.md, "How much of the teacher a student can see").
 
 A teacher answers in the student's action space: the env's for ClutterNav-v0 and ClutterReach-v0; for
 ClutterFly-v0, the velocity the flight controller's inner loops fly (:data:`clutter_gym.training.residual`'s
@@ -27,10 +29,14 @@ import numpy as np
 
 #: Each env's teachers, the first its default, and the env arguments each one reads on top of the student's.
 TEACHERS: dict[str, dict[str, dict[str, Any]]] = {
-    "ClutterNav-v0": {"planner": {"subgoal_lookahead": 0.5}, "seen-map": {"subgoal_lookahead": 0.5}},
+    "ClutterNav-v0": {"planner": {"subgoal_lookahead": 0.5}, "committed": {"subgoal_lookahead": 0.5},
+                      "seen-map": {"subgoal_lookahead": 0.5}, "in-range": {"subgoal_lookahead": 0.5}},
     "ClutterReach-v0": {"planner": {"subgoal_lookahead": 0.1}},
-    "ClutterFly-v0": {"planner": {"subgoal_lookahead": 0.5}},
+    "ClutterFly-v0": {"planner": {"subgoal_lookahead": 0.5}, "seen-map": {"subgoal_lookahead": 0.5},
+                      "in-range": {"subgoal_lookahead": 0.5}},
 }
+#: radians: how much shorter the other way round may be before ClutterNav-v0's committed teachers turn it
+COMMIT = math.pi / 3
 #: ClutterReach-v0's pursuit gain on the subgoal (actions per radian), the map-based block's (ppo.yml).
 REACH_PURSUIT_GAIN = 15.0
 
@@ -56,79 +62,40 @@ class Teacher(ABC):
 
 class PlannerNavigator(Teacher):
     """ClutterNav-v0's planner reference: the potential field steering for the subgoal on the known layout's
-    planned path (:class:`~clutter_gym.training.baselines.PotentialFieldNavigator` with ``goal_key="subgoal"``)."""
+    planned path (:class:`~clutter_gym.training.baselines.PotentialFieldNavigator` with ``goal_key="subgoal"``).
 
-    def __init__(self, env: gym.Env) -> None:
+    With ``commit`` > 0 (radians) it keeps turning the way the robot turns (its yaw rate, the ``velocity``
+    entry) when the subgoal lies so far behind that the other way round is at most ``commit`` shorter: which way
+    the path leaves is the map's, but which way a robot already turning keeps turning is something its student can
+    see, so its labels stop flipping between hard left and hard right at the same view (docs/learning.md).
+    """
+
+    #: rad/s: a yaw rate below this is no turn to keep
+    TURNING = 0.1
+
+    def __init__(self, env: gym.Env, commit: float = 0.0, waypoint: bool = False) -> None:
         from clutter_gym.training.baselines import PotentialFieldNavigator
 
         self.field = PotentialFieldNavigator.for_env(env, goal_key="subgoal")
+        self.commit, self.waypoint = commit, waypoint
 
     def __call__(self, obs: dict[str, np.ndarray], info: dict[str, Any]) -> np.ndarray:
-        return self.field(obs)
+        return self._answer(obs)
 
+    def _answer(self, obs: dict[str, np.ndarray]) -> np.ndarray:
+        """For a student that picks its waypoint (``waypoint``), the subgoal's bearing in units of pi; else the
+        field's action towards the subgoal."""
+        if self.waypoint:
+            return np.array([math.atan2(float(obs["subgoal"][1]), float(obs["subgoal"][2])) / math.pi], np.float32)
+        return self._act(obs)
 
-class SeenMapNavigator(PlannerNavigator):
-    """The planner reference planning on the obstacles the LIDAR has hit so far this episode (every return is
-    matched to the obstacle within 5 cm of it; the arena's walls are known, as its size is), free space elsewhere.
-    Its plan is redone whenever a new obstacle is seen."""
-
-    #: metres: a return this close to an obstacle's footprint is taken as that obstacle seen
-    MATCH = 0.05
-
-    def __init__(self, env: gym.Env) -> None:
-        super().__init__(env)
-        self.env = env.unwrapped
-        lidar = next((s for s in self.env.sensors if s.name == "lidar"), None)
-        if lidar is None or lidar.config.n_channels != 1:
-            raise ValueError("the seen-map teacher needs a 2D LIDAR: 'lidar' in sensors and lidar_channels 1")
-        self.angles, self.max_range = np.asarray(lidar.config.angles), float(lidar.config.max_range)
-        self.lookahead = float(self.env.task.subgoal_lookahead)
-        self.reset()
-
-    def reset(self) -> None:
-        self.seen: frozenset[int] = frozenset()
-        self._planned: frozenset[int] | None = None
-        self._path = None
-
-    def __call__(self, obs: dict[str, np.ndarray], info: dict[str, Any]) -> np.ndarray:
-        from clutter_gym.tasks.navigate import SUBGOAL_PLAN_MARGIN, polar
-        from clutter_gym.worlds.floor.path import PathDistance
-        from clutter_gym.worlds.floor.scene import Scene
-
-        env = self.env
-        state = env.robot.state()
-        x, y, yaw = float(state.position[0]), float(state.position[1]), state.yaw
-        self.seen |= self._hit(np.asarray(info["lidar_ranges"], dtype=float), x, y, yaw)
-        if self.seen != self._planned:
-            scene = env.scene
-            known = Scene(tuple(scene.obstacles[i] for i in sorted(self.seen)), scene.start, scene.goal)
-            task = env.task
-            self._path = PathDistance(known, task.spec, task.robot_radius, plan_margin=SUBGOAL_PLAN_MARGIN)
-            self._planned = self.seen
-        point = self._path.waypoint(x, y, lookahead=self.lookahead)
-        return self.field({**obs, "subgoal": polar(point, x, y, yaw, self.lookahead)})
-
-    def _hit(self, ranges: np.ndarray, x: float, y: float, yaw: float) -> frozenset[int]:
-        """The obstacles within :attr:`MATCH` of a return of this scan."""
-        obstacles = self.env.scene.obstacles
-        hit = np.isfinite(ranges) & (ranges < self.max_range - 1e-3)
-        if not hit.any() or not obstacles:
-            return frozenset()
-        angle = self.angles[hit] + yaw
-        points = np.stack([x + ranges[hit] * np.cos(angle), y + ranges[hit] * np.sin(angle)], axis=1)
-        gaps = np.stack([_footprint_distance(points, o) for o in obstacles], axis=1)
-        nearest = gaps.argmin(axis=1)
-        return frozenset(int(i) for i in nearest[gaps[np.arange(len(points)), nearest] < self.MATCH])
-
-
-def _footprint_distance(points: np.ndarray, obstacle: Any) -> np.ndarray:
-    """(m,) distance from each of ``points`` (m, 2) to ``obstacle``'s footprint, metres (0 inside)."""
-    offset = points - np.asarray(obstacle.position[:2], dtype=float)
-    if obstacle.shape == "cylinder":
-        return np.maximum(np.linalg.norm(offset, axis=1) - obstacle.radius, 0.0)
-    c, s = math.cos(obstacle.yaw), math.sin(obstacle.yaw)
-    local = np.stack([c * offset[:, 0] + s * offset[:, 1], -s * offset[:, 0] + c * offset[:, 1]], axis=1)
-    return np.linalg.norm(np.maximum(np.abs(local) - 0.5 * np.asarray(obstacle.size[:2]), 0.0), axis=1)
+    def _act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
+        error, ahead = self.field.steer(obs)
+        yaw_rate = float(obs["velocity"][1])
+        if (self.commit and abs(yaw_rate) > self.TURNING and yaw_rate * error < 0.0
+                and abs(error) > math.pi - 0.5 * self.commit):
+            error -= math.copysign(2.0 * math.pi, error)  # the long way round, which it has begun
+        return self.field.command(error, ahead)
 
 
 class PlannerReacher(Teacher):
@@ -152,15 +119,23 @@ class PlannerFlyer(Teacher):
         return (self.flyer.velocity(obs) / self.flyer.max_speed).astype(np.float32)
 
 
-def make_teacher(env_id: str, name: str, env: gym.Env) -> Teacher:
-    """Teacher ``name`` of ``env_id`` on ``env`` (made with the student's and the teacher's env arguments).
+def make_teacher(env_id: str, name: str, env: gym.Env, space: str = "action") -> Teacher:
+    """Teacher ``name`` of ``env_id`` on ``env`` (made with the student's and the teacher's env arguments),
+    answering in the student's action ``space`` (:func:`clutter_gym.training.residual.residual_map`).
 
     Raises:
         ValueError: no such teacher (:func:`check_teacher`).
     """
     check_teacher(env_id, name)
+    if name in ("seen-map", "in-range"):
+        from clutter_gym.training.known_map import SeenMapFlyer, SeenMapNavigator
+
+        keep = name == "seen-map"
+        if env_id == "ClutterNav-v0":
+            return SeenMapNavigator(env, COMMIT, keep, space == "waypoint")
+        return SeenMapFlyer(env, keep)
     if env_id == "ClutterNav-v0":
-        return SeenMapNavigator(env) if name == "seen-map" else PlannerNavigator(env)
+        return PlannerNavigator(env, COMMIT if name == "committed" else 0.0, space == "waypoint")
     if env_id == "ClutterReach-v0":
         return PlannerReacher()
     return PlannerFlyer(env)

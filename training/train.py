@@ -83,7 +83,7 @@ def distilled_kwargs(config: TrainConfig) -> dict[str, Any]:
     """:class:`DistilledPPO`'s own arguments for the run of ``config``."""
     settings = config.distill
     return {"bc_weight": settings.bc_weight, "bc_steps": settings.bc_steps, "start_step": settings.steps,
-            "recorder": LabelRecorder()}
+            "recorder": LabelRecorder(), "action_bins": config.action_bins}
 
 
 def train(run: RunDir, progress: bool = True, timesteps: int | None = None, trust_pickle: bool = False,

@@ -8,31 +8,34 @@ from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
-from gymnasium.wrappers import FilterObservation
 import numpy as np
 from gymnasium import spaces
+from gymnasium.wrappers import FilterObservation
 from stable_baselines3.common.monitor import Monitor
 from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv, VecNormalize
 
 from clutter_gym.training import normalizer
+from clutter_gym.training.binned_actions import BinnedActions
 from clutter_gym.training.config import TrainConfig
 from clutter_gym.training.episode_stats import EpisodeStats
 from clutter_gym.training.layout_pool import LayoutPool
 from clutter_gym.training.memory import stack_frames
 from clutter_gym.training.residual import SubgoalResidual
+from clutter_gym.training.scan_memory import MemoryObservation
 from clutter_gym.training.worker_vec_env import WorkerVecEnv
 
 
 def make_env(env_id: str, make_kwargs: dict[str, Any], render_mode: str | None = None, layouts: int = 0,
              residual_gain: float = 0.0, residual_space: str = "action",
              residual_base: dict[str, float] | None = None, teacher: str = "",
-             keep: tuple[str, ...] | None = None) -> gym.Env:
+             keep: tuple[str, ...] | None = None, scan_memory: str = "", action_bins: int = 0) -> gym.Env:
     """One env with SB3's Monitor and the EpisodeStats wrapper (importable in a fresh worker process); with
     ``layouts`` > 0 it resets from a pool of that many layouts (:class:`LayoutPool`), with a base controller
     (``residual_gain`` > 0, or the velocity interface ``residual_space="velocity"``) it takes residual actions on
     it (:class:`SubgoalResidual`, with the base controller's ``residual_base`` gains); with a ``teacher`` (its env
     arguments already in ``make_kwargs``) its steps carry the teacher's labels (:class:`TeacherLabels`) and only
-    the observation entries ``keep`` reach the policy."""
+    the observation entries ``keep`` reach the policy; with a ``scan_memory`` its observations carry the LIDAR's
+    memory (:class:`MemoryObservation`); with ``action_bins`` its actions are bins (:class:`BinnedActions`)."""
     import clutter_gym  # noqa: F401  (registers the ids in worker processes)
 
     env = gym.make(env_id, render_mode=render_mode, **make_kwargs)
@@ -40,11 +43,15 @@ def make_env(env_id: str, make_kwargs: dict[str, Any], render_mode: str | None =
         env = LayoutPool(env, layouts)
     if residual_gain or residual_space != "action":
         env = SubgoalResidual(env, residual_gain, residual_space, residual_base)
+    if scan_memory:
+        env = MemoryObservation(env, scan_memory)
     if teacher:
         from clutter_gym.training.teachers import TeacherLabels, make_teacher
 
-        env = TeacherLabels(env, make_teacher(env_id, teacher, env))
+        env = TeacherLabels(env, make_teacher(env_id, teacher, env, residual_space))
         env = FilterObservation(env, list(keep or env.observation_space.spaces))
+    if action_bins:
+        env = BinnedActions(env, action_bins)
     return EpisodeStats(Monitor(env))
 
 
@@ -55,10 +62,11 @@ def build_vec_env(config: TrainConfig, seed: int) -> VecEnv:
     too, and its policy sees the student's entries and ``critic_inputs``."""
     keep = None
     if config.teacher.name:
-        keep = (*student_keys(config), *config.critic_inputs)
+        keep = (*student_keys(config), *(["memory"] if config.scan_memory else []), *config.critic_inputs)
     fns = [functools.partial(make_env, config.env_id, _train_kwargs(config, i), layouts=config.layouts_per_env,
                              residual_gain=config.residual_gain, residual_space=config.residual_space,
-                             residual_base=config.residual_base, teacher=config.teacher.name, keep=keep)
+                             residual_base=config.residual_base, teacher=config.teacher.name, keep=keep,
+                             scan_memory=config.scan_memory, action_bins=config.action_bins)
            for i in range(config.n_envs)]
     workers = env_workers(config)
     venv: VecEnv = DummyVecEnv(fns) if workers == 1 else WorkerVecEnv(fns, workers)
