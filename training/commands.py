@@ -39,13 +39,13 @@ def user_errors(*kinds: type[BaseException]) -> Iterator[None]:
 
 
 def run_errors() -> AbstractContextManager[None]:
-    """Treat what stops training on a run folder as one line: a file it cannot write (a full disk), or
-    normalisation statistics that are missing or in a pickle nobody said to trust. Other errors of training keep
-    their tracebacks."""
+    """Treat what stops training on a run folder as one line: a file it cannot write (a full disk), normalisation
+    statistics that are missing or in a pickle nobody said to trust, or a model that does not fit the run. Other
+    errors of training keep their tracebacks."""
     from clutter_gym.training.normalizer import UntrustedFileError
-    from clutter_gym.training.run_dir import RunWriteError
+    from clutter_gym.training.run_dir import IncompatibleRunError, RunWriteError
 
-    return user_errors(RunWriteError, UntrustedFileError, FileNotFoundError)
+    return user_errors(RunWriteError, UntrustedFileError, IncompatibleRunError, FileNotFoundError)
 
 
 def positive_int(text: str) -> int:

@@ -107,7 +107,8 @@ def test_an_older_run_loads_with_trust_pickle_and_acts_the_same(finished, tmp_pa
     from clutter_gym.training.vec_env import make_env
 
     # what clutter-gym 0.1 wrote: SB3's own pickle of the same statistics
-    legacy = wrap(DummyVecEnv([lambda: make_env(config.env_id, config.make_kwargs())]), run.model_dir / NORMALIZER_FILE)
+    legacy = wrap(DummyVecEnv([lambda: make_env(config.env_id, config.make_kwargs())]), run.model_dir / NORMALIZER_FILE,
+                  config)
     legacy.save(str(run.model_dir / LEGACY_NORMALIZER_FILE))
     legacy.close()
     (run.model_dir / NORMALIZER_FILE).unlink()
