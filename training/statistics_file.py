@@ -1,10 +1,10 @@
 """``vecnormalize.npz`` read without trusting it: the members' headers before their arrays, every value against the
 run's config.yaml and its env's observation space.
 
-The statistics decide what the policy sees, and a run folder can come from anyone. So before a member's array is
-read its ``.npy`` header is (an archive of a few megabytes can declare an array of gigabytes), and a member must
-hold what clutter-gym writes there: the settings string, and float arrays of the shapes the observation space
-gives, finite, with a positive count and no negative variance. The settings must be those this run's config asked
+The statistics decide what the policy sees, and a run folder can come from anyone. So each member's ``.npy``
+header is read before its array (an archive of a few megabytes can declare an array of gigabytes), and a member
+must hold what clutter-gym writes there: the settings string, and float arrays of the shapes the observation
+space gives, finite, with a positive count and no negative variance. The settings must be those this run's config asked
 for (``normalize_obs``, ``normalize_reward``, ``gamma``, SB3's clipping and epsilon, the normalised observation
 keys): a file that says ``norm_obs: false`` for a run trained on normalised observations would make its policy act
 on raw ones without a word. Every refusal is one ``ValueError`` line naming the file and the member or setting.

@@ -17,12 +17,13 @@ import zipfile
 import numpy as np
 import pytest
 import torch
+from helpers import Touch, copy_run
 
 from clutter_gym.cli import main
 from clutter_gym.training import load, policy_file
 from clutter_gym.training.config import config_for
 from clutter_gym.training.normalizer import NORMALIZER_FILE
-from clutter_gym.training.run_dir import MODEL_FILE, RunDir
+from clutter_gym.training.run_dir import MODEL_FILE
 from clutter_gym.training.train import start, train
 
 #: a run of two checkpoints (steps 64 and 128) and a final model, on 32 LIDAR rays
@@ -31,26 +32,11 @@ SMALL = {"timesteps": 128, "n_envs": 1, "checkpoint_every": 64, "final_eval_epis
          "ppo": {"n_steps": 64, "batch_size": 32, "n_epochs": 1}}
 
 
-class _Touch:
-    """Unpickling this creates a file: the stand-in for code a crafted pickle runs."""
-
-    def __init__(self, path):
-        self.path = str(path)
-
-    def __reduce__(self):
-        return (open, (self.path, "w"))
-
-
 @pytest.fixture(scope="module")
 def finished(tmp_path_factory):
     run = start(config_for("ClutterNav-v0", SMALL), tmp_path_factory.mktemp("statistics") / "run")
     train(run, progress=False)
     return run
-
-
-def _copy(run: RunDir, tmp_path) -> RunDir:
-    shutil.copytree(run.root, tmp_path / "copy")
-    return RunDir(tmp_path / "copy")
 
 
 def _rewrite(path, changes: dict) -> None:
@@ -105,7 +91,7 @@ def test_statistics_that_are_not_the_runs_are_refused_naming_file_and_field(fini
                                                                           message):
     """Before, the (1,)-shaped mean, the infinite variance, clip_obs -1, norm_obs false and the other settings
     loaded and evaluated with exit 0: the policy acted on observations it was never trained on."""
-    run = _copy(finished, tmp_path)
+    run = copy_run(finished, tmp_path)
     path = run.model_dir / NORMALIZER_FILE
     _rewrite(path, changes)
     line = _one_line_error(["eval", str(run.root), "--episodes", "1"], capsys)
@@ -117,7 +103,7 @@ def test_statistics_that_are_not_the_runs_are_refused_naming_file_and_field(fini
 @pytest.mark.parametrize("bad", [np.full(LIDAR, np.nan), np.array(["x"] * LIDAR)], ids=["NaN", "strings"])
 def test_resume_from_bad_statistics_names_them_and_goes_back_a_checkpoint(finished, tmp_path, capsys, bad):
     """NaN or string statistics in the newest checkpoint gave raw tracebacks on --resume."""
-    run = _copy(finished, tmp_path)
+    run = copy_run(finished, tmp_path)
     shutil.rmtree(run.model_dir)  # a run killed before its end: it resumes from its newest checkpoint
     (older, _), (newest_step, newest) = run.checkpoints()
     _rewrite(newest / NORMALIZER_FILE, {"obs/lidar/mean": bad})
@@ -141,10 +127,10 @@ def _replace_member(path, name: str, content: bytes) -> None:
 def test_a_pickle_in_the_optimizer_weights_is_named_in_one_line(finished, tmp_path, capsys):
     """A pickle in policy.optimizer.pth gave a raw UnpicklingError (torch's text, which suggests loading it without
     the guard); no code ran, and none runs now."""
-    run = _copy(finished, tmp_path)
+    run = copy_run(finished, tmp_path)
     marker = tmp_path / "pwned"
     for folder in (run.model_dir, run.checkpoints()[-1][1]):
-        _replace_member(folder / MODEL_FILE, "policy.optimizer.pth", pickle.dumps(_Touch(marker)))
+        _replace_member(folder / MODEL_FILE, "policy.optimizer.pth", pickle.dumps(Touch(marker)))
     line = _one_line_error(["eval", str(run.root), "--episodes", "1"], capsys)
     assert f"{run.model_dir / MODEL_FILE} is not a complete SB3 model file" in line
     assert "policy.optimizer.pth is not plain weights: torch's weights-only loader refused it" in line
@@ -157,7 +143,7 @@ def test_a_pickle_in_the_optimizer_weights_is_named_in_one_line(finished, tmp_pa
 
 
 def test_non_finite_weights_and_oversized_members_are_named(finished, tmp_path, capsys, monkeypatch):
-    run = _copy(finished, tmp_path)
+    run = copy_run(finished, tmp_path)
     path = run.model_dir / MODEL_FILE
     with zipfile.ZipFile(path) as archive:
         weights = torch.load(io.BytesIO(archive.read("policy.pth")), weights_only=True)
@@ -179,7 +165,7 @@ def test_weights_of_another_shape_are_one_line(finished, tmp_path, capsys):
                                                                                         "n_rays": 16}}),
                   tmp_path / "other")
     train(other, progress=False)
-    run = _copy(finished, tmp_path)
+    run = copy_run(finished, tmp_path)
     shutil.copy(other.model_dir / MODEL_FILE, run.model_dir / MODEL_FILE)
     line = _one_line_error(["eval", str(run.root), "--episodes", "1"], capsys)
     assert f"{run.model_dir / MODEL_FILE} does not fit the policy of this run's config.yaml" in line
@@ -188,7 +174,7 @@ def test_weights_of_another_shape_are_one_line(finished, tmp_path, capsys):
 def test_a_member_declaring_a_huge_array_is_refused_before_it_is_read(finished, tmp_path):
     """A 0.8 MB deflated member declaring 100 million floats (800 MB) was read whole: the issue's (400,000,000,)
     took eval past 2.6 GB. Its header is read first now, and peak memory stays under 1 GB."""
-    run = _copy(finished, tmp_path)
+    run = copy_run(finished, tmp_path)
     path = run.model_dir / NORMALIZER_FILE
     with zipfile.ZipFile(path) as archive:
         entries = {entry: archive.read(entry) for entry in archive.namelist()}
@@ -223,11 +209,11 @@ def test_a_member_declaring_a_huge_array_is_refused_before_it_is_read(finished, 
 
 def test_a_crafted_pickle_in_the_statistics_member_list_runs_nothing(finished, tmp_path):
     """An object array (a pickle inside the .npy) is refused by its header's dtype, not by unpickling it."""
-    run = _copy(finished, tmp_path)
+    run = copy_run(finished, tmp_path)
     path = run.model_dir / NORMALIZER_FILE
     marker = tmp_path / "pwned"
     payload = np.empty(LIDAR, dtype=object)
-    payload[0] = _Touch(marker)
+    payload[0] = Touch(marker)
     buffer = io.BytesIO()
     np.save(buffer, payload, allow_pickle=True)
     _replace_member(path, "obs/lidar/mean.npy", buffer.getvalue())
