@@ -236,4 +236,3 @@ def env_spaces(config: TrainConfig) -> tuple[spaces.Space, spaces.Space]:
 def stacked_space(space: spaces.Space, frame_stack: int) -> spaces.Space:
     """The space of a stack of ``frame_stack`` observations of ``space``, which the policy takes."""
     return StackedObservations(1, frame_stack, space).stacked_observation_space if frame_stack > 1 else space
-
