@@ -173,7 +173,7 @@ def test_weights_of_another_shape_are_one_line(finished, tmp_path, capsys):
 
 def test_a_member_declaring_a_huge_array_is_refused_before_it_is_read(finished, tmp_path):
     """A 0.8 MB deflated member declaring 100 million floats (800 MB) was read whole: the issue's (400,000,000,)
-    took eval past 2.6 GB. Its header is read first now, and peak memory stays under 1 GB."""
+    took eval past 2.6 GB. Its header is read first now, and load() allocates no more than it does on any run."""
     run = copy_run(finished, tmp_path)
     path = run.model_dir / NORMALIZER_FILE
     with zipfile.ZipFile(path) as archive:
@@ -192,19 +192,20 @@ def test_a_member_declaring_a_huge_array_is_refused_before_it_is_read(finished, 
                 member.write(zeros)
     assert path.stat().st_size < 1_000_000
     script = textwrap.dedent(f"""
-        import resource
+        import tracemalloc
         from clutter_gym.training import load
+        tracemalloc.start()  # numpy's arrays are traced; the process's own peak would count numba's compiling too
         try:
             load({str(run.root)!r})
         except ValueError as error:
             print(error)
-        print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024)
+        print(tracemalloc.get_traced_memory()[1])
         """)
     done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr[-3000:]
     message, peak = done.stdout.splitlines()[-2:]
     assert message.startswith(f"{path}: obs/lidar/mean is an array of shape ({count},)"), message
-    assert int(peak) < 1 << 30, f"peak memory {int(peak) / 2**20:.0f} MiB"
+    assert int(peak) < 1 << 28, f"load() allocated {int(peak) / 2**20:.0f} MiB at its peak"
 
 
 def test_a_crafted_pickle_in_the_statistics_member_list_runs_nothing(finished, tmp_path):
