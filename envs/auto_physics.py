@@ -14,6 +14,9 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+import numpy as np
+from scipy.spatial import cKDTree
+
 from clutter_gym.datatypes import Obstacle
 
 PHYSICS_MODES = ("auto", "fixed")
@@ -22,6 +25,8 @@ PHYSICS_MODES = ("auto", "fixed")
 TIERS = ((5, 10.0, 240.0, 100), (10, 100.0, 480.0, 200), (10, 1000.0, 960.0, 200))
 #: metres: a body whose bottom is this close to another's top, over it, rests on it
 RESTING = 1e-3
+#: bodies whose neighbours one k-d tree query lists at a time: bounds the lists held at once
+_CHUNK = 256
 
 
 @dataclass(frozen=True)
@@ -42,30 +47,46 @@ class PhysicsChoice:
         return {"physics_hz": self.physics_hz, "solver_iterations": self.solver_iterations, "reason": self.reason}
 
 
-def _rests_on(upper: Obstacle, lower: Obstacle) -> bool:
-    """``upper``'s bottom lies on ``lower``'s top and their footprints' enclosing circles overlap."""
-    top = lower.z + lower.size[2]
-    near = math.dist(upper.position, lower.position) < upper.radius + lower.radius
-    return abs(upper.z - top) <= RESTING and near
-
-
 def loads(obstacles: Sequence[Obstacle]) -> tuple[int, float]:
     """(the tallest column of movable bodies resting on one another, counted in bodies; the largest mass of a
     movable body over the mass of a movable body it rests on). A scene without such a pair gives (1, 0) or
-    (0, 0)."""
+    (0, 0).
+
+    A body rests on another when its bottom lies within :data:`RESTING` of the other's top, its bottom is higher
+    than the other's bottom, and their footprints' enclosing circles overlap. The second condition only matters
+    for bodies :data:`RESTING` thick or thinner (for any thicker one it follows from the first); it makes "rests
+    on" point upwards, so two thin bodies at one height rest on neither and there is no cycle. The columns are
+    then counted in one pass from the lowest body up, each body's from those under it, and the pairs come from a
+    k-d tree, so a scene of thousands of movable bodies costs milliseconds (docs/hard-cases.md).
+    """
     movable = [o for o in obstacles if o.movable]
-    below: dict[int, list[int]] = {i: [j for j, lower in enumerate(movable) if j != i and _rests_on(o, lower)]
-                                   for i, o in enumerate(movable)}
-    ratio = max((movable[i].mass / movable[j].mass for i, under in below.items() for j in under), default=0.0)
-    height: dict[int, int] = {}
-
-    def column(i: int) -> int:  # a body rests only on lower ones: the recursion ends
-        if i not in height:
-            height[i] = 1 + max((column(j) for j in below[i]), default=0)
-        return height[i]
-
-    tallest = max((column(i) for i in range(len(movable))), default=0)
-    return tallest, ratio
+    if len(movable) < 2:
+        return len(movable), 0.0
+    xy = np.array([o.position for o in movable], dtype=float)
+    bottom = np.array([o.z for o in movable], dtype=float)
+    top = bottom + np.array([o.size[2] for o in movable], dtype=float)
+    radius = np.array([o.radius for o in movable], dtype=float)
+    mass = np.array([o.mass for o in movable], dtype=float)
+    # A pair is within reach[i] in x and in y, and (z scaled) in height: the scale makes every reach cover at
+    # least RESTING in height, and at most twice that. The search is wide by a hair (rounding); the exact test
+    # below decides.
+    reach = radius + radius.max()
+    scale = reach.min() / RESTING
+    tree = cKDTree(np.column_stack((xy, top * scale)))
+    points = np.column_stack((xy, bottom * scale))
+    order = np.argsort(bottom, kind="stable")
+    height = np.ones(len(movable), dtype=np.int64)
+    ratio = 0.0
+    for chunk in np.array_split(order, -(-len(order) // _CHUNK)):
+        found = tree.query_ball_point(points[chunk], reach[chunk] * (1.0 + 1e-9), p=np.inf, return_sorted=False)
+        for i, near in zip(chunk, found):  # lowest first: every body under i has its column counted already
+            j = np.asarray(near, dtype=np.int64)
+            j = j[(np.abs(bottom[i] - top[j]) <= RESTING) & (bottom[j] < bottom[i])
+                  & (np.hypot(xy[j, 0] - xy[i, 0], xy[j, 1] - xy[i, 1]) < radius[i] + radius[j])]
+            if j.size:
+                height[i] = 1 + height[j].max()
+                ratio = max(ratio, float(mass[i] / mass[j].min()))
+    return int(height.max()), ratio
 
 
 def choose_physics(obstacles: Sequence[Obstacle], physics_hz: float, solver_iterations: int,

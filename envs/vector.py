@@ -11,7 +11,6 @@ autoreset, whatever the number of workers: the split changes the speed, never a 
 from __future__ import annotations
 
 import functools
-import multiprocessing as mp
 import os
 from collections.abc import Sequence
 from typing import Any
@@ -19,8 +18,9 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 from gymnasium.vector import AutoresetMode, SyncVectorEnv, VectorEnv
+from gymnasium.vector.utils import CloudpickleWrapper
 
-from clutter_gym.util.workers import blocks, gather, serve, stop_workers
+from clutter_gym.util.workers import DEFAULT_TIMEOUT, Workers, blocks, check_actions, serve
 
 
 def _block(env_id: str, count: int, kwargs: dict[str, Any]) -> SyncVectorEnv:
@@ -46,8 +46,8 @@ def _answer(block: SyncVectorEnv, cmd: str, data: Any) -> Any:
     raise NotImplementedError(f"worker command {cmd!r}")
 
 
-def _serve(remote: Any, parent_remote: Any, env_id: str, count: int, kwargs: dict[str, Any]) -> None:
-    serve(remote, parent_remote, functools.partial(_block, env_id, count, kwargs), _answer)
+def _serve(remote: Any, parent_remote: Any, env_id: str, count: int, kwargs: CloudpickleWrapper) -> None:
+    serve(remote, parent_remote, functools.partial(_block, env_id, count, kwargs.fn), _answer)
 
 
 def _concat(parts: Sequence[Any]) -> Any:
@@ -103,35 +103,37 @@ class BlockVectorEnv(VectorEnv):
         env_id: a registered env id.
         num_envs: number of envs, at least 1.
         workers: processes stepping them, this one included (1: all in this process).
-        start_method: multiprocessing start method of the worker processes (default: Python's, as for Gymnasium's
-            ``AsyncVectorEnv``; "forkserver" or "spawn" need the script's ``if __name__ == "__main__":`` guard).
+        start_method: multiprocessing start method of the worker processes (default: forkserver where there is
+            one, else spawn, as for the training's vector env: a fork of a process holding pybullet clients and
+            threads is unsafe). Both start the worker from a fresh interpreter that imports the calling script, so
+            a script that makes this env needs the ``if __name__ == "__main__":`` guard.
+        worker_timeout: seconds a worker may take over one answer (its first also waits for it to build its envs)
+            before it counts as stuck (default :data:`~clutter_gym.util.workers.DEFAULT_TIMEOUT`, far beyond any
+            reset; None: no limit).
         **kwargs: the env's keyword arguments (``max_episode_steps`` included), as ``gym.make`` takes them.
+
+    A worker that dies or stops answering raises :class:`~clutter_gym.util.workers.WorkerLostError` naming it, its
+    envs and how it ended; every later call raises the same, and ``close`` ends and reaps the workers whatever
+    their state.
     """
 
     metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP}
 
     def __init__(self, env_id: str, num_envs: int, workers: int | None = None, start_method: str | None = None,
-                 **kwargs: Any) -> None:
+                 worker_timeout: float | None = DEFAULT_TIMEOUT, **kwargs: Any) -> None:
         if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
             raise ValueError(f"num_envs must be an integer of at least 1, got {num_envs!r}")
         workers = min(os.cpu_count() or 1, int(num_envs)) if workers is None else workers
         self.blocks = blocks(int(num_envs), workers)
         self.sizes = [stop - start for start, stop in self.blocks]
-        ctx = mp.get_context(start_method)
-        self.remotes, self.processes = [], []
-        for size in self.sizes[1:]:  # started first: they build their envs while this process builds its own
-            remote, work_remote = ctx.Pipe()
-            process = ctx.Process(target=_serve, args=(work_remote, remote, env_id, size, kwargs), daemon=True)
-            process.start()  # daemon: never outlives a crashed parent
-            work_remote.close()
-            self.remotes.append(remote)
-            self.processes.append(process)
+        # started first: they build their envs while this process builds its own; the kwargs cloudpickled, as a
+        # fork would have passed them whatever they hold
+        self.workers = Workers(_serve, [(env_id, size, CloudpickleWrapper(kwargs)) for size in self.sizes[1:]],
+                               self.blocks[1:], start_method, worker_timeout)
         try:
             self.local = _block(env_id, self.sizes[0], kwargs)
         except BaseException:  # a bad env argument: the workers meet it too; none is left behind
-            for process in self.processes:
-                process.terminate()
-                process.join()
+            self.workers.close(grace=0.0)
             raise
         self.num_envs = int(num_envs)
         self.single_observation_space = self.local.single_observation_space
@@ -142,14 +144,19 @@ class BlockVectorEnv(VectorEnv):
         self.render_mode = self.local.render_mode
         self.closed = False
 
+    @property
+    def processes(self) -> list[Any]:
+        """The worker processes (``multiprocessing.Process``), one per block after the first."""
+        return self.workers.processes
+
     def _call_blocks(self, cmd: str, data: Sequence[Any]) -> list[Any]:
         """Send worker ``k`` (``k`` >= 1) ``(cmd, data[k])`` and answer ``data[0]`` here meanwhile; answers in block
         order."""
         if self.closed:
             raise RuntimeError("this vector env is closed")
-        for remote, item in zip(self.remotes, data[1:]):
-            remote.send((cmd, item))
-        return gather(self.remotes, lambda: _answer(self.local, cmd, data[0]))
+        for k, item in enumerate(data[1:]):
+            self.workers.send(k, cmd, item)
+        return self.workers.receive(range(len(data) - 1), lambda: _answer(self.local, cmd, data[0]))
 
     def reset(self, *, seed: int | Sequence[int | None] | None = None,
               options: dict[str, Any] | None = None) -> tuple[Any, dict[str, Any]]:
@@ -168,7 +175,7 @@ class BlockVectorEnv(VectorEnv):
         return _concat(obs), _merge_infos(infos, self.blocks, self.num_envs)
 
     def step(self, actions: Any) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
-        actions = np.asarray(actions)
+        actions = check_actions(actions, self.action_space.shape)
         results = self._call_blocks("step", [actions[start:stop] for start, stop in self.blocks])
         obs, rewards, terminations, truncations, infos = zip(*results)
         return (_concat(obs), np.concatenate(rewards), np.concatenate(terminations), np.concatenate(truncations),
@@ -195,11 +202,14 @@ class BlockVectorEnv(VectorEnv):
         return None if parts[0] is None else tuple(frame for part in parts for frame in part)
 
     def close_extras(self, **kwargs: Any) -> None:
+        """Close the envs here and in the workers, and end the workers (those that died or hang too)."""
         if self.closed:
             return
-        stop_workers(self.remotes, self.processes)
-        self.local.close()
-        self.closed = True
+        try:
+            self.workers.close()
+        finally:
+            self.closed = True
+            self.local.close()
 
 
 def make_block_vector_env(env_id: str) -> Any:

@@ -7,6 +7,7 @@ which pytest loads by itself and which is never imported.
 from __future__ import annotations
 
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -75,3 +76,21 @@ def report_tables(report: str) -> dict[str, list[list[str]]]:
         if "\n| " in body:
             tables[title] = markdown_rows(body[body.index("\n| ") + 1:].split("\n\n", 1)[0])
     return tables
+
+
+class Touch:
+    """Unpickling this creates a file: the stand-in for code a crafted pickle runs."""
+
+    def __init__(self, path):
+        self.path = str(path)
+
+    def __reduce__(self):
+        return (open, (self.path, "w"))
+
+
+def copy_run(run, tmp_path):
+    """A copy of the run folder of ``run`` (a ``RunDir``) in ``tmp_path / "copy"``, as a ``RunDir``, to tamper with."""
+    from clutter_gym.training.run_dir import RunDir  # imported here: most tests that use helpers need no training
+
+    shutil.copytree(run.root, tmp_path / "copy")
+    return RunDir(tmp_path / "copy")

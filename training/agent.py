@@ -245,6 +245,8 @@ def load(run_dir: str | Path, step: int | None = None, trust_pickle: bool = Fals
         FileNotFoundError: no run, model or checkpoint there (the message lists the checkpoints there are), or
             the normalisation statistics of a run trained with ``normalize_obs`` are missing.
         UntrustedFileError: the statistics are in a pickle and ``trust_pickle`` is False.
+        ValueError: the statistics are not what the run's config and its env's observations make (the message
+            names the file and the setting or statistic: :mod:`clutter_gym.training.statistics_file`).
         IncompatibleRunError: a run this version of clutter-gym cannot rebuild; the message names the
             version that wrote it.
     """
@@ -261,10 +263,11 @@ def load(run_dir: str | Path, step: int | None = None, trust_pickle: bool = Fals
     if statistics is None and config.ppo.normalize_obs:
         raise FileNotFoundError(f"{folder / NORMALIZER_FILE} is missing: {run.root} was trained on normalised "
                                 "observations, and its policy acts wrongly on raw ones")
-    observation_space, action_space = policy_spaces(config)
+    env_observation_space, action_space = env_spaces(config)
+    normalizer = None if statistics is None else detached(statistics, config, env_observation_space, action_space)
     try:
-        model = load_ppo(folder / MODEL_FILE, config, observation_space, action_space)
-        normalizer = None if statistics is None else detached(statistics, observation_space, action_space)
+        model = load_ppo(folder / MODEL_FILE, config, stacked_space(env_observation_space, config.frame_stack),
+                         action_space)
     except Exception as exc:  # zip, torch and SB3 raise many kinds; all mean "cannot rebuild this model here"
         versions = run.written_by()
         raise IncompatibleRunError(f"{folder} cannot be loaded ({type(exc).__name__}: {exc}); it was written by "
@@ -273,24 +276,30 @@ def load(run_dir: str | Path, step: int | None = None, trust_pickle: bool = Fals
     return Agent(run, config, model, normalizer, folder)
 
 
-def policy_spaces(config: TrainConfig) -> tuple[spaces.Space, spaces.Space]:
-    """The observation space the run's policy takes (a stack of ``frame_stack`` env observations) and its action
-    space, from the env its config makes."""
+def env_spaces(config: TrainConfig) -> tuple[spaces.Space, spaces.Space]:
+    """The space of one observation as the run's policy takes it, and its action space: the entries of the env the
+    run's config makes, with the LIDAR's ``memory`` of a run that keeps one and the critic's entries of a run with
+    ``critic_inputs`` (from the teacher's env as made: it is never reset here), and the bins of binned actions."""
     env = gym.make(config.env_id, **config.make_kwargs())
-    observation_space = env.observation_space
-    action_space = policy_action_space(env.action_space, config.residual_space)
-    env.close()
+    try:
+        observation_space, action_space = env.observation_space, policy_action_space(env.action_space,
+                                                                                    config.residual_space)
+    finally:
+        env.close()
     if config.action_bins:
         action_space = binned_space(action_space, config.action_bins)
+    extra: dict[str, spaces.Space] = {}
     if config.scan_memory:
-        size = _memory(config).size
-        observation_space = spaces.Dict({**observation_space.spaces, "memory": spaces.Box(0.0, 1.0, (size,),
-                                                                                        np.float32)})
-    if config.critic_inputs:  # the critic's entries, from the teacher's env as made (it is never reset here)
+        extra["memory"] = spaces.Box(0.0, 1.0, (_memory(config).size,), np.float32)
+    if config.critic_inputs:
         teacher_env = gym.make(config.env_id, **config.teacher_kwargs())
-        critic = {key: teacher_env.observation_space[key] for key in config.critic_inputs}
+        extra.update({key: teacher_env.observation_space[key] for key in config.critic_inputs})
         teacher_env.close()
-        observation_space = spaces.Dict({**observation_space.spaces, **critic})
-    if config.frame_stack > 1:
-        observation_space = StackedObservations(1, config.frame_stack, observation_space).stacked_observation_space
+    if extra:
+        observation_space = spaces.Dict({**observation_space.spaces, **extra})
     return observation_space, action_space
+
+
+def stacked_space(space: spaces.Space, frame_stack: int) -> spaces.Space:
+    """The space of a stack of ``frame_stack`` observations of ``space``, which the policy takes."""
+    return StackedObservations(1, frame_stack, space).stacked_observation_space if frame_stack > 1 else space

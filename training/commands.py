@@ -40,8 +40,8 @@ def user_errors(*kinds: type[BaseException]) -> Iterator[None]:
 
 def run_errors() -> AbstractContextManager[None]:
     """Treat what stops training on a run folder as one line: a file it cannot write (a full disk), normalisation
-    statistics that are missing or in a pickle nobody said to trust, or a folder it may not train in (a link out of
-    it). Other errors of training keep their tracebacks."""
+    statistics that are missing or in a pickle nobody said to trust, a folder it may not train in (a link out of
+    it), or a model that does not fit the run. Other errors of training keep their tracebacks."""
     from clutter_gym.training.normalizer import UntrustedFileError
     from clutter_gym.training.run_dir import IncompatibleRunError, RunWriteError
 

@@ -17,6 +17,7 @@ from stable_baselines3.common.callbacks import CallbackList
 from stable_baselines3.common.logger import configure
 from stable_baselines3.common.vec_env import VecEnv
 
+from clutter_gym.training.agent import env_spaces
 from clutter_gym.training.callbacks import BestPolicyKeeper, RunMonitor
 from clutter_gym.training.config import EVAL_SEED, TrainConfig
 from clutter_gym.training.distill import Distiller
@@ -24,7 +25,7 @@ from clutter_gym.training.evaluate import evaluate
 from clutter_gym.training.normalizer import NORMALIZER_FILE, normalizer_path, read_statistics
 from clutter_gym.training.policy_file import load_ppo, saved_step
 from clutter_gym.training.privileged import DistilledPPO, LabelRecorder, PrivilegedCriticPolicy
-from clutter_gym.training.run_dir import MODEL_FILE, RunDir
+from clutter_gym.training.run_dir import MODEL_FILE, IncompatibleRunError, RunDir
 from clutter_gym.training.vec_env import policy_name, training_env
 from clutter_gym.util.atomic import write_text_atomically
 
@@ -111,6 +112,7 @@ def train(run: RunDir, progress: bool = True, timesteps: int | None = None, trus
     Raises:
         FileNotFoundError: the statistics of a run trained with normalisation are missing from its newest model.
         UntrustedFileError: they are a pickle and ``trust_pickle`` is False.
+        IncompatibleRunError: the model to continue from does not fit the run's config (its weights' shapes).
         RunWriteError: a checkpoint or the final model could not be written.
         TrainingInterrupted: training was interrupted; the checkpoint of its step was written.
         IncompatibleRunError: the run cannot be read, or an entry of its folder is a symbolic link.
@@ -135,8 +137,11 @@ def train(run: RunDir, progress: bool = True, timesteps: int | None = None, trus
         if point is None:
             model = build_model(config, venv)
         else:
-            model = load_ppo(point[1] / MODEL_FILE, config, venv.observation_space, venv.action_space, env=venv,
-                             **(distilled_kwargs(config) if config.teacher.name else {}))
+            try:
+                model = load_ppo(point[1] / MODEL_FILE, config, venv.observation_space, venv.action_space, env=venv,
+                                 **(distilled_kwargs(config) if config.teacher.name else {}))
+            except ValueError as exc:
+                raise IncompatibleRunError(f"{point[1]} cannot be continued from: {exc}") from None
             model.set_random_seed(config.seed + done)
         model.set_logger(configure(str(run.tb_dir), ["tensorboard"]))
         if config.teacher.name and len(run.read_distill_rows()) < config.distill.rounds:
@@ -186,6 +191,7 @@ def resume_point(run: RunDir, config: TrainConfig, trust_pickle: bool = False) -
         UntrustedFileError: the statistics are a pickle and ``trust_pickle`` is False.
     """
     candidates = list(run.checkpoints())
+    observation_space = None  # the env's, made once a candidate holds statistics to check against it
     if run.is_finished():
         try:
             candidates.append((saved_step(run.model_dir / MODEL_FILE), run.model_dir))
@@ -200,7 +206,9 @@ def resume_point(run: RunDir, config: TrainConfig, trust_pickle: bool = False) -
             if saved_step(folder / MODEL_FILE) != step and folder != run.model_dir:
                 raise ValueError(f"its model.zip is not of step {step}")
             if statistics is not None:
-                read_statistics(statistics)
+                if observation_space is None:
+                    observation_space = env_spaces(config)[0]
+                read_statistics(statistics, config, observation_space)
         except ValueError as exc:
             if folder == run.model_dir:  # the final model is kept: it is what load() and eval use
                 _say(f"{folder} cannot be continued from ({exc}); trying the newest checkpoint")

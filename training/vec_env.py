@@ -8,7 +8,6 @@ from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
-import numpy as np
 from gymnasium import spaces
 from gymnasium.wrappers import FilterObservation
 from stable_baselines3.common.monitor import Monitor
@@ -22,6 +21,7 @@ from clutter_gym.training.layout_pool import LayoutPool
 from clutter_gym.training.memory import stack_frames
 from clutter_gym.training.residual import SubgoalResidual
 from clutter_gym.training.scan_memory import MemoryObservation
+from clutter_gym.training.statistics_file import float_keys
 from clutter_gym.training.worker_vec_env import WorkerVecEnv
 
 
@@ -92,13 +92,6 @@ def env_workers(config: TrainConfig) -> int:
     return config.env_workers or min(config.n_envs, os.cpu_count() or 1)
 
 
-def float_keys(space: spaces.Space) -> list[str] | None:
-    """Keys of the float Box entries of a Dict space (images stay unnormalised); None for a non-Dict space."""
-    if not isinstance(space, spaces.Dict):
-        return None
-    return [k for k, s in space.spaces.items() if isinstance(s, spaces.Box) and np.issubdtype(s.dtype, np.floating)]
-
-
 def normalize(venv: VecEnv, config: TrainConfig) -> VecEnv:
     """Wrap in VecNormalize when the config asks for observation or reward normalisation."""
     ppo = config.ppo
@@ -113,7 +106,7 @@ def training_env(config: TrainConfig, seed: int, normalizer_file: Path | None = 
     ``normalizer_file``, a ``vecnormalize.npz`` or a trusted older ``.pkl``, when continuing a run) and the frame
     stack, in that order."""
     venv = build_vec_env(config, seed)
-    venv = normalize(venv, config) if normalizer_file is None else normalizer.wrap(venv, normalizer_file)
+    venv = normalize(venv, config) if normalizer_file is None else normalizer.wrap(venv, normalizer_file, config)
     return stack_frames(venv, config.frame_stack)
 
 

@@ -22,7 +22,7 @@ from gymnasium import spaces
 from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv
 from stable_baselines3.common.vec_env.base_vec_env import CloudpickleWrapper, VecEnvIndices, VecEnvObs, VecEnvStepReturn
 
-from clutter_gym.util.workers import blocks, context, gather, serve, stop_workers
+from clutter_gym.util.workers import DEFAULT_TIMEOUT, Workers, blocks, check_actions, serve
 
 
 def _answer(envs: DummyVecEnv, cmd: str, data: Any) -> Any:
@@ -69,42 +69,44 @@ def _concat(parts: Sequence[VecEnvObs], space: spaces.Space) -> VecEnvObs:
 
 class WorkerVecEnv(VecEnv):
     """``len(env_fns)`` envs over ``workers`` workers in contiguous blocks (sizes differ by at most 1): the first
-    block in this process, each other block in a worker process of its own (``workers - 1`` processes)."""
+    block in this process, each other block in a worker process of its own (``workers - 1`` processes), started in
+    :func:`clutter_gym.util.workers.context`. A worker that dies or gives no answer within ``worker_timeout`` seconds
+    (None: no limit) raises :class:`~clutter_gym.util.workers.WorkerLostError` naming it, and ``close`` ends and
+    reaps the workers whatever their state."""
 
-    def __init__(self, env_fns: list[Callable[[], gym.Env]], workers: int, start_method: str | None = None) -> None:
+    def __init__(self, env_fns: list[Callable[[], gym.Env]], workers: int, start_method: str | None = None,
+                 worker_timeout: float | None = DEFAULT_TIMEOUT) -> None:
         self.blocks = blocks(len(env_fns), workers)
-        ctx = context(start_method)
-        self.remotes, self.processes = [], []
-        for start, stop in self.blocks[1:]:  # started first: they build their envs while this process builds its own
-            remote, work_remote = ctx.Pipe()
-            make = CloudpickleWrapper(functools.partial(DummyVecEnv, env_fns[start:stop]))
-            # daemon: never outlive a crashed parent
-            process = ctx.Process(target=_serve, args=(work_remote, remote, make), daemon=True)
-            process.start()
-            work_remote.close()
-            self.remotes.append(remote)
-            self.processes.append(process)
-        self.local = DummyVecEnv(env_fns[: self.blocks[0][1]])
-        self.waiting, self.closed = False, False
+        # started first: they build their envs while this process builds its own
+        makes = [(CloudpickleWrapper(functools.partial(DummyVecEnv, env_fns[start:stop])),)
+                 for start, stop in self.blocks[1:]]
+        self.workers = Workers(_serve, makes, self.blocks[1:], start_method, worker_timeout)
+        try:
+            self.local = DummyVecEnv(env_fns[: self.blocks[0][1]])
+        except BaseException:
+            self.workers.close(grace=0.0)
+            raise
+        self.processes = self.workers.processes
+        self.closed = False
         self._local_actions: np.ndarray | None = None
         super().__init__(len(env_fns), self.local.observation_space, self.local.action_space)
 
     def _call(self, cmd: str, data: Sequence[Any]) -> list[Any]:
         """Send worker ``k`` (``k`` >= 1) ``(cmd, data[k])``, answer ``data[0]`` here meanwhile; answers in
         worker order."""
-        for remote, item in zip(self.remotes, data[1:]):
-            remote.send((cmd, item))
-        return gather(self.remotes, lambda: _answer(self.local, cmd, data[0]))
+        for k, item in enumerate(data[1:]):
+            self.workers.send(k, cmd, item)
+        return self.workers.receive(range(len(data) - 1), lambda: _answer(self.local, cmd, data[0]))
 
     def step_async(self, actions: np.ndarray) -> None:
-        for remote, (start, stop) in zip(self.remotes, self.blocks[1:]):
-            remote.send(("step", actions[start:stop]))
+        actions = check_actions(actions, (self.num_envs, *self.action_space.shape))
+        for k, (start, stop) in enumerate(self.blocks[1:]):
+            self.workers.send(k, "step", actions[start:stop])
         self._local_actions = actions[: self.blocks[0][1]]
-        self.waiting = True
 
     def step_wait(self) -> VecEnvStepReturn:
-        self.waiting = False
-        results = gather(self.remotes, lambda: _answer(self.local, "step", self._local_actions))
+        results = self.workers.receive(range(len(self.blocks) - 1),
+                                       lambda: _answer(self.local, "step", self._local_actions))
         obs, rewards, dones, infos, reset_infos = zip(*results)
         self.reset_infos = _flat(reset_infos)
         return _concat(obs, self.observation_space), np.concatenate(rewards), np.concatenate(dones), _flat(infos)
@@ -119,14 +121,14 @@ class WorkerVecEnv(VecEnv):
         return _concat(obs, self.observation_space)
 
     def close(self) -> None:
+        """Close the envs here and in the workers, and end the workers (those that died or hang too)."""
         if self.closed:
             return
-        if self.waiting:
-            for remote in self.remotes:
-                remote.recv()
-        stop_workers(self.remotes, self.processes)
-        self.local.close()
-        self.closed = True
+        try:
+            self.workers.close()
+        finally:
+            self.closed = True
+            self.local.close()
 
     def _ask(self, cmd: str, indices: VecEnvIndices, make_data: Callable[[list[int]], Any]) -> list[Any]:
         """Send ``cmd`` to the workers holding ``indices``; answers in the order of ``indices``."""
@@ -137,9 +139,9 @@ class WorkerVecEnv(VecEnv):
             by_worker.setdefault(w, []).append(i)
         asked = [w for w in by_worker if w > 0]
         for w in asked:
-            self.remotes[w - 1].send((cmd, make_data([i - self.blocks[w][0] for i in by_worker[w]])))
+            self.workers.send(w - 1, cmd, make_data([i - self.blocks[w][0] for i in by_worker[w]]))
         local = (lambda: _answer(self.local, cmd, make_data(by_worker[0]))) if 0 in by_worker else None
-        replies = gather([self.remotes[w - 1] for w in asked], local)
+        replies = self.workers.receive([w - 1 for w in asked], local)
         answers: dict[int, Any] = {}
         for w, reply in zip(([0] if local else []) + asked, replies):
             members = by_worker[w]

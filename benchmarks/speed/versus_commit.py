@@ -17,6 +17,7 @@ Needs git and the commit in this repository; the commit's package is copied, not
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import re
 import shutil
@@ -26,6 +27,7 @@ import tempfile
 import time
 import warnings
 from pathlib import Path
+from types import ModuleType
 
 import gymnasium as gym
 import numpy as np
@@ -51,6 +53,18 @@ def build_base(commit: str, folder: Path) -> None:
     for path in (site / BASE).rglob("*.py"):
         path.write_text(re.sub(r"\bclutter_gym\b", BASE, path.read_text()))
     sys.path.insert(0, str(site))
+
+
+def import_base(module: str) -> ModuleType:
+    """``module`` of the package :func:`build_base` made (``clutter_gym_base.<module>``), imported without its env
+    ids replacing this tree's: what makes envs after this makes this tree's."""
+    ours = dict(gym.registry)
+    with warnings.catch_warnings():  # the base package registers the same ids over ours
+        warnings.simplefilter("ignore")
+        imported = importlib.import_module(f"{BASE}.{module}")
+    gym.registry.clear()
+    gym.registry.update(ours)
+    return imported
 
 
 def make_pair(env_id: str, kwargs: dict) -> dict[str, gym.Env]:

@@ -49,7 +49,7 @@ def test_a_loaded_stacking_agent_acts_as_the_training_pipeline(stacked_run):
     agent = load(stacked_run.root)
     config = agent.config
     reference = normalizer.wrap(DummyVecEnv([functools.partial(make_env, config.env_id, config.make_kwargs())]),
-                                agent.folder / NORMALIZER_FILE)
+                                agent.folder / NORMALIZER_FILE, config)
     reference.training, reference.norm_reward = False, False
     reference = VecFrameStack(reference, config.frame_stack)
     env = agent.make_env()

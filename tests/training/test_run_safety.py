@@ -14,6 +14,8 @@ import zipfile
 
 import numpy as np
 import pytest
+from helpers import Touch as _Touch
+from helpers import copy_run as _copy  # the names this file's tests use
 
 from clutter_gym.cli import main
 from clutter_gym.training import load
@@ -26,26 +28,11 @@ TINY = {"timesteps": 768, "n_envs": 1, "checkpoint_every": 384, "final_eval_epis
         "env_kwargs": {"obstacle_density": 0.05, "n_rays": 32}, "ppo": {"n_steps": 64, "batch_size": 32, "n_epochs": 1}}
 
 
-class _Touch:
-    """Unpickling this creates a file: the stand-in for code a crafted pickle runs."""
-
-    def __init__(self, path):
-        self.path = str(path)
-
-    def __reduce__(self):
-        return (open, (self.path, "w"))
-
-
 @pytest.fixture(scope="module")
 def finished(tmp_path_factory):
     run = start(config_for("ClutterNav-v0", TINY), tmp_path_factory.mktemp("safety") / "run")
     train(run, progress=False)
     return run
-
-
-def _copy(run: RunDir, tmp_path) -> RunDir:
-    shutil.copytree(run.root, tmp_path / "copy")
-    return RunDir(tmp_path / "copy")
 
 
 def _eval(run: RunDir, *extra: str) -> list[str]:
@@ -107,7 +94,8 @@ def test_an_older_run_loads_with_trust_pickle_and_acts_the_same(finished, tmp_pa
     from clutter_gym.training.vec_env import make_env
 
     # what clutter-gym 0.1 wrote: SB3's own pickle of the same statistics
-    legacy = wrap(DummyVecEnv([lambda: make_env(config.env_id, config.make_kwargs())]), run.model_dir / NORMALIZER_FILE)
+    legacy = wrap(DummyVecEnv([lambda: make_env(config.env_id, config.make_kwargs())]), run.model_dir / NORMALIZER_FILE,
+                  config)
     legacy.save(str(run.model_dir / LEGACY_NORMALIZER_FILE))
     legacy.close()
     (run.model_dir / NORMALIZER_FILE).unlink()
