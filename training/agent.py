@@ -143,7 +143,8 @@ class Agent:
         try:
             for what, trained, built in (("observation", self.observation_space, env.observation_space),
                                          ("action", self.model.action_space,
-                                          policy_action_space(env.action_space, self.config.residual_space))):
+                                          policy_action_space(env.action_space, self.config.residual_space,
+                                                              self.config.env_id))):
                 if _shapes(trained) != _shapes(built):
                     raise ValueError(f"these settings give {what}s of shape {_shapes(built)}; the policy of "
                                      f"{self.run.root} was trained on {_shapes(trained)}")
@@ -197,7 +198,8 @@ def _residual(config: TrainConfig):
     """The run's residual on its base controller; ClutterNav's and mapless ClutterReach's are built on an env made
     with the run's settings (they read its LIDAR or its proximity readings)."""
     mapless = not config.env_kwargs.get("subgoal_lookahead")
-    reads_env = config.env_id == "ClutterNav-v0" or mapless and config.env_id == "ClutterReach-v0"
+    reads_env = (config.env_id == "ClutterNav-v0" or mapless and config.env_id == "ClutterReach-v0"
+                 or config.residual_space == "waypoint")
     env = gym.make(config.env_id, **config.make_kwargs()) if reads_env else None
     try:
         pursuit = subgoal_pursuit(config.env_id, config.residual_gain, env, mapless, config.residual_space,
@@ -282,8 +284,8 @@ def env_spaces(config: TrainConfig) -> tuple[spaces.Space, spaces.Space]:
     ``critic_inputs`` (from the teacher's env as made: it is never reset here), and the bins of binned actions."""
     env = gym.make(config.env_id, **config.make_kwargs())
     try:
-        observation_space, action_space = env.observation_space, policy_action_space(env.action_space,
-                                                                                    config.residual_space)
+        observation_space = env.observation_space
+        action_space = policy_action_space(env.action_space, config.residual_space, config.env_id)
     finally:
         env.close()
     if config.action_bins:

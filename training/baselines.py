@@ -77,6 +77,9 @@ class PotentialFieldNavigator:
     def __call__(self, obs: Mapping[str, np.ndarray]) -> np.ndarray:
         return self.command(*self.steer(obs))
 
+    #: what the action entries -1..1 of a policy picking this field's waypoint span: its bearing, radians
+    waypoint_scales = (math.pi,)
+
     def toward(self, obs: Mapping[str, np.ndarray], bearing: float) -> np.ndarray:
         """The action steering for a waypoint at ``bearing`` (radians from the robot's heading, counter-clockwise)
         instead of the direction the goal entry gives; the LIDAR's push and the speed rule are the field's."""

@@ -106,8 +106,8 @@ def _footprint_distance(points: np.ndarray, obstacle: Any) -> np.ndarray:
 class SeenMapFlyer(PlannerFlyer):
     """ClutterFly-v0's planner reference on the obstacles its LIDAR has hit."""
 
-    def __init__(self, env: gym.Env, keep: bool) -> None:
-        super().__init__(env)
+    def __init__(self, env: gym.Env, keep: bool, waypoint: bool = False) -> None:
+        super().__init__(env, waypoint)
         self.env = env.unwrapped
         lidar = _lidar(env, None)
         c = lidar.config

@@ -38,6 +38,9 @@ MAPLESS_ENVS = ("ClutterNav-v0", "ClutterReach-v0", "ClutterFly-v0")
 RESIDUAL_SPACES = ("action", "velocity", "waypoint")
 #: Turn gain of ClutterNav-v0's potential field when a policy picks its waypoint (its own default).
 TURN_GAIN = 1.5
+#: The angles of a waypoint a policy picks (``residual_space="waypoint"``), as the radians its action entries -1..1
+#: span: ClutterNav-v0's bearing; ClutterFly-v0's azimuth and elevation, body frame.
+WAYPOINT_SCALES = {"ClutterNav-v0": (math.pi,), "ClutterFly-v0": (math.pi, math.pi / 2)}
 #: Yaw rate per radian between the nose and the velocity commanded, 1/s, of the velocity residual's flyer.
 FACING_GAIN = 2.0
 #: The gains of ClutterFly-v0's flyer a run may set (``residual_base``), each in (0, :data:`MAX_BASE_GAIN`]; its
@@ -78,6 +81,12 @@ def subgoal_pursuit(env_id: str, gain: float, env: gym.Env | None = None, maples
         if env is None:
             raise ValueError("ClutterReach-v0's proximity field needs the env, for its control mode and readings")
         return ProximityFieldReacher.for_env(env, attraction=gain)
+    if env_id == "ClutterFly-v0" and space == "waypoint":
+        from clutter_gym.training.field_flyer import FieldFlyer
+
+        if env is None:
+            raise ValueError("ClutterFly-v0's field flyer needs the env, for its LIDAR's beams and range")
+        return FieldFlyer.for_env(env)
     if env_id == "ClutterFly-v0":
         from clutter_gym.training.baselines import CascadedFlyer
 
@@ -95,9 +104,9 @@ def check_residual_space(env_id: str, space: str) -> None:
     if space == "velocity" and env_id != "ClutterFly-v0":
         raise ValueError(f"residual_space 'velocity' is ClutterFly-v0's (a residual on its flyer's velocity "
                          f"command), got {env_id!r}")
-    if space == "waypoint" and env_id != "ClutterNav-v0":
-        raise ValueError(f"residual_space 'waypoint' is ClutterNav-v0's (the bearing its potential field steers "
-                         f"for), got {env_id!r}")
+    if space == "waypoint" and env_id not in WAYPOINT_SCALES:
+        raise ValueError(f"residual_space 'waypoint' is {' and '.join(WAYPOINT_SCALES)}'s (the direction their "
+                         f"LIDAR potential fields steer for), got {env_id!r}")
 
 
 def check_residual_base(env_id: str, base: dict[str, float]) -> None:
@@ -163,8 +172,10 @@ def residual_map(pursuit: Pursuit, space: str = "action") -> Callable[[dict[str,
     if space == "action":
         return lambda obs, action: residual_action(obs, action, pursuit)
     if space == "waypoint":
+        scales = np.asarray(pursuit.waypoint_scales)
+
         def steer(obs: dict[str, np.ndarray], action: np.ndarray) -> np.ndarray:
-            return pursuit.toward(obs, math.pi * float(np.clip(action[0], -1.0, 1.0)))
+            return pursuit.toward(obs, *(scales * np.clip(action, -1.0, 1.0)))
         return lambda obs, action: _rows(obs, action, steer)
     from clutter_gym.training.baselines import _capped
 
@@ -174,12 +185,13 @@ def residual_map(pursuit: Pursuit, space: str = "action") -> Callable[[dict[str,
     return act
 
 
-def policy_action_space(env_action_space: gym.spaces.Box, space: str = "action") -> gym.spaces.Box:
-    """The action space of a residual policy in ``space`` on an env with ``env_action_space``."""
+def policy_action_space(env_action_space: gym.spaces.Box, space: str = "action",
+                        env_id: str = "ClutterNav-v0") -> gym.spaces.Box:
+    """The action space of a residual policy in ``space`` on ``env_id`` with ``env_action_space``."""
     if space == "velocity":
         return gym.spaces.Box(-1.0, 1.0, (3,), np.float32)
     if space == "waypoint":
-        return gym.spaces.Box(-1.0, 1.0, (1,), np.float32)
+        return gym.spaces.Box(-1.0, 1.0, (len(WAYPOINT_SCALES[env_id]),), np.float32)
     return env_action_space
 
 
@@ -209,7 +221,7 @@ class SubgoalResidual(gym.Wrapper):
         self.gain = gain
         self.pursuit = subgoal_pursuit(env_id, gain, env, mapless=mapless, space=space, base=base)
         self.act = residual_map(self.pursuit, space)
-        self.action_space = policy_action_space(env.action_space, space)
+        self.action_space = policy_action_space(env.action_space, space, env_id)
         self._obs: dict[str, np.ndarray] | None = None
 
     def reset(self, **kwargs: Any) -> tuple[Any, dict]:

@@ -108,14 +108,20 @@ class PlannerReacher(Teacher):
 
 class PlannerFlyer(Teacher):
     """ClutterFly-v0's planner reference: the cascaded position controller's velocity towards the subgoal on the
-    shortest path through the known layout, in units of its top speed (the student's velocity commands)."""
+    shortest path through the known layout, in units of its top speed (the student's velocity commands); or, for a
+    student that picks its waypoint (``waypoint``), the subgoal's azimuth and elevation in units of pi and pi / 2."""
 
-    def __init__(self, env: gym.Env) -> None:
+    def __init__(self, env: gym.Env, waypoint: bool = False) -> None:
         from clutter_gym.training.baselines import CascadedFlyer
 
         self.flyer = CascadedFlyer.nominal("subgoal")
+        self.waypoint = waypoint
 
     def __call__(self, obs: dict[str, np.ndarray], info: dict[str, Any]) -> np.ndarray:
+        if self.waypoint:
+            x, y, z = (float(v) for v in obs["subgoal"][:3])
+            return np.array([math.atan2(y, x) / math.pi, math.atan2(z, math.hypot(x, y)) / (math.pi / 2)],
+                            dtype=np.float32)
         return (self.flyer.velocity(obs) / self.flyer.max_speed).astype(np.float32)
 
 
@@ -133,12 +139,12 @@ def make_teacher(env_id: str, name: str, env: gym.Env, space: str = "action") ->
         keep = name == "seen-map"
         if env_id == "ClutterNav-v0":
             return SeenMapNavigator(env, COMMIT, keep, space == "waypoint")
-        return SeenMapFlyer(env, keep)
+        return SeenMapFlyer(env, keep, space == "waypoint")
     if env_id == "ClutterNav-v0":
         return PlannerNavigator(env, COMMIT if name == "committed" else 0.0, space == "waypoint")
     if env_id == "ClutterReach-v0":
         return PlannerReacher()
-    return PlannerFlyer(env)
+    return PlannerFlyer(env, space == "waypoint")
 
 
 class TeacherLabels(gym.Wrapper):

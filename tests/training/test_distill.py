@@ -151,9 +151,49 @@ def test_a_loaded_student_acts_from_an_env_whose_map_based_parts_are_switched_of
 
 
 def test_a_teacher_the_env_does_not_have_is_refused_by_name():
-    with pytest.raises(ValueError, match=r"teacher.name must be one of \['planner', 'seen-map'\]"):
+    with pytest.raises(ValueError, match=r"teacher.name must be one of \['committed', 'in-range', 'planner', "
+                                         r"'seen-map'\]"):
         config_for("ClutterNav-v0", {"teacher": {"name": "oracle"}})
     with pytest.raises(ValueError, match="critic_inputs needs a teacher"):
         config_for("ClutterNav-v0", {"critic_inputs": ["subgoal"]})
     with pytest.raises(ValueError, match="distill.rounds must be an integer in"):
         config_for("ClutterNav-v0", {"teacher": {"name": "planner"}, "distill": {"rounds": 0}})
+
+
+def test_a_waypoint_student_is_labelled_with_the_subgoals_bearing_and_steers_the_field_there(make_env):
+    """ClutterNav-v0's waypoint interface: the label is the planner's subgoal bearing in units of pi, and the field
+    steering for a bearing equal to the goal's acts as the field on the goal."""
+    import math
+
+    from clutter_gym.training.residual import SubgoalResidual
+
+    env = make_env("ClutterNav-v0", **{**SMALL, "subgoal_lookahead": 0.5})
+    wrapped = SubgoalResidual(env, 0.0, space="waypoint")
+    assert wrapped.action_space.shape == (1,)
+    labelled = TeacherLabels(wrapped, make_teacher("ClutterNav-v0", "planner", wrapped, "waypoint"))
+    obs, _ = labelled.reset(seed=4)
+    field = PotentialFieldNavigator.for_env(env)
+    goal_bearing = math.atan2(float(obs["goal"][1]), float(obs["goal"][2]))
+    np.testing.assert_allclose(field.toward(obs, goal_bearing), field(obs), atol=1e-6)
+    _, _, _, _, info = labelled.step(np.array([goal_bearing / math.pi], dtype=np.float32))
+    subgoal = obs["subgoal"]
+    np.testing.assert_allclose(info["teacher_action"], [math.atan2(subgoal[1], subgoal[2]) / math.pi], rtol=1e-6)
+
+
+def test_the_seen_map_teacher_knows_more_as_it_sees_more_and_the_in_range_one_only_the_last_scan(make_env):
+    kwargs = {"sensors": ["lidar"], "obstacle_density": 0.2, "reverse": False, "subgoal_lookahead": 0.5}
+    known = {}
+    for name in ("seen-map", "in-range"):
+        env = make_env("ClutterNav-v0", **kwargs)
+        labelled = TeacherLabels(env, make_teacher("ClutterNav-v0", name, env), teacher_share=1.0)
+        labelled.reset(seed=7)
+        sizes = []
+        for _ in range(60):
+            *_, terminated, truncated, _ = labelled.step(np.zeros(2, dtype=np.float32))
+            sizes.append(len(labelled.teacher.known.seen))
+            if terminated or truncated:
+                break
+        known[name] = sizes
+    assert known["seen-map"] == sorted(known["seen-map"]) and known["seen-map"][-1] > known["seen-map"][0]
+    assert all(s <= k for s, k in zip(known["in-range"], known["seen-map"]))
+    assert known["in-range"] != sorted(known["in-range"])  # obstacles leave the last scan as the robot moves

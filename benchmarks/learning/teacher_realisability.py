@@ -1,0 +1,69 @@
+"""How much of a privileged teacher a sensor-reading student could match: each teacher drives the student's env
+(its shipped ``sensors`` settings) on the held-out layouts, when it plans on the whole layout (``planner``), on
+the obstacles its LIDAR has hit this episode (``seen-map``: what a student with a memory could know), or on the
+hits of its current scan alone (``in-range``: what a memoryless student sees). The gap between the last two rows
+and the first is the part of the student-teacher gap that no imitation can close without memory, or at all.
+
+    python -m benchmarks.learning.teacher_realisability --env ClutterNav-v0 --episodes 100
+    python -m benchmarks.learning.teacher_realisability --env ClutterFly-v0 --episodes 50 --levels 0.05
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import gymnasium as gym
+import numpy as np
+
+import clutter_gym  # noqa: F401  (registers the envs)
+from benchmarks.harness import table_header
+from clutter_gym.training.config import EVAL_SEED, config_for, read_hyperparams_file, user_settings
+from clutter_gym.training.evaluate import rollouts, summarize
+from clutter_gym.training.teachers import TEACHERS, TeacherLabels, make_teacher
+
+LEVELS = {"ClutterNav-v0": ("obstacle_density", (0.05, 0.12, 0.2)), "ClutterFly-v0": ("obstacle_density", (0.05,)),
+          "ClutterReach-v0": ("n_obstacles", (6,))}
+
+
+def drive(env_id: str, teacher: str, level: tuple[str, float], episodes: int, noise: str = "none") -> dict:
+    """The teacher's own episodes in the student's env at one clutter level: the evaluation summary's metrics."""
+    config = config_for(env_id, user_settings(read_hyperparams_file("sensors"), env_id))
+    kwargs = {**config.make_kwargs(noise), level[0]: level[1], **TEACHERS[env_id][teacher]}
+    env = gym.make(env_id, **kwargs)
+    labelled = TeacherLabels(env, make_teacher(env_id, teacher, env), teacher_share=1.0)
+    idle = np.zeros(env.action_space.shape, dtype=np.float32)  # ignored: the teacher drives every episode
+    try:
+        rows = rollouts(labelled, lambda obs, state: (idle, state), episodes, EVAL_SEED)
+    finally:
+        env.close()
+    return summarize(rows)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--env", default="ClutterNav-v0", choices=sorted(TEACHERS))
+    parser.add_argument("--episodes", type=int, default=100)
+    parser.add_argument("--teachers", nargs="+", default=None, help="default: every teacher of the env")
+    parser.add_argument("--levels", type=float, nargs="+", default=None, help="clutter levels (default: the env's)")
+    parser.add_argument("--noise", default="none")
+    args = parser.parse_args()
+    key, levels = LEVELS[args.env]
+    levels = args.levels or levels
+    teachers = args.teachers or list(TEACHERS[args.env])
+    t0 = time.perf_counter()
+    print(f"{args.env}: teachers driving the student's env, {args.episodes} held-out layouts per cell (seeds "
+          f"{EVAL_SEED}..), noise {args.noise!r}; success [95% Wilson interval] / collision episodes\n")
+    print(table_header("teacher", *(f"{key} {v:g}" for v in levels)))
+    for teacher in teachers:
+        cells = []
+        for value in levels:
+            metrics = drive(args.env, teacher, (key, value), args.episodes, args.noise)
+            s, c = metrics["success_rate"], metrics["collision_rate"]
+            cells.append(f"{s['value']:.0%} [{s['ci95'][0]:.0%}, {s['ci95'][1]:.0%}] / {c['value']:.0%}")
+        print(f"| {teacher} | " + " | ".join(cells) + " |", flush=True)
+    print(f"\n{time.perf_counter() - t0:.0f} s")
+
+
+if __name__ == "__main__":
+    main()
