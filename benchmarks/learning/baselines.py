@@ -52,8 +52,8 @@ from clutter_gym.util.atomic import write_text_atomically
 PLANNER_LOOKAHEAD = 0.5
 #: The shipped ClutterReach settings: the subgoal pursuit row runs with their lookahead and gain.
 REACH = config_for("ClutterReach-v0")
-#: The shipped sensor-only ClutterReach settings: the proximity field row runs with their gain.
-REACH_SENSORS = config_for("ClutterReach-v0", user_settings(read_hyperparams_file("sensors"), "ClutterReach-v0"))
+#: The last round's sensor-only ClutterReach settings (PPO): the proximity field row runs with their gain.
+REACH_SENSORS = config_for("ClutterReach-v0", user_settings(read_hyperparams_file("sensors-ppo"), "ClutterReach-v0"))
 #: The shipped ClutterFly settings: the planner reference runs with their lookahead.
 FLY = config_for("ClutterFly-v0")
 #: The shipped robust ClutterFly settings: their base (the flyer reading its thrust estimate, with their gains).

@@ -150,7 +150,7 @@ def test_a_loaded_sensor_only_agent_and_a_field_residual_agent_act_as_trained(tm
 
     tiny = {"timesteps": 64, "n_envs": 1, "validate_every": 0, "final_eval_episodes": 0, "checkpoint_every": 64,
             "ppo": {"n_steps": 32, "batch_size": 32, "n_epochs": 1}}
-    sensors = user_settings(read_hyperparams_file("sensors"), "ClutterNav-v0")
+    sensors = user_settings(read_hyperparams_file("sensors-ppo"), "ClutterNav-v0")
     for name, extra in (("sensors", {}), ("field", {"residual_gain": 1.5})):
         run = start(config_for("ClutterNav-v0", {**sensors, **tiny, **extra}), tmp_path / name)
         train(run, progress=False)
@@ -265,7 +265,7 @@ def test_a_mapless_reach_residual_is_on_the_proximity_field_and_loads_as_trained
     np.testing.assert_allclose(env.pursuit(obs), field(obs), atol=0)
     tiny = {"timesteps": 64, "n_envs": 1, "validate_every": 0, "final_eval_episodes": 0, "checkpoint_every": 64,
             "ppo": {"n_steps": 32, "batch_size": 32, "n_epochs": 1}}
-    sensors = user_settings(read_hyperparams_file("sensors"), "ClutterReach-v0")
+    sensors = user_settings(read_hyperparams_file("sensors-ppo"), "ClutterReach-v0")
     run = start(config_for("ClutterReach-v0", {**sensors, **tiny}), tmp_path / "run")
     train(run, progress=False)
     agent = load(run.root)

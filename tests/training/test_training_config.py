@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 
+from clutter_gym import ENV_IDS
 from clutter_gym.cli import build_parser, main
 from clutter_gym.training.commands import train_overrides
 from clutter_gym.training.config import PPOHyperparams, TrainConfig, config_for, hyperparams_table
@@ -14,8 +15,6 @@ from clutter_gym.training.stats import mean_interval, wilson_interval
 
 
 def test_shipped_yaml_has_a_default_block_and_valid_blocks_for_every_env():
-    from clutter_gym import ENV_IDS
-
     table = hyperparams_table()
     assert "default" in table
     for env_id in ENV_IDS:
@@ -165,15 +164,25 @@ def test_the_robust_block_trains_the_fly_residual_under_harsh_with_memory():
     assert config.residual_space == "velocity"
 
 
-def test_the_sensor_only_fly_block_reads_no_map():
-    args = build_parser().parse_args(["train", "--env", "ClutterFly-v0", "--hyperparams", "sensors"])
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_the_sensors_blocks_distil_a_teacher_into_a_student_that_reads_no_map(env_id):
+    args = build_parser().parse_args(["train", "--env", env_id, "--hyperparams", "sensors"])
+    config = config_for(env_id, train_overrides(args))
+    assert config.teacher.name and config.env_kwargs["subgoal_lookahead"] == 0.0
+    assert config.teacher_kwargs()["subgoal_lookahead"] > 0  # the teacher's map-based parts are its own
+    # the block stops when the distillation does: no PPO steps after its warm-up and rounds
+    assert config.timesteps == config.distill.warmup_steps + config.distill.rounds * config.distill.round_steps
+
+
+def test_the_last_rounds_sensor_only_fly_block_reads_no_map():
+    args = build_parser().parse_args(["train", "--env", "ClutterFly-v0", "--hyperparams", "sensors-ppo"])
     config = config_for("ClutterFly-v0", train_overrides(args))
     assert config.env_kwargs["subgoal_lookahead"] == 0.0 and config.env_kwargs["sensors"] == ["lidar"]
     assert config.residual_gain > 0 and config.residual_space == "velocity"
 
 
-def test_the_sensor_only_reach_block_reads_no_map():
-    args = build_parser().parse_args(["train", "--env", "ClutterReach-v0", "--hyperparams", "sensors"])
+def test_the_last_rounds_sensor_only_reach_block_reads_no_map():
+    args = build_parser().parse_args(["train", "--env", "ClutterReach-v0", "--hyperparams", "sensors-ppo"])
     config = config_for("ClutterReach-v0", train_overrides(args))
     assert config.env_kwargs["subgoal_lookahead"] == 0.0 and config.env_kwargs["observe_directions"]
     assert config.residual_gain > 0 and config.train_layouts == 0  # no planning, so no layout pool to plan once
