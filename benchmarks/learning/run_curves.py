@@ -1,5 +1,6 @@
 """Training curves of several runs side by side: validation success and collision rates, the rolling training
-success rate, and PPO's action std and explained variance from each run's TensorBoard file.
+success rate, and PPO's action std and explained variance from each run's TensorBoard file. A distilled student's
+validations are one per DAgger round; grey lines mark 100k, 500k and 2M steps where the axes reach them.
 
     python -m benchmarks.learning.run_curves --run "mapless=out/mapless" --run "field residual=out/residual" \
         --out docs/learning_sensors.png
@@ -55,6 +56,10 @@ def main() -> None:
     titles = ("validation success (solid), collisions (dotted)", "training success, rolling",
               "action std", "explained variance")
     for ax, title in zip(axes, titles):
+        right = ax.get_xlim()[1]
+        for mark in (100_000, 500_000, 2_000_000):
+            if mark <= right:
+                ax.axvline(mark, color="0.6", lw=0.8, zorder=0)
         ax.set_title(title, fontsize=9)
         ax.set_xlabel("env steps")
         ax.grid(alpha=0.3)
