@@ -71,7 +71,7 @@ class EnvRunner:
 
 
 def navigator_states(env: gym.Env, steps: int, seed: int) -> Iterator[RobotState]:
-    """Drive ClutterNav-v0 ``env`` with the scripted navigator from ``seed`` (resetting where episodes end) and
+    """Drive ClutterNav-v1 ``env`` with the scripted navigator from ``seed`` (resetting where episodes end) and
     yield the robot's state after each of ``steps`` steps: poses among clutter, as a policy meets them."""
     # imported here: clutter_gym.training imports torch, which the scripts that drive no navigator need not load
     from clutter_gym.training.baselines import PotentialFieldNavigator

@@ -3,7 +3,7 @@ justified by its row.
 
 Choices: collision fidelity (every level, and sphere counts; Panda and diffbot), physics rate and solver iterations,
 ``physics="auto"`` against the fixed defaults on scenes with and without stacks, LIDAR ray count, LIDAR ray caster,
-camera image size, depth camera renderer, noise profile, ClutterFly-v0's aerodynamics. Each section comes from the
+camera image size, depth camera renderer, noise profile, ClutterFly-v1's aerodynamics. Each section comes from the
 benchmark module that owns the measurement (``collision_fidelity``, ``physics_rate``, ``stacking``,
 ``lidar_resolution``, ``cylinder_rays``, ``camera_resolution``, ``camera_renderer``, ``noise_cost``, ``aero_cost``),
 and a headline from ``throughput`` opens the report.
@@ -38,8 +38,8 @@ from clutter_gym.util.machine import machine_state
 
 DOCS = Path(__file__).resolve().parents[1] / "docs"
 HEADLINE = "headline"  # the section that opens the report: the default step against its floor and a peer
-REACH_DEFAULT, NAV_DEFAULT = "convex", "primitive"  # ClutterReach-v0's and ClutterNav-v0's collision_fidelity
-NAV_MARGIN_MM = 100.0  # ClutterNav-v0's clearance_margin
+REACH_DEFAULT, NAV_DEFAULT = "convex", "primitive"  # ClutterReach-v1's and ClutterNav-v1's collision_fidelity
+NAV_MARGIN_MM = 100.0  # ClutterNav-v1's clearance_margin
 
 
 def fidelity_choices(quick: bool, seed: int) -> list[Choice]:
@@ -75,7 +75,7 @@ def fidelity_choices(quick: bool, seed: int) -> list[Choice]:
                           False, {}, selectable=False))
     by = {r.label: r for r in panda_rows}
     c, mesh, spheres = by[REACH_DEFAULT], by["mesh"], by["spheres"]
-    panda_why = (f"`{REACH_DEFAULT}` is ClutterReach-v0's default: {c.error:.2f} mm mean error at {c.speed:.0f} us, "
+    panda_why = (f"`{REACH_DEFAULT}` is ClutterReach-v1's default: {c.error:.2f} mm mean error at {c.speed:.0f} us, "
                  f"{mesh.speed / c.speed:.1f}x cheaper than `mesh` ({mesh.speed:.0f} us), and it is the geometry "
                  f"pybullet simulates, so FCL and pybullet agree on contact. The sphere levels are not cheaper enough "
                  f"to pay for their error: `spheres` (16 per link) costs {spheres.speed:.0f} us for "
@@ -83,13 +83,13 @@ def fidelity_choices(quick: bool, seed: int) -> list[Choice]:
     nav_rows = rows(diffbot_res, NAV_DEFAULT)
     by = {r.label: r for r in nav_rows}
     p, sphere = by[NAV_DEFAULT], by["sphere"]
-    nav_why = (f"`{NAV_DEFAULT}` is ClutterNav-v0's default: the diffbot is built from primitives, so this level is "
+    nav_why = (f"`{NAV_DEFAULT}` is ClutterNav-v1's default: the diffbot is built from primitives, so this level is "
                f"exact ({p.error:.2f} mm against `mesh`) at {p.speed:.0f} us; `convex` and `mesh` answer the same "
                f"shapes. `sphere` costs {sphere.speed:.0f} us for {sphere.error:.0f} mm of error.")
     fidelity = "`collision_fidelity`, sphere counts as `spheres (N)`"
-    return [Choice("fidelity-panda", "Collision fidelity: Panda (ClutterReach-v0)", fidelity, "query (us)", False,
+    return [Choice("fidelity-panda", "Collision fidelity: Panda (ClutterReach-v1)", fidelity, "query (us)", False,
                    "mean error (mm)", panda_rows, method, panda_why),
-            Choice("fidelity-diffbot", "Collision fidelity: diffbot (ClutterNav-v0)", fidelity, "query (us)", False,
+            Choice("fidelity-diffbot", "Collision fidelity: diffbot (ClutterNav-v1)", fidelity, "query (us)", False,
                    "mean error (mm)", nav_rows, method, nav_why)]
 
 
@@ -100,7 +100,7 @@ def physics_choice() -> Choice:
     d = next(r for r in rows if r.default)
     fine = min(r.extra["wall penetration (mm)"] for r in rows)
     coarser = [r for r in rows if r.speed > d.speed]
-    method = (f"ClutterNav-v0 without sensors driven by 8 s of slalom commands ({length:.2f} m); error: the largest "
+    method = (f"ClutterNav-v1 without sensors driven by 8 s of slalom commands ({length:.2f} m); error: the largest "
               f"distance from a {physics_rate.REFERENCE[0]:.0f} Hz / {physics_rate.REFERENCE[1]}-iteration reference "
               f"trajectory (the reference itself is {gap:.1f} mm from {physics_rate.REFERENCE_CHECK[0]:.0f} Hz). Wall "
               f"penetration: the deepest FCL contact while driving into a wall at full speed for 3 s.")
@@ -138,7 +138,7 @@ def auto_physics_choice(quick: bool) -> Choice:
     for physics in ("fixed", "auto"):
         rows.append(Row(f"generated layout: {physics}", rates[physics], gap if physics == "auto" else 0.0,
                         physics == "auto", selectable=False))
-    method = (f"ClutterNav-v0 without sensors, from its fixed defaults (120 Hz, 10 iterations) with `physics` "
+    method = (f"ClutterNav-v1 without sensors, from its fixed defaults (120 Hz, 10 iterations) with `physics` "
               f"\"fixed\" or \"auto\". Stacks and loads (`python -m benchmarks.hard_cases.stacking --auto-only`): "
               f"movable boxes held for {seconds:.0f} s of zero commands (steps/s: best of two alternating runs "
               f"each); error: the largest horizontal drift of any box from where it was placed, its largest tilt as "
@@ -152,7 +152,7 @@ def auto_physics_choice(quick: bool) -> Choice:
     slow = [auto[k].speed / fixed[k].speed for k in auto if "Hz" in auto[k].label and "(120 Hz, 10 it.)" not in
             auto[k].label]
     same = auto["generated layout"].speed / fixed["generated layout"].speed
-    why = (f"\"auto\" is the default of ClutterNav-v0 and ClutterReach-v0: {len(held)} of {len(auto)} scenes hold 1 mm "
+    why = (f"\"auto\" is the default of ClutterNav-v1 and ClutterReach-v1: {len(held)} of {len(auto)} scenes hold 1 mm "
            f"and 1 deg under it, each at the least of its tiers that holds the catalogue's cases; scenes that need "
            f"more run at {min(slow):.2f}-{max(slow):.2f}x the fixed rate, and a scene that needs nothing runs at the "
            f"defaults, bit for bit (the generated layout: {same:.2f}x the fixed rate, {gap:.3g} mm apart).")
@@ -161,8 +161,8 @@ def auto_physics_choice(quick: bool) -> Choice:
 
 
 def _generated_layout_run(physics: str, steps: int) -> tuple[float, np.ndarray]:
-    """Steps/s of ClutterNav-v0 on its seed-0 layout under seeded random commands, and the robot's path (steps, 3)."""
-    env = gym.make("ClutterNav-v0", sensors=(), physics=physics)
+    """Steps/s of ClutterNav-v1 on its seed-0 layout under seeded random commands, and the robot's path (steps, 3)."""
+    env = gym.make("ClutterNav-v1", sensors=(), physics=physics)
     env.reset(seed=0)
     actions = np.random.default_rng(0).uniform(-1.0, 1.0, (steps, 2))
     path = np.empty((steps, 3))
@@ -186,7 +186,7 @@ def lidar_choice(quick: bool, seed: int) -> Choice:
               f"the nearest obstacle is than the scan says.")
     per_ray, fixed = np.polyfit([r["rays"] for r in measured], [r["scan_us"] for r in measured], 1)
     why = (f"{d.label}: p95 error {d.extra['p95 (mm)']:.0f} mm, {d.extra['p95 (mm)'] / NAV_MARGIN_MM:.0%} of the "
-           f"{NAV_MARGIN_MM / 1000} m clearance margin ClutterNav-v0's reward acts on, at {d.speed:.0f} us per "
+           f"{NAV_MARGIN_MM / 1000} m clearance margin ClutterNav-v1's reward acts on, at {d.speed:.0f} us per "
            f"scan; {half.label} take {half.speed / d.speed:.0%} of its time but miss by "
            f"{half.extra['p95 (mm)']:.0f} mm (p95). A scan costs about {fixed:.0f} us plus {per_ray:.2f} us a ray "
            f"(least squares over the rows).")
@@ -230,7 +230,7 @@ def renderer_choice(quick: bool, seed: int) -> Choice:
     rows = [Row(names[r["renderer"]], r["frame_us"], r["mean_mm"], r["default"],
                 {"99th percentile (mm)": r["p99_mm"], "largest (mm)": r["max_mm"]}) for r in measured]
     rays, tiny = rows
-    method = ("ClutterFly-v0's drone camera, 84x84 depth, at the poses of the scripted flyer's flights through "
+    method = ("ClutterFly-v1's drone camera, 84x84 depth, at the poses of the scripted flyer's flights through "
               "seeded layouts; speed: one frame's CPU time; error: |depth - the exact depth| over the pixels either "
               "image sees, the exact depth being the ray cast through the same sample points (the ray caster is "
               "exact: its tests hold it to closed forms within 1e-12 m). `egl` needs a GPU and is not measured.")
@@ -240,7 +240,7 @@ def renderer_choice(quick: bool, seed: int) -> Choice:
            f"TinyRenderer's polygon cylinders, float32 depth buffer and edge rules cost {tiny.error:.1f} mm on average "
            f"({p99:.0f} mm at the 99th percentile; the largest are pixels on silhouettes). Take `tiny` for rgb, or to "
            f"see robots, which the ray caster does not draw.")
-    return Choice("camera-renderer", "Depth camera renderer (ClutterFly-v0)", "`camera_renderer`", "frame (us)", False,
+    return Choice("camera-renderer", "Depth camera renderer (ClutterFly-v1)", "`camera_renderer`", "frame (us)", False,
                   "mean depth error (mm)", rows, method, why)
 
 
@@ -254,7 +254,7 @@ def noise_choice(quick: bool, seed: int) -> Choice:
         rows.append(Row(name, rates[name], 1e3 * noise_cost.lidar_deviation_m(name, 150 if quick else 300, seed),
                         name == "none", extra))
     worst = max(v for v in shares.values())
-    method = ("ClutterNav-v0 random-walk steps under each profile as specified (its own sensor rates, action noise "
+    method = ("ClutterNav-v1 random-walk steps under each profile as specified (its own sensor rates, action noise "
               "and dynamics randomisation); error: the mean absolute difference between the profile's LIDAR "
               "observation and the clean one on the same trajectory (the profile's sensor noise only). Here the "
               "error is the point: it is the gap to real sensors a profile models.")
@@ -276,7 +276,7 @@ def aero_choice(quick: bool) -> Choice:
                  lift_low: 100 * r["lift_low"], lift_spawn: 100 * r["lift_spawn"]}) for r in measured]
     off, drag, ground, both = measured
     cruise, low = flights
-    method = (f"ClutterFly-v0 without sensors, flown closed loop by the scripted position controller "
+    method = (f"ClutterFly-v1 without sensors, flown closed loop by the scripted position controller "
               f"(`CascadedFlyer`, aimed at the goal) through two flights in an empty volume: a cruise of "
               f"{np.linalg.norm(np.subtract(cruise.goal, cruise.start[:3])):.0f} m at {cruise.start[2]:.0f} m height "
               f"at up to {cruise.max_speed:.0f} m/s, and a low flight of "
@@ -305,26 +305,26 @@ def aero_choice(quick: bool) -> Choice:
            f"{both['rate'] / off['rate']:.2f}x. Turn drag on when a policy or controller is to hold a speed or "
            f"transfer to a real Crazyflie; off keeps the plain rigid-body model the gym-pybullet-drones peer flies "
            f"by default.")
-    return Choice("aero", "Aerodynamics (ClutterFly-v0)", "`aero`", "steps per CPU-s", True, "max error (mm)", rows,
+    return Choice("aero", "Aerodynamics (ClutterFly-v1)", "`aero`", "steps per CPU-s", True, "max error (mm)", rows,
                   method, why)
 
 
 def headline(quick: bool, seed: int) -> list[str]:
-    """The ClutterNav-v0 step against its raw pybullet floor and panda-gym's PandaReach-v3, and the reset time."""
+    """The ClutterNav-v1 step against its raw pybullet floor and panda-gym's PandaReach-v3, and the reset time."""
     peer = throughput.make_peer()
     rounds = 2 if quick else 6
     nav = throughput.scenario("navigator", seed, rounds, 1000, peer)
-    env = gym.make("ClutterNav-v0")
+    env = gym.make("ClutterNav-v1")
     resets = 1e3 * throughput.reset_times(env, 100 if quick else 500, warmup=200)
     env.close()
-    lines = [f"ClutterNav-v0 at its defaults (64-beam LIDAR, IMU, FCL clearance, contacts and swept checks), "
+    lines = [f"ClutterNav-v1 at its defaults (64-beam LIDAR, IMU, FCL clearance, contacts and swept checks), "
              f"scripted navigator, {rounds} alternating blocks of 1,000 steps "
              f"(`python -m benchmarks.speed.throughput`):",
              "", f"- {nav['env']:,.0f} steps/s, {nav['ratio']:.2f}x the time of the raw pybullet work a step needs "
              f"(motors, physics, state reads, rays: {nav['floor']:,.0f} steps/s);"]
     if "peer" in nav:
         lines.append(f"- panda-gym PandaReach-v3 in the same alternation: {nav['peer']:,.0f} steps/s "
-                     f"(ClutterNav-v0 runs {nav['env'] / nav['peer']:.2f}x its rate);")
+                     f"(ClutterNav-v1 runs {nav['env'] / nav['peer']:.2f}x its rate);")
     lines.append(f"- reset with a new layout: median {np.median(resets):.2f} ms.")
     return lines
 

@@ -41,11 +41,11 @@ class Demo(NamedTuple):
 
 
 DEMOS = {
-    "ClutterNav-v0": Demo({}, PotentialFieldNavigator.for_env, "scripted potential-field policy", "diff_drive",
+    "ClutterNav-v1": Demo({}, PotentialFieldNavigator.for_env, "scripted potential-field policy", "diff_drive",
                           "base"),
-    "ClutterReach-v0": Demo({}, JointPlannerReacher, "scripted joint-space planner on the known layout, tracked",
+    "ClutterReach-v1": Demo({}, JointPlannerReacher, "scripted joint-space planner on the known layout, tracked",
                             "arm", "end effector"),
-    "ClutterFly-v0": Demo({"subgoal_lookahead": 0.5}, lambda env: CascadedFlyer.for_env(env, "subgoal"),
+    "ClutterFly-v1": Demo({"subgoal_lookahead": 0.5}, lambda env: CascadedFlyer.for_env(env, "subgoal"),
                           "scripted position controller on the planned path", "multirotor", "airframe"),
 }
 DEMO_ENVS = tuple(DEMOS)
@@ -159,7 +159,7 @@ def build_parser() -> argparse.ArgumentParser:
                                    "frames (robot and goal ringed, the robot's trail drawn) and print a summary. "
                                    "Without --seed it shows the first layout the policy has a plan for, and says "
                                    "which it skipped and why.")
-    p.add_argument("--env", choices=DEMO_ENVS, default="ClutterNav-v0", help="env id")
+    p.add_argument("--env", choices=DEMO_ENVS, default="ClutterNav-v1", help="env id")
     p.add_argument("--seed", type=int, default=None,
                    help="reset seed (the layout); default: the first from 0 on whose layout the scripted policy has "
                         "a plan")

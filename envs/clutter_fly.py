@@ -200,14 +200,14 @@ class ClutterFlyEnv(ClutterEnv):
     ) -> None:
         check_numbers(ClutterFlyEnv.__init__, locals())
         check_env_settings(render_mode, physics_hz, control_hz, solver_iterations, contact_tolerance,
-                           env_id="ClutterFly-v0", min_physics_hz=MIN_PHYSICS_HZ)
+                           env_id="ClutterFly-v1", min_physics_hz=MIN_PHYSICS_HZ)
         check_flags(ceiling=ceiling, terminate_on_collision=terminate_on_collision,
                     observe_thrust_ratio=observe_thrust_ratio)
         if not (swept_speed > 0.0):  # inf allowed: no swept checks
             raise ValueError(f"swept_speed must be > 0 m/s (inf disables swept checks), got {swept_speed!r}")
         if isinstance(aero, str) or not isinstance(aero, Sequence):
             raise ValueError(f"aero must be a tuple of names from ('drag', 'ground_effect'), got {aero!r}")
-        make_flyer = resolve_robot(robot, "multirotor", "ClutterFly-v0")
+        make_flyer = resolve_robot(robot, "multirotor", "ClutterFly-v1")
         flyer: Multirotor = make_flyer(MultirotorConfig(aero=tuple(aero), observe_thrust_ratio=observe_thrust_ratio))
         spec = _volume_spec(volume_size, obstacle_density, ceiling)
         # the airframe is rigid (fixed joints only), so self-collision is off and no allowed-collision matrix is

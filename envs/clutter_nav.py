@@ -207,11 +207,11 @@ class ClutterNavEnv(ClutterEnv):
     ) -> None:
         check_numbers(ClutterNavEnv.__init__, locals())
         check_env_settings(render_mode, physics_hz, control_hz, solver_iterations, contact_tolerance,
-                           env_id="ClutterNav-v0", min_physics_hz=MIN_PHYSICS_HZ)
+                           env_id="ClutterNav-v1", min_physics_hz=MIN_PHYSICS_HZ)
         check_physics_mode(physics)
         check_flags(terminate_on_collision=terminate_on_collision, reverse=reverse, observe_bearing=observe_bearing)
         self.forward_only = not reverse  # the linear action maps onto stand..full speed (see _command)
-        base = resolve_robot(robot, "diff_drive", "ClutterNav-v0")
+        base = resolve_robot(robot, "diff_drive", "ClutterNav-v1")
         drive = DiffDriveRobot(DiffDriveConfig(max_linear_speed=max_linear_speed, max_angular_speed=max_angular_speed),
                                base)
         spec = ClutterSpec(arena_size=arena_size, obstacle_density=obstacle_density,

@@ -91,7 +91,7 @@ class ClutterReachEnv(ClutterEnv):
 
     ## Arguments
 
-    ``robot`` (a registered arm: ``"panda"``; docs/robots.md); ``physics`` ("auto" or "fixed", as ClutterNav-v0's);
+    ``robot`` (a registered arm: ``"panda"``; docs/robots.md); ``physics`` ("auto" or "fixed", as ClutterNav-v1's);
     ``render_mode``; ``control`` ("joint_velocity", "ee_position"); ``max_joint_speed`` (0, 1];
     ``max_ee_step`` m; ``collision_fidelity`` (one of ``FIDELITY_LEVELS``: docs/collision.md);
     ``collision_padding`` m; ``self_collision``; ``n_obstacles`` [0, 20]; ``movable_obstacles`` fraction [0, 1]
@@ -154,7 +154,7 @@ class ClutterReachEnv(ClutterEnv):
     ) -> None:
         check_numbers(ClutterReachEnv.__init__, locals())
         check_env_settings(render_mode, physics_hz, control_hz, solver_iterations, contact_tolerance,
-                           env_id="ClutterReach-v0", min_physics_hz=MIN_PHYSICS_HZ)
+                           env_id="ClutterReach-v1", min_physics_hz=MIN_PHYSICS_HZ)
         check_physics_mode(physics)
         check_flags(self_collision=self_collision, shelf=shelf, observe_directions=observe_directions,
                     observe_target_offset=observe_target_offset, terminate_on_collision=terminate_on_collision)
@@ -162,7 +162,7 @@ class ClutterReachEnv(ClutterEnv):
             raise ValueError(f"clearance_range must be in [0.01, 2] metres, got {clearance_range!r}")
         if not (swept_speed > 0.0):  # inf allowed: no swept checks
             raise ValueError(f"swept_speed must be > 0 m/s (inf disables swept checks), got {swept_speed!r}")
-        make_arm = resolve_robot(robot, "arm", "ClutterReach-v0")
+        make_arm = resolve_robot(robot, "arm", "ClutterReach-v1")
         arm: Arm = make_arm(ArmConfig(control, max_joint_speed, max_ee_step), control_dt=1.0 / control_hz)
         model = arm.model
         checker = collision_checker(arm, model.tracked_links, collision_fidelity, collision_padding,

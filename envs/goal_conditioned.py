@@ -1,4 +1,4 @@
-"""ClutterReach as a goal-conditioned env, for hindsight experience replay (HER): ``ClutterReachGoal-v0``.
+"""ClutterReach as a goal-conditioned env, for hindsight experience replay (HER): ``ClutterReachGoal-v1``.
 
 panda-gym's envs and SB3's ``HerReplayBuffer`` expect a ``Dict`` observation with ``observation``,
 ``achieved_goal`` and ``desired_goal`` entries and a ``compute_reward(achieved_goal, desired_goal, info)`` that

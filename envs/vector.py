@@ -1,6 +1,6 @@
 """:class:`BlockVectorEnv`: the envs' ``vector_entry_point``, N envs over the cores in blocks, one message per worker.
 
-``gym.make_vec("ClutterNav-v0", num_envs=16)`` (or ``vectorization_mode="vector_entry_point"``) makes one. Its envs
+``gym.make_vec("ClutterNav-v1", num_envs=16)`` (or ``vectorization_mode="vector_entry_point"``) makes one. Its envs
 are split into contiguous blocks, one per worker; the first block steps in this process while each other block
 steps in a worker process of its own (:mod:`clutter_gym.util.workers`). Each block is a Gymnasium
 ``SyncVectorEnv``, so env ``i`` is the env ``gym.make`` gives, seeded ``seed + i``, with Gymnasium's next-step

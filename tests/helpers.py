@@ -46,11 +46,11 @@ def run_capped(code: str, *args: str, memory: int = 3 << 30, timeout: float = 30
 
 
 def make_refusal(robot: object, cache: Path, timeout: float = 120.0) -> subprocess.CompletedProcess:
-    """``gym.make("ClutterNav-v0", robot=robot)`` in a :func:`run_capped` process caching in ``cache``; it prints the
+    """``gym.make("ClutterNav-v1", robot=robot)`` in a :func:`run_capped` process caching in ``cache``; it prints the
     ValueError's message, if the make raised one, and exits 0 unless something else went wrong."""
     code = ("import gymnasium as gym, clutter_gym\n"
             "try:\n"
-            f"    gym.make('ClutterNav-v0', robot={robot!r})\n"
+            f"    gym.make('ClutterNav-v1', robot={robot!r})\n"
             "except ValueError as error:\n"
             "    print(error)\n")
     return run_capped(code, timeout=timeout, env={**os.environ, "XDG_CACHE_HOME": str(cache)})

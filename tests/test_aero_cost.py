@@ -20,7 +20,7 @@ SETTINGS = ("off", "drag", "ground_effect", "drag + ground_effect")  # aero_cost
 def aero(speed_vs_error_report):
     """The section's header and its rows by setting: each column's printed figure, and whether it is the default."""
     tables = report_tables((speed_vs_error_report / "speed-vs-error.md").read_text(encoding="utf-8"))
-    header, *rows = tables["Aerodynamics (ClutterFly-v0)"]
+    header, *rows = tables["Aerodynamics (ClutterFly-v1)"]
     out = {}
     for cells in rows:
         label = cells[0].strip("*")

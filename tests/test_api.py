@@ -142,7 +142,7 @@ def test_bad_actions_raise(action, message, make_env):
         env.step(np.array(action))
 
 
-@pytest.mark.parametrize("env_id", ["ClutterNav-v0", "ClutterReach-v0"])
+@pytest.mark.parametrize("env_id", ["ClutterNav-v1", "ClutterReach-v1"])
 @pytest.mark.parametrize(
     "action", ["ab", None, {"v": 1.0}, [object(), object()], [1.0, "a"], [[0.0], [0.0, 1.0]], True, [True, False],
                [1j, 0.0], np.array([True, 0.5], dtype=object), np.array([np.bool_(False), 0.5], dtype=object),
@@ -250,7 +250,7 @@ def test_close_frees_the_client_and_200_cycles_leak_nothing_measurable():
     process = psutil.Process()
 
     def cycle():
-        env = gym.make("ClutterNav-v0")
+        env = gym.make("ClutterNav-v1")
         env.reset(seed=0)
         env.step(np.zeros(2))
         sim = env.unwrapped.sim

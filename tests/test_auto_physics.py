@@ -55,7 +55,7 @@ def test_auto_never_lowers_the_envs_settings_and_keeps_a_multiple_of_the_control
 @pytest.mark.parametrize("masses", [[2.0] * 5, [2.0] * 10, [1.0, 1000.0]], ids=["5 boxes", "10 boxes", "1 t on 1 kg"])
 def test_a_stack_holds_within_a_millimetre_for_30_s_under_auto(make_env, masses):
     """At the defaults these drift 29 mm, fall, and squirt out (docs/hard-cases.md); under "auto" each holds."""
-    env = make_env("ClutterNav-v0", sensors=())
+    env = make_env("ClutterNav-v1", sensors=())
     _, info = env.reset(seed=0, options={"scene": scene(stack(masses))})
     assert info["physics"]["physics_hz"] > 120.0 and "column" in info["physics"]["reason"]
     sim, bodies = env.unwrapped.sim, env.unwrapped.movable_bodies
@@ -69,25 +69,25 @@ def test_a_stack_holds_within_a_millimetre_for_30_s_under_auto(make_env, masses)
 
 
 def test_generated_scenes_and_fixed_physics_keep_the_envs_settings(make_env):
-    env = make_env("ClutterNav-v0", movable_obstacles=1.0)
+    env = make_env("ClutterNav-v1", movable_obstacles=1.0)
     for seed in range(5):
         _, info = env.reset(seed=seed)
         assert (info["physics"]["physics_hz"], info["physics"]["solver_iterations"]) == (120.0, 10)
-    fixed = make_env("ClutterNav-v0", sensors=(), physics="fixed")
+    fixed = make_env("ClutterNav-v1", sensors=(), physics="fixed")
     _, info = fixed.reset(seed=0, options={"scene": scene(stack([2.0] * 5))})
     assert (info["physics"]["physics_hz"], info["physics"]["solver_iterations"]) == (120.0, 10)
     assert fixed.unwrapped.substeps == 6
 
 
 def test_an_episode_after_a_stack_goes_back_to_the_fast_settings(make_env):
-    env = make_env("ClutterNav-v0", sensors=())
+    env = make_env("ClutterNav-v1", sensors=())
     env.reset(seed=0, options={"scene": scene(stack([2.0] * 5))})
     assert env.unwrapped.substeps == 12
     _, info = env.reset(seed=0)
     assert info["physics"]["physics_hz"] == 120.0 and env.unwrapped.substeps == 6
 
 
-@pytest.mark.parametrize("env_id", ["ClutterNav-v0", "ClutterReach-v0"])
+@pytest.mark.parametrize("env_id", ["ClutterNav-v1", "ClutterReach-v1"])
 def test_a_bad_physics_mode_is_refused_at_make(make_env, env_id):
     with pytest.raises(ValueError, match=r"physics must be one of \('auto', 'fixed'\), got 'fast'"):
         make_env(env_id, physics="fast")

@@ -64,7 +64,7 @@ def test_the_envs_and_the_scripted_baselines_import_and_make(bare):
     code = ("import gymnasium as gym, clutter_gym\n"
             "from clutter_gym.training.baselines import PotentialFieldNavigator\n"
             "from clutter_gym.training.joint_planner import JointPlannerReacher\n"
-            "env = gym.make('ClutterNavTrain-v0')\n"
+            "env = gym.make('ClutterNavTrain-v1')\n"
             "obs, _ = env.reset(seed=0)\n"
             "env.step(PotentialFieldNavigator.for_env(env)(obs))\n"
             "env.close()\n")

@@ -105,20 +105,20 @@ def test_settings_layer_shipped_file_then_user_file_then_options(tmp_path):
     user = tmp_path / "mine.yml"
     user.write_text(yaml.safe_dump({
         "default": {"n_envs": 2, "ppo": {"learning_rate": 1e-3, "gamma": 0.95}},
-        "ClutterNav-v0": {"env_kwargs": {"obstacle_density": 0.05, "noise": {"lidar": {"range_sigma": 0.02}}}},
+        "ClutterNav-v1": {"env_kwargs": {"obstacle_density": 0.05, "noise": {"lidar": {"range_sigma": 0.02}}}},
     }))
     args = build_parser().parse_args(["train", "--hyperparams", str(user), "--gamma", "0.9",
                                       "--env-kwargs", "noise.lidar.dropout_prob=0.1", "lidar_range=3"])
-    args.env = "ClutterNav-v0"
-    config = config_for("ClutterNav-v0", train_overrides(args))
-    shipped = config_for("ClutterNav-v0")
+    args.env = "ClutterNav-v1"
+    config = config_for("ClutterNav-v1", train_overrides(args))
+    shipped = config_for("ClutterNav-v1")
     assert config.n_envs == 2 and config.ppo.learning_rate == 1e-3 and config.ppo.gamma == 0.9
     assert config.ppo.n_steps == shipped.ppo.n_steps  # untouched keys keep the shipped file's values
     assert config.env_kwargs == {**shipped.env_kwargs, "obstacle_density": 0.05, "lidar_range": 3,
                                  "noise": {"lidar": {"range_sigma": 0.02, "dropout_prob": 0.1}}}
     kwargs = config.make_kwargs(noise="harsh")
     assert kwargs["noise"] == {"profile": "harsh", "lidar": {"range_sigma": 0.02, "dropout_prob": 0.1}}
-    reach = build_parser().parse_args(["sweep", "--env", "ClutterReach-v0", "--hyperparams", str(user)])
+    reach = build_parser().parse_args(["sweep", "--env", "ClutterReach-v1", "--hyperparams", str(user)])
     assert settings(reach) == {"n_envs": 2, "ppo": {"learning_rate": 1e-3, "gamma": 0.95}, "env_kwargs": {}}
 
 
@@ -143,9 +143,9 @@ def test_train_with_env_kwargs_trains_under_custom_noise_and_resume_refuses_chan
 def test_report_refuses_a_run_with_other_settings(tmp_path, capsys):
     from clutter_gym.training.report import prepare_run
 
-    run = prepare_run("ClutterNav-v0", tmp_path, timesteps=64, seed=0,
+    run = prepare_run("ClutterNav-v1", tmp_path, timesteps=64, seed=0,
                       settings={"env_kwargs": {"obstacle_density": 0.05}})
-    assert prepare_run("ClutterNav-v0", tmp_path, timesteps=128, seed=0,
+    assert prepare_run("ClutterNav-v1", tmp_path, timesteps=128, seed=0,
                        settings={"env_kwargs": {"obstacle_density": 0.05}}).root == run.root  # a new budget is fine
     with pytest.raises(SystemExit) as exit_info:
         main(["report", "--out", str(tmp_path), "--env-kwargs", "obstacle_density=0.1"])
@@ -159,11 +159,11 @@ def test_demo_refuses_envs_without_a_scripted_policy(capsys):
     with pytest.raises(SystemExit) as exit_info:
         build_parser().parse_args(["demo", "--env", "CartPole-v1"])
     err = capsys.readouterr().err.strip()
-    assert exit_info.value.code == 2 and "--env" in err and "ClutterReach-v0" in err and len(err.splitlines()) == 1
+    assert exit_info.value.code == 2 and "--env" in err and "ClutterReach-v1" in err and len(err.splitlines()) == 1
 
 
 def test_the_reach_demo_plans_to_the_target_and_writes_a_gif(tmp_path, capsys):
-    assert main(["demo", "--env", "ClutterReach-v0", "--seed", "1", "--out", str(tmp_path), "--json"]) == 0
+    assert main(["demo", "--env", "ClutterReach-v1", "--seed", "1", "--out", str(tmp_path), "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["policy"].startswith("scripted joint-space planner")
     assert summary["success"] and summary["contact_steps"] == 0
@@ -188,12 +188,12 @@ def test_the_default_demo_moves_every_registered_robot_to_its_goal(env_id, robot
 
 
 def test_a_layout_without_a_plan_is_said_so_and_the_default_demo_shows_one_with_a_plan(tmp_path, capsys):
-    """Seed 0 of ClutterReach-v0 is a layout the joint planner finds no path for (if it ever does, pick another)."""
-    assert main(["demo", "--env", "ClutterReach-v0", "--seed", "0", "--frame-every", "1000", "--out",
+    """Seed 0 of ClutterReach-v1 is a layout the joint planner finds no path for (if it ever does, pick another)."""
+    assert main(["demo", "--env", "ClutterReach-v1", "--seed", "0", "--frame-every", "1000", "--out",
                  str(tmp_path)]) == 0
     out = capsys.readouterr().out
     assert "the planner found no path" in out and "moved          0.00 m" in out
-    assert main(["demo", "--env", "ClutterReach-v0", "--frame-every", "1000", "--out", str(tmp_path), "--json"]) == 0
+    assert main(["demo", "--env", "ClutterReach-v1", "--frame-every", "1000", "--out", str(tmp_path), "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["seed"] == 1 and summary["skipped_seeds"] == {"0": "the planner found no path"}
     assert summary["moved_m"] > 0.1 and summary["success"]
@@ -201,14 +201,14 @@ def test_a_layout_without_a_plan_is_said_so_and_the_default_demo_shows_one_with_
 
 def test_the_demo_refuses_a_robot_of_another_kind_in_one_line(capsys):
     with pytest.raises(SystemExit) as exit_info:
-        main(["demo", "--env", "ClutterReach-v0", "--robot", "husky"])
+        main(["demo", "--env", "ClutterReach-v1", "--robot", "husky"])
     err = capsys.readouterr().err.strip()
     assert exit_info.value.code == 2 and len(err.splitlines()) == 1, err
     assert err.startswith("clutter-gym demo: error: ") and "robot 'husky' is a wheeled base" in err
 
 
 def test_the_fly_demo_flies_the_planned_path_to_the_goal_and_writes_a_gif(tmp_path, capsys):
-    assert main(["demo", "--env", "ClutterFly-v0", "--seed", "1", "--frame-every", "10", "--out", str(tmp_path),
+    assert main(["demo", "--env", "ClutterFly-v1", "--seed", "1", "--frame-every", "10", "--out", str(tmp_path),
                  "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["policy"] == "scripted position controller on the planned path"

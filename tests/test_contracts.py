@@ -39,7 +39,7 @@ def test_the_reach_task_gives_the_same_step_whether_evaluate_or_observe_runs_fir
     """Both read the planned path's index, which moves forward with the joints once per state."""
     runs = []
     for evaluate_first in (False, True):
-        env = make_env("ClutterReach-v0", subgoal_lookahead=0.2)
+        env = make_env("ClutterReach-v1", subgoal_lookahead=0.2)
         env.reset(seed=3)
         core = env.unwrapped
         rng = np.random.default_rng(0)
@@ -62,7 +62,7 @@ def test_the_reach_task_gives_the_same_step_whether_evaluate_or_observe_runs_fir
 
 
 def test_render_after_a_failed_reset_shows_the_robot_without_a_goal(make_env):
-    env = make_env("ClutterNav-v0", render_mode="rgb_array")
+    env = make_env("ClutterNav-v1", render_mode="rgb_array")
     env.reset(seed=0)
     env.step(np.array([0.5, 0.0]))
     with pytest.raises(ValueError, match="scene"):

@@ -1,4 +1,4 @@
-"""ClutterFly-v0 as a whole env: hover, contact and crash, leaving the volume, the progress sign, the floor as an
+"""ClutterFly-v1 as a whole env: hover, contact and crash, leaving the volume, the progress sign, the floor as an
 obstacle, kwargs and scene errors, user scenes, and every noise profile with every sensor."""
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ FULL_THRUST = np.array([1.0, 0.0, 0.0, 0.0])
 
 
 def fly_env(make_env, **kwargs):
-    return make_env("ClutterFly-v0", volume_size=SIZE, **kwargs)
+    return make_env("ClutterFly-v1", volume_size=SIZE, **kwargs)
 
 
 def scene(obstacles=(), start=(0.0, 0.0, 1.0, 0.0), goal=(1.5, 1.5, 1.0)):
@@ -187,7 +187,7 @@ def test_a_user_scene_round_trips(make_env):
 
 
 def test_a_generated_scene_round_trips_through_reset_options(make_env):
-    a, b = make_env("ClutterFly-v0"), make_env("ClutterFly-v0")
+    a, b = make_env("ClutterFly-v1"), make_env("ClutterFly-v1")
     obs_a, _ = a.reset(seed=4)
     obs_b, _ = b.reset(seed=99, options={"scene": a.unwrapped.scene.to_dict()})
     assert b.unwrapped.scene == a.unwrapped.scene
@@ -232,7 +232,7 @@ def test_a_generated_scene_round_trips_through_reset_options(make_env):
 )
 def test_bad_kwargs_name_the_field(make_env, kwargs, message):
     with pytest.raises(ValueError, match=message):
-        make_env("ClutterFly-v0", **kwargs)
+        make_env("ClutterFly-v1", **kwargs)
 
 
 @pytest.mark.parametrize(

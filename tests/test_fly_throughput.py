@@ -66,7 +66,7 @@ def test_every_workload_gives_finite_positive_rates(bench):
         for rate in cells[:3]:  # wall-clock, per CPU-s, per CPU-s in step() alone
             assert math.isfinite(float(rate.replace(",", ""))) and float(rate.replace(",", "")) > 0.0, (label, cells)
     assert rows["peer: HoverAviary KIN (rebuilt)"][5] == "51.0"  # pybullet calls per step: the peer's upstream 51
-    assert float(rows["ClutterFly-v0, IMU only"][5]) > 0.0
+    assert float(rows["ClutterFly-v1, IMU only"][5]) > 0.0
     assert all(line in bench for line in ("\nKinematic:", "\nCamera:", "\nFloor:"))
 
 
@@ -79,15 +79,15 @@ def test_the_lidar_is_cast_at_its_rate(bench):
 
 
 def test_the_variants_fly_one_flight_and_the_floor_replays_it_across_a_reset(bench):
-    """Every ClutterFly-v0 variant draws one action stream, so they fly the same flight and differ only in their
+    """Every ClutterFly-v1 variant draws one action stream, so they fly the same flight and differ only in their
     sensors; the floor's twin, given the recorder's forces tick by tick and reset where its episodes ended, retraces
     the flight to the bit."""
-    assert float(workload_rows(bench)["ClutterFly-v0, IMU only"][3]) > 0.0  # resets per 1,000 steps: one was replayed
-    assert "Checks: the ClutterFly-v0 variants flew one flight; the floor's twin retraced the recorded flight" in bench
+    assert float(workload_rows(bench)["ClutterFly-v1, IMU only"][3]) > 0.0  # resets per 1,000 steps: one was replayed
+    assert "Checks: the ClutterFly-v1 variants flew one flight; the floor's twin retraced the recorded flight" in bench
 
 
 def test_phase_profile_accounts_for_the_step(bench):
-    profile = markdown_rows(bench.split("Where a ClutterFly-v0 (IMU only) step goes")[1])[1:]
+    profile = markdown_rows(bench.split("Where a ClutterFly-v1 (IMU only) step goes")[1])[1:]
     total = float(profile[-1][1].replace(",", ""))
     top = [cells for cells in profile[:-2] if not cells[0].startswith("&nbsp;")]
     assert total > 0.0 and all(float(cells[1].replace(",", "")) > 0.0 for cells in top)

@@ -1,4 +1,4 @@
-"""ClutterReachGoal-v0: ClutterReach for hindsight experience replay, as panda-gym users expect it."""
+"""ClutterReachGoal-v1: ClutterReach for hindsight experience replay, as panda-gym users expect it."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from clutter_gym.goal_conditioned import GOAL_TERMS
 @pytest.mark.parametrize("reward_type", ["sparse", "dense"])
 def test_compute_reward_agrees_with_step_one_by_one_and_in_batches(reward_type):
     """Through ``env.unwrapped``, where Gymnasium-Robotics' GoalEnv and HER implementations call it."""
-    env = gym.make("ClutterReachGoal-v0", reward_type=reward_type, collision_fidelity="primitive")
+    env = gym.make("ClutterReachGoal-v1", reward_type=reward_type, collision_fidelity="primitive")
     compute = env.unwrapped.compute_reward
     obs, _ = env.reset(seed=2)
     assert set(obs) == {"observation", "achieved_goal", "desired_goal"} and obs in env.observation_space
@@ -39,21 +39,21 @@ def test_compute_reward_agrees_with_step_one_by_one_and_in_batches(reward_type):
 
 
 def test_the_goal_env_passes_gymnasiums_checker_and_refuses_an_unknown_reward_type():
-    env = gym.make("ClutterReachGoal-v0")
+    env = gym.make("ClutterReachGoal-v1")
     check_env(env.unwrapped, skip_render_check=True)
     with pytest.raises(ValueError, match="copy_info_dict"):  # SB3's default stores no infos
         env.unwrapped.compute_reward(np.zeros((2, 3)), np.ones((2, 3)), np.array([{}, {}]))
     env.close()
     with pytest.raises(ValueError, match="reward_type must be one of"):
-        gym.make("ClutterReachGoal-v0", reward_type="shaped")
+        gym.make("ClutterReachGoal-v1", reward_type="shaped")
     with pytest.raises(TypeError, match="'reward_tpye' \\(did you mean 'reward_type'\\?\\)"):
-        gym.make("ClutterReachGoal-v0", reward_tpye="dense")  # named as every env names a misspelt argument
+        gym.make("ClutterReachGoal-v1", reward_tpye="dense")  # named as every env names a misspelt argument
 
 
 def test_her_with_sac_trains_on_it():
     from stable_baselines3 import SAC, HerReplayBuffer
 
-    env = gym.make("ClutterReachGoal-v0")
+    env = gym.make("ClutterReachGoal-v1")
     model = SAC("MultiInputPolicy", env, replay_buffer_class=HerReplayBuffer, learning_starts=100, batch_size=64,
                 replay_buffer_kwargs={"n_sampled_goal": 4, "goal_selection_strategy": "future",
                                       "copy_info_dict": True},

@@ -41,10 +41,10 @@ import pytest
 @pytest.mark.filterwarnings("ignore:.*render_mode:UserWarning")
 def test_invalid_kwargs_raise_at_make(kwargs, pattern):
     with pytest.raises(ValueError, match=pattern):
-        gym.make("ClutterNav-v0", **kwargs)
+        gym.make("ClutterNav-v1", **kwargs)
 
 
-@pytest.mark.parametrize("env_id", ["ClutterNav-v0", "ClutterReach-v0", "ClutterFly-v0"])
+@pytest.mark.parametrize("env_id", ["ClutterNav-v1", "ClutterReach-v1", "ClutterFly-v1"])
 @pytest.mark.parametrize(("physics_hz", "control_hz"), [(1.0, 1.0), (20.0, 20.0), (40.0, 20.0)])
 def test_a_physics_rate_below_the_envs_floor_is_refused(env_id, physics_hz, control_hz):
     """Below its floor an env's stiffest dynamics break (docs/envs.md, "Physics rate"): ClutterFly's rate loop
@@ -53,7 +53,7 @@ def test_a_physics_rate_below_the_envs_floor_is_refused(env_id, physics_hz, cont
         gym.make(env_id, physics_hz=physics_hz, control_hz=control_hz)
 
 
-@pytest.mark.parametrize("env_id", ["ClutterNav-v0", "ClutterReach-v0", "ClutterFly-v0"])
+@pytest.mark.parametrize("env_id", ["ClutterNav-v1", "ClutterReach-v1", "ClutterFly-v1"])
 @pytest.mark.parametrize(("physics_hz", "control_hz", "least"), [(120.0, 1e-3, "0.12"), (10000.0, 5.0, "10")])
 def test_more_than_a_thousand_physics_ticks_per_step_are_refused(env_id, physics_hz, control_hz, least):
     """One step holds one action for at most 1000 ticks: control_hz=1e-3 made a step 1,000 s of simulated time."""
@@ -66,17 +66,17 @@ def test_the_rate_limits_themselves_are_allowed(make_env):
     from clutter_gym.clutter_nav import MIN_PHYSICS_HZ
     from clutter_gym.make_checks import MAX_TICKS_PER_STEP
 
-    assert make_env("ClutterNav-v0", physics_hz=MIN_PHYSICS_HZ, control_hz=20.0).unwrapped.substeps == 3
-    env = make_env("ClutterNav-v0", physics_hz=float(MAX_TICKS_PER_STEP), control_hz=1.0, sensors=())
+    assert make_env("ClutterNav-v1", physics_hz=MIN_PHYSICS_HZ, control_hz=20.0).unwrapped.substeps == 3
+    env = make_env("ClutterNav-v1", physics_hz=float(MAX_TICKS_PER_STEP), control_hz=1.0, sensors=())
     assert env.unwrapped.substeps == MAX_TICKS_PER_STEP
 
 
 @pytest.mark.parametrize(("env_id", "name", "value"), [
-    ("ClutterNav-v0", "terminate_on_collision", [1]),
-    ("ClutterReach-v0", "shelf", "no"),
-    ("ClutterReach-v0", "self_collision", "no"),
-    ("ClutterReach-v0", "terminate_on_collision", 1),
-    ("ClutterReach-v0", "observe_directions", None),
+    ("ClutterNav-v1", "terminate_on_collision", [1]),
+    ("ClutterReach-v1", "shelf", "no"),
+    ("ClutterReach-v1", "self_collision", "no"),
+    ("ClutterReach-v1", "terminate_on_collision", 1),
+    ("ClutterReach-v1", "observe_directions", None),
 ])
 def test_switches_take_booleans_only(env_id, name, value):
     """A switch given "no" or [1] would otherwise switch by truthiness (on)."""
@@ -85,15 +85,15 @@ def test_switches_take_booleans_only(env_id, name, value):
 
 
 @pytest.mark.parametrize(("env_id", "name", "value"), [
-    ("ClutterNav-v0", "arena_size", "5"),
-    ("ClutterNav-v0", "arena_size", None),
-    ("ClutterNav-v0", "physics_hz", "120"),
-    ("ClutterNav-v0", "max_linear_speed", "fast"),
-    ("ClutterNav-v0", "collision_padding", "0.1"),
-    ("ClutterNav-v0", "contact_weight", True),
-    ("ClutterNav-v0", "n_rays", None),
-    ("ClutterReach-v0", "max_joint_speed", None),
-    ("ClutterReach-v0", "n_obstacles", "3"),
+    ("ClutterNav-v1", "arena_size", "5"),
+    ("ClutterNav-v1", "arena_size", None),
+    ("ClutterNav-v1", "physics_hz", "120"),
+    ("ClutterNav-v1", "max_linear_speed", "fast"),
+    ("ClutterNav-v1", "collision_padding", "0.1"),
+    ("ClutterNav-v1", "contact_weight", True),
+    ("ClutterNav-v1", "n_rays", None),
+    ("ClutterReach-v1", "max_joint_speed", None),
+    ("ClutterReach-v1", "n_obstacles", "3"),
 ])
 def test_number_arguments_given_something_else_name_the_argument(env_id, name, value):
     with pytest.raises(ValueError, match=re.escape(f"{name} must be a number, got {value!r}")):
@@ -101,12 +101,12 @@ def test_number_arguments_given_something_else_name_the_argument(env_id, name, v
 
 
 def test_numpy_numbers_are_numbers(make_env):
-    env = make_env("ClutterNav-v0", arena_size=np.float32(5.0), n_rays=np.int64(32),
+    env = make_env("ClutterNav-v1", arena_size=np.float32(5.0), n_rays=np.int64(32),
                    noise={"lidar": {"range_sigma": np.float32(0.01), "latency_steps": np.int64(1)}})
     assert env.unwrapped.observation_space["lidar"].shape == (32,)
     assert env.unwrapped.noise.lidar.range_sigma == pytest.approx(0.01)
     assert env.unwrapped.noise.timing["lidar"].latency_steps == 1
-    reach = make_env("ClutterReach-v0", n_obstacles=np.int64(3), solver_iterations=np.int64(10))
+    reach = make_env("ClutterReach-v1", n_obstacles=np.int64(3), solver_iterations=np.int64(10))
     assert reach.unwrapped.arena.spec.n_obstacles == 3
 
 
@@ -114,22 +114,22 @@ def test_numpy_numbers_are_numbers(make_env):
 def test_an_empty_lidar_window_is_refused_at_make(lidar):
     """A window with nothing in it would read "no return" forever; 4 m is beyond the default 3.5 m lidar_range."""
     with pytest.raises(ValueError, match="range window is empty"):
-        gym.make("ClutterNav-v0", noise={"lidar": lidar})
+        gym.make("ClutterNav-v1", noise={"lidar": lidar})
 
 
 def test_numpy_booleans_are_booleans():
-    env = gym.make("ClutterReach-v0", shelf=np.bool_(False), terminate_on_collision=np.True_)
+    env = gym.make("ClutterReach-v1", shelf=np.bool_(False), terminate_on_collision=np.True_)
     assert env.unwrapped.arena.spec.shelf is False
     env.close()
 
 
 def test_unknown_kwarg_is_named_with_the_closest_allowed_name_and_the_list():
     with pytest.raises(TypeError, match=r"'n_beams' \(did you mean 'n_rays'\?\); it takes \[.*'n_rays'"):
-        gym.make("ClutterNav-v0", n_beams=10)
+        gym.make("ClutterNav-v1", n_beams=10)
     with pytest.raises(TypeError, match=r"'obstacle_densty' \(did you mean 'obstacle_density'\?\)"):
-        gym.make("ClutterFly-v0", obstacle_densty=0.1)
+        gym.make("ClutterFly-v1", obstacle_densty=0.1)
     with pytest.raises(TypeError, match=r"'zzz'; it takes \["):  # nothing close: the list alone
-        gym.make("ClutterReach-v0", zzz=1)
+        gym.make("ClutterReach-v1", zzz=1)
 
 
 @pytest.mark.parametrize("sensors", [(), ("imu",), ("lidar",), ("imu", "lidar")])

@@ -1,4 +1,4 @@
-"""ClutterReach-v0: layouts, user scenes and their errors, both control modes, reward terms, and the FCL/pybullet
+"""ClutterReach-v1: layouts, user scenes and their errors, both control modes, reward terms, and the FCL/pybullet
 cross-check (API and determinism are in test_api.py, parametrised over every env id)."""
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ def scene(obstacles=(), target=(0.45, 0.2, 0.3), start=READY) -> dict:
 
 @pytest.mark.parametrize("fidelity", ["convex", "mesh"])
 def test_generated_layouts_start_clear_with_a_free_reachable_target(fidelity, make_env):
-    env = make_env("ClutterReach-v0", collision_fidelity=fidelity)
+    env = make_env("ClutterReach-v1", collision_fidelity=fidelity)
     for seed in range(25):
         obs, info = env.reset(seed=seed)
         scene_ = env.unwrapped.scene
@@ -41,7 +41,7 @@ def test_generated_layouts_start_clear_with_a_free_reachable_target(fidelity, ma
 def test_generated_scenes_are_accepted_back_at_every_fidelity_level(fidelity, make_env):
     """A generated start is clear of the clutter and of self-collision; a coarse level refused some of them back when
     it judged self-collision by its own shapes, which overlap around the wrist where the links do not."""
-    env = make_env("ClutterReach-v0", collision_fidelity=fidelity)
+    env = make_env("ClutterReach-v1", collision_fidelity=fidelity)
     for seed in range(31):
         env.reset(seed=seed)
         _, info = env.reset(options={"scene": env.unwrapped.scene.to_dict()})
@@ -51,7 +51,7 @@ def test_generated_scenes_are_accepted_back_at_every_fidelity_level(fidelity, ma
 def test_coarse_levels_report_the_self_collisions_convex_reports_under_random_commands(make_env):
     """The fidelity level changes what FCL measures, not the physics: envs stepped in lockstep share every pose."""
     levels = ("convex", *COARSE_LEVELS)
-    envs = {level: make_env("ClutterReach-v0", collision_fidelity=level, max_joint_speed=1.0) for level in levels}
+    envs = {level: make_env("ClutterReach-v1", collision_fidelity=level, max_joint_speed=1.0) for level in levels}
     rng = np.random.default_rng(2)
     reports = {level: [] for level in levels}
     for seed in range(3):
@@ -79,7 +79,7 @@ def test_layouts_have_a_shelf_and_are_seeded():
 
 
 def test_user_scene_round_trips_and_starts_where_asked(make_env):
-    env = make_env("ClutterReach-v0")
+    env = make_env("ClutterReach-v1")
     env.reset(seed=9)
     layout = env.unwrapped.scene.to_dict()
     obs, _ = env.reset(options={"scene": layout})
@@ -100,14 +100,14 @@ def test_user_scene_round_trips_and_starts_where_asked(make_env):
     ],
 )
 def test_bad_scenes_raise_naming_the_field(bad, message, make_env):
-    env = make_env("ClutterReach-v0")
+    env = make_env("ClutterReach-v1")
     with pytest.raises(ValueError, match=message):
         env.reset(options={"scene": bad})
 
 
 def test_a_scene_refused_for_starting_in_collision_cannot_be_stepped(make_env):
     """The refused scene is already placed when the check refuses it: a step there would run it anyway."""
-    env = make_env("ClutterReach-v0")
+    env = make_env("ClutterReach-v1")
     env.reset(seed=0)
     env.step(np.zeros(7))
     with pytest.raises(ValueError, match="scene starts in collision"):
@@ -138,11 +138,11 @@ def test_a_scene_refused_for_starting_in_collision_cannot_be_stepped(make_env):
 )
 def test_bad_kwargs_raise_at_make(kwargs, message, make_env):
     with pytest.raises(ValueError, match=message):
-        make_env("ClutterReach-v0", **kwargs)
+        make_env("ClutterReach-v1", **kwargs)
 
 
 def test_joint_velocity_actions_move_each_joint_by_speed_times_period(make_env):
-    env = make_env("ClutterReach-v0", max_joint_speed=0.5)
+    env = make_env("ClutterReach-v1", max_joint_speed=0.5)
     env.reset(options={"scene": scene()})
     action = np.zeros(7, dtype=np.float32)
     action[0] = 1.0  # joint 1 at half its 2.175 rad/s limit for 4 steps of 0.05 s, then hold
@@ -153,7 +153,7 @@ def test_joint_velocity_actions_move_each_joint_by_speed_times_period(make_env):
 
 
 def test_ee_position_control_moves_the_hand_where_asked(make_env):
-    env = make_env("ClutterReach-v0", control="ee_position")
+    env = make_env("ClutterReach-v1", control="ee_position")
     obs, _ = env.reset(options={"scene": scene()})
     start = obs["ee_position"].copy()
     for _ in range(6):
@@ -163,7 +163,7 @@ def test_ee_position_control_moves_the_hand_where_asked(make_env):
 
 def test_reaching_the_target_is_a_success_with_the_bonus(make_env):
     target = READY_EE + [0.1, 0.0, -0.05]
-    env = make_env("ClutterReach-v0", control="ee_position")
+    env = make_env("ClutterReach-v1", control="ee_position")
     obs, _ = env.reset(options={"scene": scene(target=target)})
     for _ in range(20):
         step = np.clip((obs["target"] - obs["ee_position"]) / 0.05, -1, 1)
@@ -175,7 +175,7 @@ def test_reaching_the_target_is_a_success_with_the_bonus(make_env):
 
 def test_pressing_into_a_box_is_a_contact_both_engines_see_and_costs(make_env):
     box = {"shape": "box", "size": [0.3, 0.4, 0.3], "position": [0.35, 0.0]}  # top at 0.3 m, under the hand
-    env = make_env("ClutterReach-v0", control="ee_position")
+    env = make_env("ClutterReach-v1", control="ee_position")
     env.reset(options={"scene": scene([box])})
     infos = [env.step(np.array([0.0, 0.0, -1.0], dtype=np.float32))[4] for _ in range(8)]
     touching = [i for i in infos if i["n_contacts"] > 0]
@@ -186,7 +186,7 @@ def test_pressing_into_a_box_is_a_contact_both_engines_see_and_costs(make_env):
 
 def test_clearance_observation_matches_the_witness_points(make_env):
     obstacle = {"shape": "cylinder", "radius": 0.05, "height": 0.3, "position": [0.3, 0.3]}
-    env = make_env("ClutterReach-v0", observe_directions=True)
+    env = make_env("ClutterReach-v1", observe_directions=True)
     obs, _ = env.reset(options={"scene": scene([obstacle])})
     obs, _, _, _, info = env.step(np.zeros(7, dtype=np.float32))
     points = info["witness_points"]
@@ -204,7 +204,7 @@ def test_fcl_and_pybullet_agree_on_contact_in_most_random_steps(make_env):
     collision margin while FCL's clearance is still above the 1 mm tolerance); 1 of these 240. The steps in contact
     move with any change to the hand's path: 50 of 240 with the IK target read in float32, 40 in float64 (the two
     targets differ by under 3e-8 m), so the floor only checks that the rollouts touch things."""
-    env = make_env("ClutterReach-v0", control="ee_position", n_obstacles=12)
+    env = make_env("ClutterReach-v1", control="ee_position", n_obstacles=12)
     rng = np.random.default_rng(0)
     steps = disagreements = contacts = 0
     for seed in range(4):
@@ -232,7 +232,7 @@ def test_obstacle_distance3d_closed_forms():
 
 
 def test_straight_line_reacher_reaches_every_target_on_an_empty_table():
-    env = gym.make("ClutterReach-v0", control="ee_position", n_obstacles=0, shelf=False)
+    env = gym.make("ClutterReach-v1", control="ee_position", n_obstacles=0, shelf=False)
     reacher = StraightLineReacher.for_env(env)
     for seed in range(5):
         obs, _ = env.reset(seed=seed)
@@ -247,7 +247,7 @@ def test_straight_line_reacher_reaches_every_target_on_an_empty_table():
 
 def test_straight_line_reacher_refuses_joint_velocity_control():
     with pytest.raises(ValueError, match="control='ee_position'"):
-        StraightLineReacher.for_env(gym.make("ClutterReach-v0"))
+        StraightLineReacher.for_env(gym.make("ClutterReach-v1"))
 
 
 def _field_obs(q, target, readings=()):
@@ -308,7 +308,7 @@ def test_proximity_field_pushes_a_near_link_away_from_its_obstacle_and_ignores_a
 def test_proximity_field_touches_nothing_where_it_would_without_its_readings(make_env):
     """On layouts where the field without repulsion (the straight joint-space line) touches the clutter, the
     proximity readings keep the arm clear of it."""
-    env = make_env("ClutterReach-v0", observe_directions=True)
+    env = make_env("ClutterReach-v1", observe_directions=True)
     for seed in (SHELF_SEED, SHELF_SEED + 2):
         touched = []
         for field in (ProximityFieldReacher.for_env(env, repulsion=0.0), ProximityFieldReacher.for_env(env)):
@@ -320,12 +320,12 @@ def test_proximity_field_touches_nothing_where_it_would_without_its_readings(mak
             touched.append(max(costs) > 0.0)
         assert touched == [True, False], f"layout {seed}"
     with pytest.raises(ValueError, match="observe_directions=True"):
-        ProximityFieldReacher.for_env(make_env("ClutterReach-v0"))
+        ProximityFieldReacher.for_env(make_env("ClutterReach-v1"))
 
 
 def test_target_offset_is_opt_in_and_equals_target_minus_end_effector():
-    assert "target_offset" not in gym.make("ClutterReach-v0").observation_space.spaces
-    env = gym.make("ClutterReach-v0", control="ee_position", observe_target_offset=True)
+    assert "target_offset" not in gym.make("ClutterReach-v1").observation_space.spaces
+    env = gym.make("ClutterReach-v1", control="ee_position", observe_target_offset=True)
     obs, _ = env.reset(seed=3)
     for _ in range(3):
         assert env.observation_space.contains(obs)
@@ -337,7 +337,7 @@ def test_target_offset_is_opt_in_and_equals_target_minus_end_effector():
 def test_padding_is_a_margin_against_the_world_not_between_the_arms_own_links():
     """panda_link5 and panda_link7 sit about 22 mm apart in every start pose: padded 1 cm each, they touched, and from
     about 11 mm of padding every episode started in self-collision and every generated scene was refused back."""
-    env = gym.make("ClutterReach-v0", collision_padding=0.02)
+    env = gym.make("ClutterReach-v1", collision_padding=0.02)
     for seed in range(5):
         _, info = env.reset(seed=seed)
         model = env.unwrapped.checker.model

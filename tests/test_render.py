@@ -13,12 +13,12 @@ import pytest
 HUMAN_SCRIPT = """
 import gymnasium as gym, numpy as np, clutter_gym
 from gymnasium.utils.env_checker import check_env
-env = gym.make("ClutterNav-v0", render_mode="human")
+env = gym.make("ClutterNav-v1", render_mode="human")
 env.reset(seed=0)
 for _ in range(10):
     env.step(np.array([0.5, 0.2]))
 env.close()
-check_env(gym.make("ClutterNav-v0").unwrapped)  # with a display: every render mode, human included
+check_env(gym.make("ClutterNav-v1").unwrapped)  # with a display: every render mode, human included
 print("human-ok")
 """
 
@@ -45,4 +45,4 @@ def test_human_mode_without_a_display_fails_clearly(monkeypatch):
     if not sys.platform.startswith("linux"):
         pytest.skip("the display check applies to Linux")
     with pytest.raises(RuntimeError, match="needs a display"):
-        gym.make("ClutterNav-v0", render_mode="human")
+        gym.make("ClutterNav-v1", render_mode="human")

@@ -13,7 +13,7 @@ from clutter_gym.util.overlay import GOAL_COLOUR, ROBOT_COLOUR, ring_pixels
 
 #: Least robot pixels in a 320x240 frame, per env, over the frames the demo policy's episodes give at reset and
 #: every 25 steps, with margin under the measured counts (docs/envs.md, "What rgb_array shows").
-LEAST_ROBOT_PIXELS = {"ClutterNav-v0": 150, "ClutterReach-v0": 2000, "ClutterFly-v0": 250}
+LEAST_ROBOT_PIXELS = {"ClutterNav-v1": 150, "ClutterReach-v1": 2000, "ClutterFly-v1": 250}
 LEAST_RING_PIXELS = 80  # a ring of the least radius is about 2 pi 8 px by 2 px
 
 
@@ -53,7 +53,7 @@ def test_frames_show_the_robot_readably_and_ring_it_and_its_goal(env_id, make_en
 
 
 def test_the_fly_chase_camera_keeps_clutter_out_from_between_it_and_the_drone(make_env):
-    for env, _ in _demo_frames(make_env, "ClutterFly-v0", seeds=range(3), every=10, steps=150):
+    for env, _ in _demo_frames(make_env, "ClutterFly-v1", seeds=range(3), every=10, steps=150):
         base = env.unwrapped
         view = base.render_view()
         drone = base.robot.state().position
@@ -93,7 +93,7 @@ def test_the_trail_is_kept_while_rendering_and_starts_again_each_episode(make_en
 
 def test_human_mode_points_the_gui_camera_as_the_rgb_array_view(make_env, monkeypatch):
     """The GUI itself needs a display (test_render.py); here the call that points it is recorded."""
-    env = make_env("ClutterFly-v0", render_mode="rgb_array")
+    env = make_env("ClutterFly-v1", render_mode="rgb_array")
     env.reset(seed=0)
     base = env.unwrapped
     calls = []

@@ -26,7 +26,7 @@ def test_fcl_and_pybullet_agree_on_contact_in_more_than_99_percent_of_steps():
 
 
 def test_scripted_navigator_reaches_some_goals_without_touching_anything():
-    env = gym.make("ClutterNav-v0")
+    env = gym.make("ClutterNav-v1")
     successes = contacts = 0
     for episode in range(20):
         obs, _ = env.reset(seed=1000 + episode)

@@ -13,7 +13,7 @@ import math
 import pytest
 from helpers import report_tables
 
-SECTIONS = {"LIDAR ray count": ("lidar-rays", False), "Aerodynamics (ClutterFly-v0)": ("aero", True)}
+SECTIONS = {"LIDAR ray count": ("lidar-rays", False), "Aerodynamics (ClutterFly-v1)": ("aero", True)}
 
 
 def printed(cell: str) -> tuple[float, float]:

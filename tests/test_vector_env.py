@@ -35,9 +35,9 @@ def assert_same(a, b, where: str) -> None:
 
 
 @pytest.mark.parametrize(("env_id", "num_envs", "kwargs"), [
-    ("ClutterNav-v0", 3, {"max_episode_steps": 12, "terminate_on_collision": True}),
-    ("ClutterReach-v0", 2, {"max_episode_steps": 8}),
-    ("ClutterFly-v0", 2, {"max_episode_steps": 10}),
+    ("ClutterNav-v1", 3, {"max_episode_steps": 12, "terminate_on_collision": True}),
+    ("ClutterReach-v1", 2, {"max_episode_steps": 8}),
+    ("ClutterFly-v1", 2, {"max_episode_steps": 10}),
 ])
 def test_blocks_over_two_workers_step_as_one_sync_vector_env(env_id, num_envs, kwargs):
     """Seeded alike and given the same actions, the block vector env over two workers (uneven blocks for
@@ -66,14 +66,14 @@ def test_blocks_over_two_workers_step_as_one_sync_vector_env(env_id, num_envs, k
 
 
 def test_it_is_make_vecs_default_and_one_worker_stays_in_process():
-    envs = gym.make_vec("ClutterNav-v0", num_envs=2, workers=1)
+    envs = gym.make_vec("ClutterNav-v1", num_envs=2, workers=1)
     try:
         assert isinstance(envs.unwrapped, BlockVectorEnv) and envs.unwrapped.processes == []
         obs, _ = envs.reset(seed=[3, 4])
-        single = gym.make("ClutterNav-v0")
+        single = gym.make("ClutterNav-v1")
         np.testing.assert_array_equal(obs["lidar"][1], single.reset(seed=4)[0]["lidar"])
         single.close()
-        assert envs.get_attr("spec")[0].id == "ClutterNav-v0"
+        assert envs.get_attr("spec")[0].id == "ClutterNav-v1"
         envs.set_attr("marker", [1, 2])
         assert envs.get_attr("marker") == (1, 2)
     finally:
@@ -81,7 +81,7 @@ def test_it_is_make_vecs_default_and_one_worker_stays_in_process():
 
 
 def test_close_stops_the_workers_and_errors_come_back_named():
-    envs = BlockVectorEnv("ClutterNav-v0", num_envs=2, workers=2)
+    envs = BlockVectorEnv("ClutterNav-v1", num_envs=2, workers=2)
     envs.reset(seed=0)
     with pytest.raises(ValueError, match="action must be finite"):
         envs.step(np.full((2, 2), np.nan))
@@ -99,18 +99,18 @@ def test_close_stops_the_workers_and_errors_come_back_named():
 ])
 def test_bad_counts_name_the_field(kwargs, match):
     with pytest.raises(ValueError, match=match):
-        BlockVectorEnv("ClutterNav-v0", **kwargs)
+        BlockVectorEnv("ClutterNav-v1", **kwargs)
 
 
 def test_a_bad_env_argument_is_named_and_leaves_no_worker():
     before = set(multiprocessing.active_children())
     with pytest.raises(ValueError, match="n_rays"):
-        gym.make_vec("ClutterNav-v0", num_envs=2, workers=2, n_rays=0)
+        gym.make_vec("ClutterNav-v1", num_envs=2, workers=2, n_rays=0)
     assert set(multiprocessing.active_children()) <= before
 
 
 def test_a_wrong_number_of_seeds_or_values_and_a_reset_mask_are_named():
-    envs = BlockVectorEnv("ClutterNav-v0", num_envs=2, workers=1)
+    envs = BlockVectorEnv("ClutterNav-v1", num_envs=2, workers=1)
     try:
         with pytest.raises(ValueError, match="a list of 2 seeds"):
             envs.reset(seed=[1, 2, 3])
@@ -133,7 +133,7 @@ def test_a_killed_worker_is_named_and_close_still_ends_everything():
     """kill -9 of a worker: step raised a bare BrokenPipeError, close raised it on every call, ``closed`` stayed
     False, the local envs stayed open and the worker a zombie."""
     done = run_script(textwrap.dedent("""
-        envs = BlockVectorEnv("ClutterNav-v0", num_envs=3, workers=2)
+        envs = BlockVectorEnv("ClutterNav-v1", num_envs=3, workers=2)
         envs.reset(seed=0)
         process = envs.processes[0]
         os.kill(process.pid, signal.SIGKILL)
@@ -163,7 +163,7 @@ def test_a_killed_worker_is_named_and_close_still_ends_everything():
 def test_a_stopped_worker_times_out_with_a_named_error_and_close_ends_it():
     """A worker stopped with SIGSTOP blocked step for ever; now the answer is awaited ``worker_timeout`` seconds."""
     done = run_script(textwrap.dedent("""
-        envs = BlockVectorEnv("ClutterNav-v0", num_envs=2, workers=2, worker_timeout=3)
+        envs = BlockVectorEnv("ClutterNav-v1", num_envs=2, workers=2, worker_timeout=3)
         envs.reset(seed=0)
         process = envs.processes[0]
         os.kill(process.pid, signal.SIGSTOP)
@@ -186,7 +186,7 @@ def test_a_stopped_worker_times_out_with_a_named_error_and_close_ends_it():
 
 
 def test_a_worker_that_takes_its_time_is_awaited():
-    envs = BlockVectorEnv("ClutterNav-v0", num_envs=2, workers=2, worker_timeout=60)
+    envs = BlockVectorEnv("ClutterNav-v1", num_envs=2, workers=2, worker_timeout=60)
     try:
         envs.reset(seed=0)
         os.kill(envs.processes[0].pid, signal.SIGSTOP)
@@ -200,7 +200,7 @@ def test_a_worker_that_takes_its_time_is_awaited():
 @pytest.mark.parametrize("timeout", [0, -1, float("inf"), float("nan"), "10", True])
 def test_a_bad_worker_timeout_is_named(timeout):
     with pytest.raises(ValueError, match="worker_timeout must be a positive number of seconds or None"):
-        BlockVectorEnv("ClutterNav-v0", num_envs=2, workers=2, worker_timeout=timeout)
+        BlockVectorEnv("ClutterNav-v1", num_envs=2, workers=2, worker_timeout=timeout)
 
 
 @pytest.mark.parametrize("workers", [1, 2])
@@ -210,7 +210,7 @@ def test_a_bad_worker_timeout_is_named(timeout):
 ], ids=["too few rows", "too many rows", "one env's action", "wrong row length", "ragged"])
 def test_actions_of_the_wrong_shape_are_named_before_any_env_steps(workers, actions, got):
     """Too few rows gave "zip() argument 2 is longer than argument 1"; too many were cut short without a word."""
-    envs = BlockVectorEnv("ClutterNav-v0", num_envs=3, workers=workers)
+    envs = BlockVectorEnv("ClutterNav-v1", num_envs=3, workers=workers)
     try:
         envs.reset(seed=0)
         with pytest.raises(ValueError, match=r"actions must have shape \(3, 2\) \(one row per env\), got " + got):
@@ -223,7 +223,7 @@ def test_actions_of_the_wrong_shape_are_named_before_any_env_steps(workers, acti
 def test_workers_start_in_the_workers_context_not_a_fork():
     """The block env forked its workers while clutter_gym.util.workers.context() says a fork of a process holding
     pybullet clients is unsafe; the kwargs still reach them."""
-    envs = BlockVectorEnv("ClutterNav-v0", num_envs=2, workers=2, max_episode_steps=5)
+    envs = BlockVectorEnv("ClutterNav-v1", num_envs=2, workers=2, max_episode_steps=5)
     try:
         assert type(envs.processes[0]).__name__ == "ForkServerProcess"
         assert envs.get_attr("spec")[1].max_episode_steps == 5

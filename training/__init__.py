@@ -1,6 +1,6 @@
 """Policies and training tooling for clutter-gym envs (installed as ``clutter_gym.training``).
 
-``load(run_dir)`` gives a trained run's :class:`Agent`. The scripted baselines, the configs and the ``*Train-v0``
+``load(run_dir)`` gives a trained run's :class:`Agent`. The scripted baselines, the configs and the ``*Train-v1``
 envs need only the envs' own dependencies; ``load`` and ``Agent`` need the ``[train]`` extra (stable-baselines3 and
 torch), which is imported when one of them is first used, so that a bare ``pip install clutter-gym`` can run the
 envs, their scripted policies and the command line's ``demo`` and ``profiles``.

@@ -198,7 +198,7 @@ def _residual(config: TrainConfig):
     """The run's residual on its base controller; ClutterNav's and mapless ClutterReach's are built on an env made
     with the run's settings (they read its LIDAR or its proximity readings)."""
     mapless = not config.env_kwargs.get("subgoal_lookahead")
-    reads_env = (config.env_id == "ClutterNav-v0" or mapless and config.env_id == "ClutterReach-v0"
+    reads_env = (config.env_id == "ClutterNav-v1" or mapless and config.env_id == "ClutterReach-v1"
                  or config.residual_space == "waypoint")
     env = gym.make(config.env_id, **config.make_kwargs()) if reads_env else None
     try:

@@ -184,7 +184,7 @@ def train_overrides(args: argparse.Namespace) -> dict[str, Any]:
 def add_parsers(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("train", help="train PPO into a run folder (or --resume one)",
                        description="Train PPO into a run folder, or continue one with --resume.")
-    p.add_argument("--env", choices=ENV_IDS, default=None, help="env id (default ClutterNav-v0)")
+    p.add_argument("--env", choices=ENV_IDS, default=None, help="env id (default ClutterNav-v1)")
     p.add_argument("--timesteps", type=positive_int, default=None, help="total env steps (default from the files)")
     p.add_argument("--n-envs", type=positive_int, default=None, help="parallel envs (default from the files)")
     p.add_argument("--seed", type=int, default=None, help="seeds PPO and the envs (env i gets SEED + i; default 0)")
@@ -221,7 +221,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("sweep", help="sim-to-real sweep: train under profiles, evaluate under profiles, CSV + heatmap",
                        description="Train under each --train-noise profile and seed, evaluate every run under "
                                    "each --eval-noise profile; write sweep.csv and heatmap.png.")
-    p.add_argument("--env", choices=ENV_IDS, default="ClutterNav-v0", help="env id")
+    p.add_argument("--env", choices=ENV_IDS, default="ClutterNav-v1", help="env id")
     p.add_argument("--train-noise", type=profile_list, default=["none", "nominal"],
                    help="comma-separated profiles to train under")
     p.add_argument("--eval-noise", type=profile_list, default=["none", "nominal", "harsh"],
@@ -248,7 +248,7 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
                        description="The main job: train PPO with the defaults (or resume that run), evaluate it "
                                    "with clean sensors and under the nominal profile, and write report.md, a "
                                    "learning curve and an episode GIF.")
-    p.add_argument("--env", choices=ENV_IDS, default="ClutterNav-v0", help="env id")
+    p.add_argument("--env", choices=ENV_IDS, default="ClutterNav-v1", help="env id")
     p.add_argument("--timesteps", type=positive_int, default=None,
                    help="training budget in env steps (default from the files)")
     p.add_argument("--seed", type=int, default=0, help="training seed")
@@ -274,7 +274,7 @@ def run_train(args: argparse.Namespace) -> int:
             run = RunDir(args.resume)
             check_env_builds(run.read_config())  # a run from someone else: its env is refused here, in one line
         else:
-            args.env = args.env or "ClutterNav-v0"
+            args.env = args.env or "ClutterNav-v1"
             config = config_for(args.env, train_overrides(args))
             run = start(config, args.out or f"runs/{config.env_id}/{config.noise}-seed{config.seed}")
     print(f"run folder: {run.root}")

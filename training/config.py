@@ -120,7 +120,7 @@ class TrainConfig:
             values evenly from -1 to 1, picked from a categorical distribution
             (:mod:`clutter_gym.training.binned_actions`: a student that cannot average the teacher's modes).
         scan_memory: "" (none), or what the policy is told of every LIDAR return of the episode, kept by dead
-            reckoning: ``"polar"`` or ``"grid"`` (:mod:`clutter_gym.training.scan_memory`; ClutterNav-v0).
+            reckoning: ``"polar"`` or ``"grid"`` (:mod:`clutter_gym.training.scan_memory`; ClutterNav-v1).
         frame_stack: the policy sees its episode's last ``frame_stack`` observations (every entry concatenated,
             oldest first; see :mod:`clutter_gym.training.memory`). 1: the current observation only.
         train_layouts: 0: every training reset samples a new layout; N > 0: the training envs share out N
@@ -133,13 +133,13 @@ class TrainConfig:
             ``env_kwargs`` and ``noise`` alone.
         residual_gain: 0: the policy's action is the env's; g > 0: the env's action is
             ``clip(pursuit(obs) + policy action, -1, 1)``, a residual policy on a base controller with gain g
-            (ClutterNav-v0's potential field on the goal, or ClutterReach-v0's and ClutterFly-v0's pursuit of the
+            (ClutterNav-v1's potential field on the goal, or ClutterReach-v1's and ClutterFly-v1's pursuit of the
             subgoal with ``subgoal_lookahead > 0``; the pursuits and what their gain means:
             :mod:`clutter_gym.training.residual`).
         residual_space: what a residual policy's action adds to: ``"action"``, the base controller's action;
-            ``"velocity"`` (ClutterFly-v0), the velocity its flyer commands, the policy's action then being a
+            ``"velocity"`` (ClutterFly-v1), the velocity its flyer commands, the policy's action then being a
             (3,) velocity offset in units of the flyer's top speed (:func:`clutter_gym.training.residual.residual_map`).
-        residual_base: gains of the base controller other than its defaults, ClutterFly-v0's flyer only
+        residual_base: gains of the base controller other than its defaults, ClutterFly-v1's flyer only
             (``{attitude_gain: 4.0}``; the names: :data:`clutter_gym.training.residual.FLYER_GAINS`).
         env_kwargs: extra ``gym.make`` keyword arguments. Its ``noise`` entry, if any, holds noise-section
             overrides (``{"lidar": {"range_sigma": 0.02}}``) applied on top of whichever profile the env is
@@ -153,7 +153,7 @@ class TrainConfig:
         ppo: PPO hyperparameters.
     """
 
-    env_id: str = "ClutterNav-v0"
+    env_id: str = "ClutterNav-v1"
     seed: int = 0
     noise: str = "none"
     timesteps: int = 500_000
@@ -209,17 +209,17 @@ class TrainConfig:
         if not all(isinstance(key, str) for key in self.critic_inputs):
             raise ValueError(f"critic_inputs must be a list of observation entry names, got {list(self.critic_inputs)}")
         if self.teacher.name and self.residual_gain:
-            raise ValueError("a student distilled from a teacher acts on its own (residual_gain 0); ClutterFly-v0's "
+            raise ValueError("a student distilled from a teacher acts on its own (residual_gain 0); ClutterFly-v1's "
                              "acts through the flight controller with residual_space: velocity")
         if self.residual_gain and not (self.env_id in MAPLESS_ENVS
                                        or self.env_id in PURSUIT_ENVS and self.env_kwargs.get("subgoal_lookahead")):
             raise ValueError(f"residual_gain > 0 needs env_id in {MAPLESS_ENVS}, or in {PURSUIT_ENVS} with "
                              "env_kwargs.subgoal_lookahead > 0")
-        reach_field = self.env_id == "ClutterReach-v0" and not self.env_kwargs.get("subgoal_lookahead")
+        reach_field = self.env_id == "ClutterReach-v1" and not self.env_kwargs.get("subgoal_lookahead")
         if self.residual_gain and reach_field and not (self.env_kwargs.get("observe_directions")
                                                        and self.env_kwargs.get("control", "joint_velocity")
                                                        == "joint_velocity"):
-            raise ValueError("residual_gain > 0 on ClutterReach-v0 without a subgoal (a residual on the proximity "
+            raise ValueError("residual_gain > 0 on ClutterReach-v1 without a subgoal (a residual on the proximity "
                              "field) needs env_kwargs.observe_directions: true and control: joint_velocity")
         check_residual_space(self.env_id, self.residual_space)
         if self.residual_space != "action" and not (self.residual_gain or self.teacher.name):
@@ -259,7 +259,7 @@ class TrainConfig:
 
     @property
     def uses_base(self) -> bool:
-        """The policy acts through a base controller: a residual on it, or (a student on ClutterFly-v0) the
+        """The policy acts through a base controller: a residual on it, or (a student on ClutterFly-v1) the
         flight controller flying the velocity the policy commands."""
         return bool(self.residual_gain) or self.residual_space != "action"
 

@@ -1,7 +1,7 @@
-"""ClutterFly-v0's flyer steered by a LIDAR potential field: sensor-only local obstacle avoidance in 3-D.
+"""ClutterFly-v1's flyer steered by a LIDAR potential field: sensor-only local obstacle avoidance in 3-D.
 
 The velocity it flies is a pull along a target direction (towards the goal, or a waypoint direction a policy picks)
-plus a push away from every LIDAR return closer than ``influence`` (Khatib's field, as ClutterNav-v0's
+plus a push away from every LIDAR return closer than ``influence`` (Khatib's field, as ClutterNav-v1's
 :class:`~clutter_gym.training.baselines.PotentialFieldNavigator` on its 2-D scan), slowed where the returns ahead
 are close, and the :class:`~clutter_gym.training.baselines.CascadedFlyer`'s inner loops fly it, turning the nose
 (and with it the LIDAR) towards the way it flies. Like every potential field it stops in front of obstacles whose

@@ -7,7 +7,7 @@ all of the episode's returns (``keep=True``, ``"seen-map"``: a robot that maps w
 memory could) or the current scan's alone (``keep=False``, ``"in-range"``: a memoryless student's view). Walls,
 floor and ceiling are known, as an arena's size is. An obstacle seen is known whole, so the measure is an upper
 bound on what the returns alone tell. The plan is redone whenever the known set changes; measurement only, far too
-slow to label training data at scale on ClutterFly-v0.
+slow to label training data at scale on ClutterFly-v1.
 """
 
 from __future__ import annotations
@@ -57,7 +57,7 @@ class _Known:
 
 
 class SeenMapNavigator(PlannerNavigator):
-    """ClutterNav-v0's planner reference (committed, as its student's teacher) on the obstacles the LIDAR has hit."""
+    """ClutterNav-v1's planner reference (committed, as its student's teacher) on the obstacles the LIDAR has hit."""
 
     def __init__(self, env: gym.Env, commit: float, keep: bool, waypoint: bool = False) -> None:
         super().__init__(env, commit, waypoint)
@@ -104,7 +104,7 @@ def _footprint_distance(points: np.ndarray, obstacle: Any) -> np.ndarray:
 
 
 class SeenMapFlyer(PlannerFlyer):
-    """ClutterFly-v0's planner reference on the obstacles its LIDAR has hit."""
+    """ClutterFly-v1's planner reference on the obstacles its LIDAR has hit."""
 
     def __init__(self, env: gym.Env, keep: bool, waypoint: bool = False) -> None:
         super().__init__(env, waypoint)

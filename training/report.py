@@ -71,7 +71,7 @@ def main_job(run: RunDir, out: Path, timesteps: int | None, episodes: int, progr
     train_s = time.perf_counter() - t0
     summaries = {}
     t0 = time.perf_counter()
-    navigation = run.read_config().env_id == "ClutterNav-v0"
+    navigation = run.read_config().env_id == "ClutterNav-v1"
     for profile in PROFILES:
         video = out / "episode.gif" if profile == "none" and not navigation else None
         summary = evaluate(run.root, noise=profile, episodes=episodes, seed=EVAL_SEED, video=video, progress=progress)
@@ -141,11 +141,11 @@ def plot_learning_curve(run: RunDir, path: Path) -> Path | None:
 
 
 #: Per env, the target on clean sensors: success rate at least, collision rate at most, wall time of training and
-#: evaluation at most. ClutterNav-v0's is the main job's; ClutterFly-v0's is its own issue's.
+#: evaluation at most. ClutterNav-v1's is the main job's; ClutterFly-v1's is its own issue's.
 TARGETS = {
-    "ClutterNav-v0": {"success_rate": 0.90, "collision_rate": 0.05, "minutes": 15.0},
-    "ClutterReach-v0": {"success_rate": 0.90, "collision_rate": 0.05, "minutes": 15.0},
-    "ClutterFly-v0": {"success_rate": 0.80, "collision_rate": 0.10, "minutes": 15.0},
+    "ClutterNav-v1": {"success_rate": 0.90, "collision_rate": 0.05, "minutes": 15.0},
+    "ClutterReach-v1": {"success_rate": 0.90, "collision_rate": 0.05, "minutes": 15.0},
+    "ClutterFly-v1": {"success_rate": 0.80, "collision_rate": 0.10, "minutes": 15.0},
 }
 
 
@@ -163,10 +163,10 @@ def _verdict(env_id: str, metrics: dict, seconds: float) -> str:
 #: Per map-based env with a subgoal pursuit: what else the policy sees, the lookahead's unit, the path, the pursuit
 #: a residual policy acts on, and who carries the skill then.
 _MAP_BASED = {
-    "ClutterReach-v0": ("its joints, clearances and the target", "rad",
+    "ClutterReach-v1": ("its joints, clearances and the target", "rad",
                         "on a joint-space path planned over the known layout", "a pursuit of that subgoal",
                         "the planner carries most of the skill; the baseline table has the pursuit alone"),
-    "ClutterFly-v0": ("the flight controller's state and the goal", "m",
+    "ClutterFly-v1": ("the flight controller's state and the goal", "m",
                       "on the shortest path through the known layout",
                       "a cascaded position controller flying to that subgoal",
                       "the planner and the controller carry most of the skill; the baseline table has them alone"),
@@ -175,9 +175,9 @@ _MAP_BASED = {
 
 #: The sensor-only base controller a residual policy adds its actions to, per env.
 _MAPLESS_BASE = {
-    "ClutterNav-v0": "a potential field over the same LIDAR and goal",
-    "ClutterReach-v0": "a joint-space potential field over the same proximity readings and target",
-    "ClutterFly-v0": "a position controller flying straight at the goal, which sees no obstacle",
+    "ClutterNav-v1": "a potential field over the same LIDAR and goal",
+    "ClutterReach-v1": "a joint-space potential field over the same proximity readings and target",
+    "ClutterFly-v1": "a position controller flying straight at the goal, which sees no obstacle",
 }
 
 
@@ -197,7 +197,7 @@ def _observation_line(config) -> str:
                 "the mapless task; train without `subgoal_lookahead` for that.")
     else:
         sensed = ("its joint positions and velocities, each link's proximity reading and the target's position"
-                  if config.env_id == "ClutterReach-v0" else
+                  if config.env_id == "ClutterReach-v1" else
                   f"its sensors ({', '.join(config.env_kwargs.get('sensors', ['the env default']))}), its own "
                   "velocity and the goal's position relative to it")
         line = (f"**Sensor-only agent.** The policy reads only what the robot measures: {sensed}; no map, no "
@@ -259,7 +259,7 @@ def render_report(run: RunDir, summaries: dict, curve: Path | None, train_s: flo
     if curve is not None:
         lines += [f"![learning curve]({curve.name})", ""]
     lines += ["![evaluation episodes, clean sensors](episode.gif)", ""]
-    if config.env_id == "ClutterNav-v0":
+    if config.env_id == "ClutterNav-v1":
         from clutter_gym.training.episode_view import EVERY, SPEEDUP
 
         lines += [f"*Every {EVERY}th step of two evaluation episodes, at {SPEEDUP:g}x the real speed.*", ""]

@@ -1,5 +1,5 @@
 """A residual policy on a base controller: the env's action is ``clip(pursuit(obs) + policy action, -1, 1)``, or
-on ClutterFly-v0 with ``residual_space="velocity"`` the flyer's inner loops flying its commanded velocity plus
+on ClutterFly-v1 with ``residual_space="velocity"`` the flyer's inner loops flying its commanded velocity plus
 the policy's offset (:func:`residual_map`).
 
 A simple controller (the pursuit) already does much of the task; the policy learns the correction: where the
@@ -7,13 +7,13 @@ pursuit cuts a corner into an obstacle, overshoots, stops short of the target or
 Training wraps each env in :class:`SubgoalResidual`; a loaded agent adds the same pursuit term in
 ``Agent.predict``, so it acts on plain env observations. The pursuit of each env (:func:`subgoal_pursuit`):
 
-* ClutterNav-v0: :class:`~clutter_gym.training.baselines.PotentialFieldNavigator` on the ``goal``, reading the
+* ClutterNav-v1: :class:`~clutter_gym.training.baselines.PotentialFieldNavigator` on the ``goal``, reading the
   env's LIDAR: sensor-only, no map (``gain``: its turn gain, angular command per radian of heading error);
-* ClutterReach-v0 (map-based, ``subgoal_lookahead > 0``): ``clip(gain * subgoal, -1, 1)``, every joint driven
+* ClutterReach-v1 (map-based, ``subgoal_lookahead > 0``): ``clip(gain * subgoal, -1, 1)``, every joint driven
   towards the joint-space subgoal on a path planned over the known layout, at a speed proportional to its offset
   (``gain``: actions per radian); without a subgoal, :class:`~clutter_gym.training.baselines.ProximityFieldReacher`
   on the target, reading the arm's proximity readings: sensor-only (``gain``: its attraction, 1/s);
-* ClutterFly-v0: :class:`~clutter_gym.training.baselines.CascadedFlyer`, a flight stack's position controller
+* ClutterFly-v1: :class:`~clutter_gym.training.baselines.CascadedFlyer`, a flight stack's position controller
   (``gain``: its position gain, commanded m/s per metre of offset), on the subgoal (map-based, with
   ``subgoal_lookahead > 0``) or, without one, straight at the goal: sensor-only, it sees no obstacle, and the
   policy's LIDAR or camera is what steers around them.
@@ -32,18 +32,18 @@ from clutter_gym.util.checks import is_number
 
 Pursuit = Callable[[dict[str, np.ndarray]], np.ndarray]
 #: The envs with a pursuit of the subgoal (map-based), and those with a base controller on the goal (sensor-only).
-PURSUIT_ENVS = ("ClutterReach-v0", "ClutterFly-v0")
-MAPLESS_ENVS = ("ClutterNav-v0", "ClutterReach-v0", "ClutterFly-v0")
+PURSUIT_ENVS = ("ClutterReach-v1", "ClutterFly-v1")
+MAPLESS_ENVS = ("ClutterNav-v1", "ClutterReach-v1", "ClutterFly-v1")
 #: What a residual policy's action adds to (:func:`residual_map`).
 RESIDUAL_SPACES = ("action", "velocity", "waypoint")
-#: Turn gain of ClutterNav-v0's potential field when a policy picks its waypoint (its own default).
+#: Turn gain of ClutterNav-v1's potential field when a policy picks its waypoint (its own default).
 TURN_GAIN = 1.5
 #: The angles of a waypoint a policy picks (``residual_space="waypoint"``), as the radians its action entries -1..1
-#: span: ClutterNav-v0's bearing; ClutterFly-v0's azimuth and elevation, body frame.
-WAYPOINT_SCALES = {"ClutterNav-v0": (math.pi,), "ClutterFly-v0": (math.pi, math.pi / 2)}
+#: span: ClutterNav-v1's bearing; ClutterFly-v1's azimuth and elevation, body frame.
+WAYPOINT_SCALES = {"ClutterNav-v1": (math.pi,), "ClutterFly-v1": (math.pi, math.pi / 2)}
 #: Yaw rate per radian between the nose and the velocity commanded, 1/s, of the velocity residual's flyer.
 FACING_GAIN = 2.0
-#: The gains of ClutterFly-v0's flyer a run may set (``residual_base``), each in (0, :data:`MAX_BASE_GAIN`]; its
+#: The gains of ClutterFly-v1's flyer a run may set (``residual_base``), each in (0, :data:`MAX_BASE_GAIN`]; its
 #: position gain is ``residual_gain``.
 FLYER_GAINS = ("velocity_gain", "max_speed", "max_accel", "attitude_gain")
 MAX_BASE_GAIN = 100.0
@@ -52,10 +52,10 @@ MAX_BASE_GAIN = 100.0
 def subgoal_pursuit(env_id: str, gain: float, env: gym.Env | None = None, mapless: bool = False,
                    space: str = "action", base: dict[str, float] | None = None) -> Pursuit:
     """The pursuit of ``env_id`` with ``gain`` (> 0): action(s) for one observation or a batch; ``mapless``: the
-    sensor-only base on the goal instead of the subgoal (ClutterNav-v0 has only that one); ``space="velocity"``
-    (ClutterFly-v0): the flyer that turns its nose towards the velocity it flies (:func:`residual_map`); ``base``:
-    ClutterFly-v0's flyer gains other than its defaults (:func:`check_residual_base`).
-    ClutterNav-v0's and mapless ClutterReach-v0's read the LIDAR or the proximity readings of ``env`` (an env made
+    sensor-only base on the goal instead of the subgoal (ClutterNav-v1 has only that one); ``space="velocity"``
+    (ClutterFly-v1): the flyer that turns its nose towards the velocity it flies (:func:`residual_map`); ``base``:
+    ClutterFly-v1's flyer gains other than its defaults (:func:`check_residual_base`).
+    ClutterNav-v1's and mapless ClutterReach-v1's read the LIDAR or the proximity readings of ``env`` (an env made
     with the run's settings), which they then need.
 
     Raises:
@@ -64,30 +64,30 @@ def subgoal_pursuit(env_id: str, gain: float, env: gym.Env | None = None, maples
     """
     from clutter_gym import TRAIN_IDS
 
-    env_id = TRAIN_IDS.get(env_id, env_id)  # a *Train-v0 id is its env with the shipped settings
+    env_id = TRAIN_IDS.get(env_id, env_id)  # a *Train-v1 id is its env with the shipped settings
     check_residual_space(env_id, space)
     check_residual_base(env_id, base or {})
-    if env_id == "ClutterNav-v0":
+    if env_id == "ClutterNav-v1":
         if env is None:
-            raise ValueError("ClutterNav-v0's potential field needs the env, for its LIDAR's beam angles and range")
+            raise ValueError("ClutterNav-v1's potential field needs the env, for its LIDAR's beam angles and range")
         if space == "waypoint":
             return _field(env, gain or TURN_GAIN)
         return _batched(_field(env, gain))
-    if env_id == "ClutterReach-v0" and not mapless:
+    if env_id == "ClutterReach-v1" and not mapless:
         return lambda obs: np.clip(gain * np.asarray(obs["subgoal"], dtype=np.float32), -1.0, 1.0)
-    if env_id == "ClutterReach-v0":
+    if env_id == "ClutterReach-v1":
         from clutter_gym.training.baselines import ProximityFieldReacher
 
         if env is None:
-            raise ValueError("ClutterReach-v0's proximity field needs the env, for its control mode and readings")
+            raise ValueError("ClutterReach-v1's proximity field needs the env, for its control mode and readings")
         return ProximityFieldReacher.for_env(env, attraction=gain)
-    if env_id == "ClutterFly-v0" and space == "waypoint":
+    if env_id == "ClutterFly-v1" and space == "waypoint":
         from clutter_gym.training.field_flyer import FieldFlyer
 
         if env is None:
-            raise ValueError("ClutterFly-v0's field flyer needs the env, for its LIDAR's beams and range")
+            raise ValueError("ClutterFly-v1's field flyer needs the env, for its LIDAR's beams and range")
         return FieldFlyer.for_env(env)
-    if env_id == "ClutterFly-v0":
+    if env_id == "ClutterFly-v1":
         from clutter_gym.training.baselines import CascadedFlyer
 
         facing = FACING_GAIN if space == "velocity" else 0.0
@@ -101,8 +101,8 @@ def check_residual_space(env_id: str, space: str) -> None:
     """Raises a named ValueError unless ``space`` is one of :data:`RESIDUAL_SPACES` that ``env_id`` has."""
     if space not in RESIDUAL_SPACES:
         raise ValueError(f"residual_space must be one of {RESIDUAL_SPACES}, got {space!r}")
-    if space == "velocity" and env_id != "ClutterFly-v0":
-        raise ValueError(f"residual_space 'velocity' is ClutterFly-v0's (a residual on its flyer's velocity "
+    if space == "velocity" and env_id != "ClutterFly-v1":
+        raise ValueError(f"residual_space 'velocity' is ClutterFly-v1's (a residual on its flyer's velocity "
                          f"command), got {env_id!r}")
     if space == "waypoint" and env_id not in WAYPOINT_SCALES:
         raise ValueError(f"residual_space 'waypoint' is {' and '.join(WAYPOINT_SCALES)}'s (the direction their "
@@ -110,14 +110,14 @@ def check_residual_space(env_id: str, space: str) -> None:
 
 
 def check_residual_base(env_id: str, base: dict[str, float]) -> None:
-    """Raises a named ValueError unless ``base`` sets only gains of ClutterFly-v0's flyer (:data:`FLYER_GAINS`),
+    """Raises a named ValueError unless ``base`` sets only gains of ClutterFly-v1's flyer (:data:`FLYER_GAINS`),
     each a number in (0, :data:`MAX_BASE_GAIN`]."""
     if not isinstance(base, dict):
         raise ValueError(f"residual_base must be a mapping of {FLYER_GAINS} to numbers, got {base!r}")
     if not base:
         return
-    if env_id != "ClutterFly-v0":
-        raise ValueError(f"residual_base sets the gains of ClutterFly-v0's flyer, got env {env_id!r}")
+    if env_id != "ClutterFly-v1":
+        raise ValueError(f"residual_base sets the gains of ClutterFly-v1's flyer, got env {env_id!r}")
     for key, value in base.items():
         if key not in FLYER_GAINS:
             raise ValueError(f"residual_base.{key} is not a gain of the flyer; it has {FLYER_GAINS}")
@@ -129,7 +129,7 @@ def _field(env: gym.Env, gain: float) -> Pursuit:
     from clutter_gym.training.baselines import PotentialFieldNavigator
 
     if "lidar" not in env.observation_space.spaces:
-        raise ValueError("a residual on ClutterNav-v0's potential field needs 'lidar' in sensors")
+        raise ValueError("a residual on ClutterNav-v1's potential field needs 'lidar' in sensors")
     field = PotentialFieldNavigator.for_env(env)
     field.turn_gain = gain
     return field
@@ -160,11 +160,11 @@ def residual_action(obs: dict[str, np.ndarray], action: np.ndarray, pursuit: Pur
 def residual_map(pursuit: Pursuit, space: str = "action") -> Callable[[dict[str, np.ndarray], Any], np.ndarray]:
     """``(raw observation, policy action) -> env action`` of a residual policy on ``pursuit`` (one or a batch),
     from :func:`subgoal_pursuit` with the same ``space``: ``"action"``, the policy's action adds to the pursuit's
-    (:func:`residual_action`); ``"velocity"`` (ClutterFly-v0), it adds to the velocity the pursuit's
+    (:func:`residual_action`); ``"velocity"`` (ClutterFly-v1), it adds to the velocity the pursuit's
     :class:`~clutter_gym.training.baselines.CascadedFlyer` commands, in units of its top speed along body x, y, z,
     and the sum, capped at that speed, goes to the flyer's inner loops, which also turn the nose towards it
     (``yaw_gain`` :data:`FACING_GAIN`): the policy steers, the flyer flies, and the LIDAR and the camera look where
-    the drone goes. A zero action is the pursuit's own action either way. ``"waypoint"`` (ClutterNav-v0): the policy's
+    the drone goes. A zero action is the pursuit's own action either way. ``"waypoint"`` (ClutterNav-v1): the policy's
     (1,) action is the bearing of the point to steer for, in units of pi, and the pursuit's
     :class:`~clutter_gym.training.baselines.PotentialFieldNavigator` steers for it (the policy picks where to go, the
     field how to get there past the obstacles its LIDAR sees).
@@ -186,7 +186,7 @@ def residual_map(pursuit: Pursuit, space: str = "action") -> Callable[[dict[str,
 
 
 def policy_action_space(env_action_space: gym.spaces.Box, space: str = "action",
-                        env_id: str = "ClutterNav-v0") -> gym.spaces.Box:
+                        env_id: str = "ClutterNav-v1") -> gym.spaces.Box:
     """The action space of a residual policy in ``space`` on ``env_id`` with ``env_action_space``."""
     if space == "velocity":
         return gym.spaces.Box(-1.0, 1.0, (3,), np.float32)
@@ -205,7 +205,7 @@ class SubgoalResidual(gym.Wrapper):
             (on its subgoal when it has one, else on the goal).
         gain: the pursuit's gain (> 0; see :func:`subgoal_pursuit`).
         space: what the residual adds to (:func:`residual_map`).
-        base: ClutterFly-v0's flyer gains other than its defaults (:func:`check_residual_base`).
+        base: ClutterFly-v1's flyer gains other than its defaults (:func:`check_residual_base`).
     """
 
     def __init__(self, env: gym.Env, gain: float, space: str = "action", base: dict[str, float] | None = None) -> None:

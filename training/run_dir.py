@@ -31,6 +31,7 @@ import platform
 import re
 import shutil
 import subprocess
+import warnings
 from collections.abc import Iterator
 from contextlib import contextmanager
 from importlib import metadata
@@ -39,6 +40,7 @@ from typing import Any
 
 import yaml
 
+from clutter_gym import RENAMED_IDS
 from clutter_gym.training.config import TrainConfig
 from clutter_gym.training.normalizer import NORMALIZER_FILE, save_normalizer
 from clutter_gym.util.atomic import atomic_folder, atomic_path, write_text_atomically
@@ -143,6 +145,12 @@ class RunDir:
         if run_format != RUN_FORMAT:
             raise IncompatibleRunError(f"{self.root} is a run of format {run_format!r}, written by {wrote}; this "
                                        f"{here} reads format {RUN_FORMAT}: use the version that wrote it")
+        if data.get("env_id") in RENAMED_IDS:
+            new_id = RENAMED_IDS[data["env_id"]]
+            warnings.warn(f"{self.root} was trained on {data['env_id']}, which {here} no longer has: it is read as "
+                          f"{new_id}, whose defaults changed in 0.3.0 (CHANGELOG.md); retrain it for that env's "
+                          "results", UserWarning, stacklevel=2)
+            data["env_id"] = new_id
         try:
             return TrainConfig.from_dict(data)
         except (TypeError, ValueError) as exc:

@@ -3,15 +3,15 @@ visits (:mod:`clutter_gym.training.distill`).
 
 Each env has the map-based planner reference of docs/baselines.md as its teacher (``"planner"``): it reads the
 ``subgoal`` entry, the point a fixed length ahead on a path planned over the known layout, which the env adds when
-it is made with the teacher's env arguments (:data:`TEACHERS`) on top of the student's own. ClutterNav-v0's
+it is made with the teacher's env arguments (:data:`TEACHERS`) on top of the student's own. ClutterNav-v1's
 ``"committed"`` is the same planner keeping the turn its robot has begun where both ways round are about as long
-(:class:`PlannerNavigator`). ``"seen-map"`` and ``"in-range"`` (ClutterNav-v0, ClutterFly-v0) plan on only the
+(:class:`PlannerNavigator`). ``"seen-map"`` and ``"in-range"`` (ClutterNav-v1, ClutterFly-v1) plan on only the
 obstacles the LIDAR has hit this episode, or hits in its current scan (:mod:`clutter_gym.training.known_map`):
 what a student with a memory, or without one, could in principle match. They measure how much of the
 student-teacher gap the map explains (docs/learning.md, "How much of the teacher a student can see").
 
-A teacher answers in the student's action space: the env's for ClutterNav-v0 and ClutterReach-v0; for
-ClutterFly-v0, the velocity the flight controller's inner loops fly (:data:`clutter_gym.training.residual`'s
+A teacher answers in the student's action space: the env's for ClutterNav-v1 and ClutterReach-v1; for
+ClutterFly-v1, the velocity the flight controller's inner loops fly (:data:`clutter_gym.training.residual`'s
 ``"velocity"`` space with no base velocity), in units of the flyer's top speed.
 :class:`TeacherLabels` runs the teacher inside the env's process, on the env's own state, and reports its action in
 ``info``; with probability :attr:`TeacherLabels.teacher_share` an episode is driven by the teacher instead of the
@@ -29,15 +29,15 @@ import numpy as np
 
 #: Each env's teachers, the first its default, and the env arguments each one reads on top of the student's.
 TEACHERS: dict[str, dict[str, dict[str, Any]]] = {
-    "ClutterNav-v0": {"planner": {"subgoal_lookahead": 0.5}, "committed": {"subgoal_lookahead": 0.5},
+    "ClutterNav-v1": {"planner": {"subgoal_lookahead": 0.5}, "committed": {"subgoal_lookahead": 0.5},
                       "seen-map": {"subgoal_lookahead": 0.5}, "in-range": {"subgoal_lookahead": 0.5}},
-    "ClutterReach-v0": {"planner": {"subgoal_lookahead": 0.1}},
-    "ClutterFly-v0": {"planner": {"subgoal_lookahead": 0.5}, "seen-map": {"subgoal_lookahead": 0.5},
+    "ClutterReach-v1": {"planner": {"subgoal_lookahead": 0.1}},
+    "ClutterFly-v1": {"planner": {"subgoal_lookahead": 0.5}, "seen-map": {"subgoal_lookahead": 0.5},
                       "in-range": {"subgoal_lookahead": 0.5}},
 }
-#: radians: how much shorter the other way round may be before ClutterNav-v0's committed teachers turn it
+#: radians: how much shorter the other way round may be before ClutterNav-v1's committed teachers turn it
 COMMIT = math.pi / 3
-#: ClutterReach-v0's pursuit gain on the subgoal (actions per radian), the map-based block's (ppo.yml).
+#: ClutterReach-v1's pursuit gain on the subgoal (actions per radian), the map-based block's (ppo.yml).
 REACH_PURSUIT_GAIN = 15.0
 
 
@@ -61,7 +61,7 @@ class Teacher(ABC):
 
 
 class PlannerNavigator(Teacher):
-    """ClutterNav-v0's planner reference: the potential field steering for the subgoal on the known layout's
+    """ClutterNav-v1's planner reference: the potential field steering for the subgoal on the known layout's
     planned path (:class:`~clutter_gym.training.baselines.PotentialFieldNavigator` with ``goal_key="subgoal"``).
 
     With ``commit`` > 0 (radians) it keeps turning the way the robot turns (its yaw rate, the ``velocity``
@@ -99,7 +99,7 @@ class PlannerNavigator(Teacher):
 
 
 class PlannerReacher(Teacher):
-    """ClutterReach-v0's planner reference: every joint driven towards the subgoal on the joint-space path planned
+    """ClutterReach-v1's planner reference: every joint driven towards the subgoal on the joint-space path planned
     over the known layout, ``clip(gain x subgoal)`` (the map-based block's pursuit)."""
 
     def __call__(self, obs: dict[str, np.ndarray], info: dict[str, Any]) -> np.ndarray:
@@ -107,7 +107,7 @@ class PlannerReacher(Teacher):
 
 
 class PlannerFlyer(Teacher):
-    """ClutterFly-v0's planner reference: the cascaded position controller's velocity towards the subgoal on the
+    """ClutterFly-v1's planner reference: the cascaded position controller's velocity towards the subgoal on the
     shortest path through the known layout, in units of its top speed (the student's velocity commands); or, for a
     student that picks its waypoint (``waypoint``), the subgoal's azimuth and elevation in units of pi and pi / 2."""
 
@@ -137,12 +137,12 @@ def make_teacher(env_id: str, name: str, env: gym.Env, space: str = "action") ->
         from clutter_gym.training.known_map import SeenMapFlyer, SeenMapNavigator
 
         keep = name == "seen-map"
-        if env_id == "ClutterNav-v0":
+        if env_id == "ClutterNav-v1":
             return SeenMapNavigator(env, COMMIT, keep, space == "waypoint")
         return SeenMapFlyer(env, keep, space == "waypoint")
-    if env_id == "ClutterNav-v0":
+    if env_id == "ClutterNav-v1":
         return PlannerNavigator(env, COMMIT if name == "committed" else 0.0, space == "waypoint")
-    if env_id == "ClutterReach-v0":
+    if env_id == "ClutterReach-v1":
         return PlannerReacher()
     return PlannerFlyer(env, space == "waypoint")
 
@@ -155,7 +155,7 @@ class TeacherLabels(gym.Wrapper):
     seed, so the env's ``np_random`` (its layouts) is the same with the wrapper as without it.
 
     Args:
-        env: the env, made with the student's and the teacher's arguments (and, on ClutterFly-v0, behind the
+        env: the env, made with the student's and the teacher's arguments (and, on ClutterFly-v1, behind the
             velocity interface the student acts through).
         teacher: the teacher, answering in ``env``'s action space.
         teacher_share: the probability that an episode is driven by the teacher, in [0, 1].

@@ -1,10 +1,10 @@
 """The shipped PPO settings in rl-zoo3's hyperparameter format, so the zoo trains these envs as we do.
 
-    python -m rl_zoo3.train --algo ppo --env ClutterNavTrain-v0 --gym-packages clutter_gym \\
+    python -m rl_zoo3.train --algo ppo --env ClutterNavTrain-v1 --gym-packages clutter_gym \\
         --conf-file clutter_gym.training.zoo
 
 rl-zoo3 imports this module and reads ``hyperparams`` (a block per env id). Its blocks are keyed by the
-``*Train-v0`` ids (``clutter_gym.TRAIN_IDS``), which make each env with the env arguments its agent trains with:
+``*Train-v1`` ids (``clutter_gym.TRAIN_IDS``), which make each env with the env arguments its agent trains with:
 rl-zoo3 (2.9) makes its evaluation env without a block's ``env_kwargs``, so settings carried there would reach the
 training envs only. The blocks carry the wrappers (the layout pool, the residual on the subgoal pursuit), which
 the zoo applies to both.
@@ -23,7 +23,7 @@ from clutter_gym.training.config import TrainConfig, config_for
 
 def shipped_env(env_id: str, **overrides: Any) -> gym.Env:
     """``env_id``'s env with the env arguments of its block in the hyperparameter files, ``overrides`` on top
-    (the entry point of the ``*Train-v0`` ids)."""
+    (the entry point of the ``*Train-v1`` ids)."""
     creator = load_env_creator(gym.spec(env_id).entry_point)
     return creator(**{**config_for(env_id).make_kwargs(), **overrides})
 
@@ -31,7 +31,7 @@ def shipped_env(env_id: str, **overrides: Any) -> gym.Env:
 def zoo_block(config: TrainConfig) -> dict[str, Any]:
     """One env's rl-zoo3 block: PPO arguments plus the zoo's ``n_timesteps``, ``n_envs``, ``policy``,
     ``normalize``, ``frame_stack`` and ``env_wrapper`` (the layout pool and the residual on the subgoal pursuit)
-    keys; the env arguments come with the block's ``*Train-v0`` id."""
+    keys; the env arguments come with the block's ``*Train-v1`` id."""
     ppo = config.ppo
     block: dict[str, Any] = {
         "n_timesteps": config.timesteps,

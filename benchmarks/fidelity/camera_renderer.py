@@ -1,6 +1,6 @@
-"""Speed against error of the depth camera's renderer: the ray caster against TinyRenderer on ClutterFly-v0.
+"""Speed against error of the depth camera's renderer: the ray caster against TinyRenderer on ClutterFly-v1.
 
-The scripted position controller (``CascadedFlyer`` on the subgoal) flies ClutterFly-v0 through seeded layouts;
+The scripted position controller (``CascadedFlyer`` on the subgoal) flies ClutterFly-v1 through seeded layouts;
 at every pose both renderers draw the drone camera's 84x84 depth frame (interleaved, so machine noise hits them
 alike). The reference is the ray cast cast through TinyRenderer's own sample points (its principal point is half a
 pixel off the ideal one), so the two images sample the same rays: the ray caster meets the exact boxes and
@@ -26,12 +26,12 @@ from clutter_gym.training.baselines import CascadedFlyer
 
 SIZE = 84
 RENDERERS = ("rays", "tiny")
-DEFAULT = "rays"  # ClutterFly-v0's renderer for depth
+DEFAULT = "rays"  # ClutterFly-v1's renderer for depth
 
 
 def flight_states(steps: int, seed: int):
     """(env, robot state) after each of ``steps`` steps of the scripted flyer (resetting where episodes end)."""
-    env = gym.make("ClutterFly-v0", sensors=("camera",), camera_renderer="tiny", subgoal_lookahead=0.5)
+    env = gym.make("ClutterFly-v1", sensors=("camera",), camera_renderer="tiny", subgoal_lookahead=0.5)
     obs, _ = env.reset(seed=seed)
     flyer = CascadedFlyer.for_env(env, "subgoal")
     for _ in range(steps):
@@ -79,7 +79,7 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=200)
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
-    print(f"{args.steps} scripted-flight poses in ClutterFly-v0, {SIZE}x{SIZE} depth; error against the exact ray "
+    print(f"{args.steps} scripted-flight poses in ClutterFly-v1, {SIZE}x{SIZE} depth; error against the exact ray "
           f"cast through the same sample points\n")
     print(table_header("renderer", "frame (us of CPU)", "mean error (mm)", "99th percentile (mm)", "largest (mm)"))
     for r in rows(args.steps, args.seed):

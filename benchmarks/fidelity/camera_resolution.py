@@ -1,6 +1,6 @@
 """Speed against error of the camera's image size: frame time against the depth detail a smaller image loses.
 
-The scripted navigator drives ClutterNav-v0 with its default RGB-D camera; at every pose each size renders its
+The scripted navigator drives ClutterNav-v1 with its default RGB-D camera; at every pose each size renders its
 RGB-D frame (interleaved, so machine noise hits them alike) with TinyRenderer, and so does a 256x256 reference.
 The error is the mean absolute difference between a size's depth image, sampled at the reference's pixel
 centres (nearest pixel), and the reference depth: what the coarser grid blurs at obstacle edges. Pixels seen by
@@ -29,7 +29,7 @@ DEFAULT_SIZE = CameraConfig.width
 
 def rows(steps: int = 200, seed: int = 0) -> list[dict]:
     """Per size: RGB-D frame time (us), mean absolute depth error (mm) against the reference, default flag."""
-    env = gym.make("ClutterNav-v0", sensors=("lidar", "imu", "camera"))
+    env = gym.make("ClutterNav-v1", sensors=("lidar", "imu", "camera"))
     u = env.unwrapped
     cameras = {n: Camera(CameraConfig(width=n, height=n)) for n in (*SIZES, REFERENCE_SIZE)}
     seconds = dict.fromkeys(SIZES, 0.0)

@@ -1,5 +1,5 @@
 """Self-collision at the coarse levels, judged by their own shapes (as before) and confirmed with ``convex``'s (as
-now, envs/collision/confirm.py): how often ClutterReach-v0 reports a cost under uniform random joint commands, how
+now, envs/collision/confirm.py): how often ClutterReach-v1 reports a cost under uniform random joint commands, how
 often each level's self-collision verdict differs from ``convex``'s, and what ``checker.check`` and ``env.step``
 cost, both ways in one run.
 
@@ -102,10 +102,10 @@ def main() -> None:
     parser.add_argument("--episodes", type=int, default=30, help="episodes (of up to 100 steps) per level")
     parser.add_argument("--rounds", type=int, default=9, help="timing rounds of checker.check")
     args = parser.parse_args()
-    reference = gym.make("ClutterReach-v0", collision_fidelity="convex")
+    reference = gym.make("ClutterReach-v1", collision_fidelity="convex")
     rows = []
     for level in ("convex", *COARSE_LEVELS):
-        env = gym.make("ClutterReach-v0", collision_fidelity=level)
+        env = gym.make("ClutterReach-v1", collision_fidelity=level)
         checkers = {"now": env.unwrapped.checker}
         if level != "convex":
             checkers["before"] = before_checker(env, level)
@@ -121,7 +121,7 @@ def main() -> None:
                          check_us[name] / check_us.get("before", check_us[name]), 1e3 * r["step_s"] / len(r["cost"])))
         env.close()
     reference.close()
-    print(f"\nClutterReach-v0, uniform random joint commands, {args.episodes} seeded episodes per level; "
+    print(f"\nClutterReach-v1, uniform random joint commands, {args.episodes} seeded episodes per level; "
           f"checker.check: medians over {args.rounds} rounds, CPU time\n")
     print(table_header("level", "self-collision by", "steps", "cost", "self-collision", "convex's",
                        "extra hits", "missed hits", "check (us)", "check vs before", "env.step CPU (ms)"))

@@ -15,7 +15,7 @@
    sqrt(N) (fixed density, so about as many near the arm), Panda in random configurations: FCL's obstacle tree
    (``convex``), brute force (the checker's ``signed_distance`` on every moving-shape/obstacle pair) and pybullet
    (per-body loop and broad-phase variant). A method is extrapolated linearly in N where one query would take > 20 s.
-4. Env throughput: ClutterReach-v0 at each level and panda-gym's PandaReach-v3, random actions, alternating
+4. Env throughput: ClutterReach-v1 at each level and panda-gym's PandaReach-v3, random actions, alternating
    blocks; medians over blocks.
 
 Competitors run interleaved in one process (per scene, per configuration or per block), so machine noise hits
@@ -344,7 +344,7 @@ def scaling_table(panda: Robot, sizes: list[int], n_configs: int, budget_s: floa
 
 
 def env_table(rounds: int, steps: int) -> None:
-    envs = {f"ClutterReach-v0 ({f})": gym.make("ClutterReach-v0", collision_fidelity=f) for f in FIDELITY_LEVELS}
+    envs = {f"ClutterReach-v1 ({f})": gym.make("ClutterReach-v1", collision_fidelity=f) for f in FIDELITY_LEVELS}
     with quiet_c_output():
         import panda_gym  # noqa: F401
 

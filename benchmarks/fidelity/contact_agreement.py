@@ -1,4 +1,4 @@
-"""How often FCL and pybullet disagree about contact, over contact-heavy random-walk rollouts of ClutterNav-v0.
+"""How often FCL and pybullet disagree about contact, over contact-heavy random-walk rollouts of ClutterNav-v1.
 
 FCL measures the exact geometry (cylinders as cylinders) at the pose after the step; pybullet reports the
 contact points of its last narrow phase, with 64-gon prisms for cylinder obstacles and its own contact margins.
@@ -19,7 +19,7 @@ from benchmarks.harness import smooth_actions
 
 
 def measure(steps: int, seed: int) -> dict[str, float]:
-    env = gym.make("ClutterNav-v0")
+    env = gym.make("ClutterNav-v1")
     env.reset(seed=seed)
     counts = {"fcl": 0, "pybullet": 0, "fcl_only": 0, "pybullet_only": 0}
     clearance_at_disagreement = []

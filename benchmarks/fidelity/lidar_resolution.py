@@ -1,6 +1,6 @@
 """Speed against error of the LIDAR's ray count: scan time against how far the nearest return is off.
 
-The scripted navigator drives ClutterNav-v0 through seeded layouts; at every pose each ray count casts its scan
+The scripted navigator drives ClutterNav-v1 through seeded layouts; at every pose each ray count casts its scan
 (interleaved, so machine noise hits them alike) and so does a 4,096-ray reference. The error is what a sparse
 scan misses: its nearest return less the reference's (never negative, as the reference's beams include its
 own), which is how much closer the nearest obstacle is than the scan says. Ranges are clean (no noise profile).
@@ -27,7 +27,7 @@ DEFAULT_RAYS = LidarConfig.n_rays
 
 def rows(steps: int = 600, seed: int = 0) -> list[dict]:
     """Per ray count: scan time (us), mean and p95 nearest-return error (mm), and whether it is the default."""
-    env = gym.make("ClutterNav-v0")
+    env = gym.make("ClutterNav-v1")
     u = env.unwrapped
     scanners = {n: Lidar(LidarConfig(n_rays=n)) for n in (*RAY_COUNTS, REFERENCE_RAYS)}
     seconds = dict.fromkeys(RAY_COUNTS, 0.0)

@@ -7,7 +7,7 @@ tolerance at one of its ticks, yet was clear at the step's end and at the step b
 flag. Printed: such steps, those the audit flagged, the audit's flags at steps without one, and of the missed ones
 how many end in contact anyway (their cost is charged) and how many do not (bounces within one step).
 
-    python -m benchmarks.hard_cases.audit_vs_ticks [--env ClutterFly-v0] [--steps 600] [--env-kwargs '{}']
+    python -m benchmarks.hard_cases.audit_vs_ticks [--env ClutterFly-v1] [--steps 600] [--env-kwargs '{}']
 """
 
 from __future__ import annotations
@@ -80,7 +80,7 @@ def run(env_id: str, steps: int, seed: int, kwargs: dict) -> dict[str, list[int]
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--env", default="ClutterFly-v0")
+    parser.add_argument("--env", default="ClutterFly-v1")
     parser.add_argument("--steps", type=int, default=600)
     parser.add_argument("--seed", type=int, default=7)
     parser.add_argument("--env-kwargs", default="{}", help="JSON keyword arguments for the env")

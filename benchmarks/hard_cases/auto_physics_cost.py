@@ -1,6 +1,6 @@
 """What ``physics="auto"`` costs at reset: reading the columns and mass ratios of thousands of movable bodies.
 
-``clutter_gym.auto_physics.loads`` runs at every reset of ClutterNav-v0 and ClutterReach-v0. Timed here on two
+``clutter_gym.auto_physics.loads`` runs at every reset of ClutterNav-v1 and ClutterReach-v1. Timed here on two
 layouts of N movable bodies in the largest arena: ``floor``, the large-scene benchmark's grid of small boxes and
 cylinders (``clutter_gym.hard_cases.large_scenes.grid_scene``) with every obstacle given 2 kg, none on another, and
 ``columns``, the same grid of 0.3 x 0.3 x 0.2 m boxes in columns of five. Figures are medians over rounds; with
@@ -57,7 +57,7 @@ def todays_scenes() -> list[tuple[Obstacle, ...]]:
     scenes = [parse_scene(stack_scene(n, masses), 4.0, 0.2).obstacles
               for n, masses in ((1, ()), (2, ()), (5, ()), (10, ()), (12, ()), (2, (1e3, 1.0)), (2, (1.0, 1e3)),
                                 (2, (1.0, 1e2)))]
-    for env_id in ("ClutterNav-v0", "ClutterReach-v0"):
+    for env_id in ("ClutterNav-v1", "ClutterReach-v1"):
         env = gym.make(env_id, movable_obstacles=1.0)
         for seed in range(20):
             env.reset(seed=seed)
@@ -74,7 +74,7 @@ def timed(function: Callable[[Sequence[Obstacle]], tuple[int, float]], obstacles
 
 def reset_seconds(scene: dict) -> float:
     """Seconds of a ClutterNav reset onto ``scene`` (30 m arena), after a reset onto a generated layout."""
-    env = gym.make("ClutterNav-v0", arena_size=ARENA, sensors=())
+    env = gym.make("ClutterNav-v1", arena_size=ARENA, sensors=())
     env.reset(seed=0)
     began = time.perf_counter()
     env.reset(seed=0, options={"scene": scene})

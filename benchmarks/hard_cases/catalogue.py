@@ -80,11 +80,11 @@ class Row:
 
 @contextlib.contextmanager
 def nav_maker() -> Iterator[Callable[..., gym.Env]]:
-    """A ``make(**kwargs)`` of ClutterNav-v0 envs that closes every env it made when the block ends."""
+    """A ``make(**kwargs)`` of ClutterNav-v1 envs that closes every env it made when the block ends."""
     made: list[gym.Env] = []
 
     def make(**kwargs) -> gym.Env:
-        made.append(gym.make("ClutterNav-v0", **kwargs))
+        made.append(gym.make("ClutterNav-v1", **kwargs))
         return made[-1]
 
     try:
@@ -100,7 +100,7 @@ def standstill(quick: bool) -> Row:
     seconds = 20.0
     runs = [(0.79, (0.5, 0.7)), (0.52, (0.0, 0.0))] if quick else \
         [(yaw, before) for yaw in (0.52, 0.79, 1.31) for before in ((0.0, 0.0), (0.5, 0.7))]
-    env = gym.make("ClutterNav-v0", noise="none", max_episode_steps=10_000)
+    env = gym.make("ClutterNav-v1", noise="none", max_episode_steps=10_000)
     try:
         results = [standstill_drift(env, yaw, before, seconds) for yaw, before in runs]
     finally:
@@ -177,20 +177,20 @@ def movable_settle(quick: bool) -> Row:
     seconds = 10.0 if quick else 30.0
     moved, tilt, _, rate = movable_clutter.tabletop_creep(seconds)
     return Row("movable-settle", 1e3 * moved, "mm", 0.1, "test_movable_clutter.py", rate, ENV_STEPS,
-               f"ClutterReach-v0, movable_obstacles 1, seed 2; {seconds:g} s after 0.5 s to settle",
+               f"ClutterReach-v1, movable_obstacles 1, seed 2; {seconds:g} s after 0.5 s to settle",
                f"tilt {tilt:.2g} deg")
 
 
 def movable_push(quick: bool) -> Row:
     """How far a pushed 1 kg box rests inside the wall it was driven into (its last second); mm."""
-    env = gym.make("ClutterNav-v0", max_linear_speed=1.0)
+    env = gym.make("ClutterNav-v1", max_linear_speed=1.0)
     try:
         _, positions, rate = movable_clutter.push_box(env, 6.0)
     finally:
         env.close()
     inside = positions[:, 0] + movable_clutter.PUSH_BOX_HALF - movable_clutter.PUSH_WALL_FACE
     return Row("movable-push", 1e3 * max(0.0, float(inside[-20:].max())), "mm", 1.0, "test_movable_clutter.py",
-               rate, ENV_STEPS, "ClutterNav-v0, max_linear_speed 1; 1 kg box driven into a wall, 6 s",
+               rate, ENV_STEPS, "ClutterNav-v1, max_linear_speed 1; 1 kg box driven into a wall, 6 s",
                f"{1e3 * float(inside.max()):.1f} mm in at the impact, 10 mm allowed")
 
 
@@ -308,7 +308,7 @@ def large_scene(quick: bool) -> Row:
     r = queue.get()
     process.join()
     return Row("large-scene", r["first"], "s", 1.0, "catalogue target, not a test", 1e3 / r["step"], ENV_STEPS,
-               f"ClutterNav-v0, 30 m arena, 10,000 obstacles; median of {large_scenes.STEPS} steps",
+               f"ClutterNav-v1, 30 m arena, 10,000 obstacles; median of {large_scenes.STEPS} steps",
                f"teardown {r['teardown']:.2f} s, physics alone {r['physics']:.1f} ms/step")
 
 
@@ -341,7 +341,7 @@ def penetration_depth(quick: bool) -> Row:
     steps = 800 if quick else 3200
     worst, contacts, deep, rate = panda_depth_errors(steps)
     return Row("penetration-depth", worst, "m", 1e-9, "test_collision_layer.py", rate, ENV_STEPS,
-               f"ClutterReach-v0, 10 obstacles, seed 0; {steps} full-speed random steps",
+               f"ClutterReach-v1, 10 obstacles, seed 0; {steps} full-speed random steps",
                f"{contacts} contacts, {deep} deeper than 1 mm")
 
 

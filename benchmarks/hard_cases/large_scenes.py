@@ -1,4 +1,4 @@
-"""Large user scenes in ClutterNav-v0: first reset, the same layout again, step, physics alone and teardown.
+"""Large user scenes in ClutterNav-v1: first reset, the same layout again, step, physics alone and teardown.
 
 A 30 m arena and a user scene of N small boxes and cylinders, three sizes each, on a jittered grid
 (:func:`grid_scene`), loaded after one reset on a generated layout; then a 10-obstacle scene, whose reset is the
@@ -36,7 +36,7 @@ COLUMNS = {"first": ("first reset", "s"), "again": ("same layout again", "s"), "
 def measure(n: int, render: bool, queue: multiprocessing.Queue, near_field: bool = True) -> None:
     """Put the figures of one N (seconds and milliseconds as :data:`COLUMNS` names them) on ``queue``."""
     scene, small = grid_scene(n), grid_scene(10)
-    env = gym.make("ClutterNav-v0", arena_size=ARENA, render_mode="rgb_array" if render else None)
+    env = gym.make("ClutterNav-v1", arena_size=ARENA, render_mode="rgb_array" if render else None)
     env.unwrapped.arena.near_field = near_field and env.unwrapped.arena.near_field
     env.reset(seed=0)
     out = {}

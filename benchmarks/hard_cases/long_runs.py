@@ -3,7 +3,7 @@
 * ``steps``: random actions in every env under every noise profile and collision fidelity level (one env per cell,
   made and closed in turn; one process per env id). Every observation, reward and info value must be finite; the
   process's resident memory is read after each cell.
-* ``resets``: one ClutterNav-v0 env reset over and over; reset time and resident memory per block of resets.
+* ``resets``: one ClutterNav-v1 env reset over and over; reset time and resident memory per block of resets.
 * ``cycles``: ``gym.make`` + reset + ``close`` over and over, per env id; resident memory.
 
     python -m benchmarks.hard_cases.long_runs    # 10^6 steps, 100,000 resets, 1,000 cycles per env
@@ -87,7 +87,7 @@ def print_blocks(title: str, rows: list[tuple], what: str, start: float | None =
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=int, default=1_000_000, help="random steps in all, over every cell")
-    parser.add_argument("--resets", type=int, default=100_000, help="resets of one ClutterNav-v0 env")
+    parser.add_argument("--resets", type=int, default=100_000, help="resets of one ClutterNav-v1 env")
     parser.add_argument("--cycles", type=int, default=1_000, help="make/reset/close cycles per env id")
     parser.add_argument("--parts", nargs="+", choices=PARTS, default=PARTS)
     parser.add_argument("--jobs", type=int, default=2, help="processes at a time")
@@ -102,8 +102,8 @@ def main() -> None:
         cells = in_processes(steps_run, [(env_id, args.steps // n_cells) for env_id in ENV_IDS], args.jobs)
         print_steps(cells, time.perf_counter() - t0)
     if "resets" in args.parts:
-        (rows,) = in_processes(resets_run, [("ClutterNav-v0", args.resets)], 1)
-        print_blocks(f"{args.resets:,} resets of one ClutterNav-v0 env", rows, "reset")
+        (rows,) = in_processes(resets_run, [("ClutterNav-v1", args.resets)], 1)
+        print_blocks(f"{args.resets:,} resets of one ClutterNav-v1 env", rows, "reset")
     if "cycles" in args.parts:
         for env_id, (start, rows) in zip(ENV_IDS, in_processes(cycles_run, [(e, args.cycles) for e in ENV_IDS],
                                                                 args.jobs)):

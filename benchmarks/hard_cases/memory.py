@@ -1,7 +1,7 @@
 """Memory while an env stays open: resident memory across many resets, for the runs that used to grow.
 
 Each run is its own process (resident memory is per process, and one run's heap must not hide another's):
-ClutterReach-v0 on generated layouts, ClutterNav-v0 on generated layouts, and ClutterNav-v0 on user scenes with
+ClutterReach-v1 on generated layouts, ClutterNav-v1 on generated layouts, and ClutterNav-v1 on user scenes with
 five cylinders of new sizes each reset (every one a shape pybullet cannot free). It prints resident memory at
 checkpoints and the growth per reset over the second half of the run, when warm-up allocations are done.
 
@@ -20,9 +20,9 @@ import numpy as np
 from clutter_gym.hard_cases.memory import new_sizes_scene, resident_mib
 
 RUNS = {
-    "ClutterReach-v0, generated layouts": ("ClutterReach-v0", False),
-    "ClutterNav-v0, generated layouts": ("ClutterNav-v0", False),
-    "ClutterNav-v0, 5 new cylinder sizes per user scene": ("ClutterNav-v0", True),
+    "ClutterReach-v1, generated layouts": ("ClutterReach-v1", False),
+    "ClutterNav-v1, generated layouts": ("ClutterNav-v1", False),
+    "ClutterNav-v1, 5 new cylinder sizes per user scene": ("ClutterNav-v1", True),
 }
 CHECKPOINTS = 10
 

@@ -1,5 +1,5 @@
 """How well movable clutter holds still: stacks of boxes, and a box on a box a thousand times lighter or heavier,
-in ClutterNav-v0 at several physics rates and solver iteration counts, with the robot at rest, against the time
+in ClutterNav-v1 at several physics rates and solver iteration counts, with the robot at rest, against the time
 it costs.
 
 A stack of ``n`` boxes (0.3 x 0.3 x 0.2 m, 2 kg each: ``clutter_gym.hard_cases.movable_clutter.stack_scene``) is
@@ -42,7 +42,7 @@ def hold(n: int, physics_hz: float, iterations: int, seconds: float, masses: tup
          physics: str = "fixed") -> dict[str, float]:
     """Drift (mm), tilt (degrees) and sinking of the top box (mm) of an ``n``-box stack held for ``seconds``,
     steps/s, and the physics the episode ran at (``physics="auto"`` may raise ``physics_hz`` and ``iterations``)."""
-    env = gym.make("ClutterNav-v0", physics_hz=physics_hz, solver_iterations=iterations, sensors=(), physics=physics)
+    env = gym.make("ClutterNav-v1", physics_hz=physics_hz, solver_iterations=iterations, sensors=(), physics=physics)
     _, info = env.reset(seed=0, options={"scene": stack_scene(n, masses)})
     sim, bodies = env.unwrapped.sim, env.unwrapped.movable_bodies
     start, start_rotation = sim.body_poses(bodies)

@@ -3,8 +3,8 @@ the project's FCL audit; which of them catch a body that goes through or into th
 
 The runs are :mod:`clutter_gym.hard_cases.tunneling`'s, which says how a run ends and what CCD and the audit are.
 The table launches a free cube (a multibody and a rigid body) and a free ball at each of ``SPEEDS`` against walls
-``WALLS`` thick at ClutterNav-v0's physics rate and checker settings, the ClutterNav-v0 robot at each of ``SPEEDS``
-into the same walls, and the ClutterReach-v0 Panda's hand down onto a shelf board and sideways into a shelf side,
+``WALLS`` thick at ClutterNav-v1's physics rate and checker settings, the ClutterNav-v1 robot at each of ``SPEEDS``
+into the same walls, and the ClutterReach-v1 Panda's hand down onto a shelf board and sideways into a shelf side,
 each ``BOARDS`` thick. Every case runs the envs' default rates, read from the envs and printed with the table, from
 several start offsets spread over one tick's travel (the Panda's boards over ``HAND_SPAN``), and the table counts
 runs, each once with pybullet alone and once with its CCD.
@@ -55,7 +55,7 @@ def summary(case: str, speed: str, wall: float, alone: list[Run], with_ccd: list
 
 
 def rows(offsets: int = OFFSETS) -> tuple[list[dict], Settings, Settings]:
-    """One summary per case, and the settings of ClutterNav-v0 and ClutterReach-v0."""
+    """One summary per case, and the settings of ClutterNav-v1 and ClutterReach-v1."""
     out = []
     nav, reach = make_nav_env(), make_reach_env()
     try:
@@ -103,8 +103,8 @@ def main() -> list[dict]:
     offsets = QUICK_OFFSETS if parser.parse_args().quick else OFFSETS
     t0 = time.perf_counter()
     summaries, nav, reach = rows(offsets)
-    print(f"ClutterNav-v0 (and the free bodies): {nav.describe()}")
-    print(f"ClutterReach-v0: {reach.describe()}")
+    print(f"ClutterNav-v1 (and the free bodies): {nav.describe()}")
+    print(f"ClutterReach-v1: {reach.describe()}")
     print(f"{offsets} start offsets per case; inside = deeper than {1000 * EMBEDDED:.0f} mm into the wall at the end\n")
     print(table(summaries))
     print(f"\n{time.perf_counter() - t0:.1f} s")

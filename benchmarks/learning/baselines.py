@@ -1,15 +1,15 @@
-"""Baseline tables for ClutterNav-v0, ClutterReach-v0 and ClutterFly-v0: scripted and learned policies, success
+"""Baseline tables for ClutterNav-v1, ClutterReach-v1 and ClutterFly-v1: scripted and learned policies, success
 and collision rates with 95% intervals at three clutter levels and several noise profiles, on the same held-out
 layouts for every row.
 
-ClutterNav-v0 rows: the mapless potential field; the map-based planner reference (the same field steering for the
+ClutterNav-v1 rows: the mapless potential field; the map-based planner reference (the same field steering for the
 ``subgoal`` waypoint of the costmap planner, an upper bound of what the map allows a simple controller).
-ClutterReach-v0 rows: scripted IK, the end effector heading straight for the target (``control="ee_position"``);
+ClutterReach-v1 rows: scripted IK, the end effector heading straight for the target (``control="ee_position"``);
 the proximity field (sensor-only: the target, the arm's joint positions and each link's proximity reading; the
 sensor-only PPO residual's base); the joint-space planner reference (RRT-Connect on the known layout, then path
 tracking in joint velocities); the pursuit of the ``subgoal`` on that path that the shipped PPO residual policy
 adds its actions to.
-ClutterFly-v0 rows: a cascaded position controller flying straight at the goal (mapless); the same controller on
+ClutterFly-v1 rows: a cascaded position controller flying straight at the goal (mapless); the same controller on
 the ``subgoal`` of the shortest path through the known layout (the map-based planner reference, and the pursuit
 the shipped PPO residual policy adds its actions to).
 Then one row per trained run given with ``--run NAME=RUN_DIR`` (its own env settings; the clutter level and the
@@ -18,9 +18,9 @@ on identical layouts.
 
     python -m benchmarks.learning.baselines --run "PPO subgoal=out/learning/seed0/run" [--episodes 50] \
         [--out docs/baselines]
-    python -m benchmarks.learning.baselines --env ClutterReach-v0 --run "PPO=runs/ClutterReach-v0/none-seed0"
-    python -m benchmarks.learning.baselines --env ClutterReach-v0 --no-scripted --run "another row=RUN_DIR"
-    python -m benchmarks.learning.baselines --env ClutterFly-v0 --run "PPO residual=runs/ClutterFly-v0/none-seed0"
+    python -m benchmarks.learning.baselines --env ClutterReach-v1 --run "PPO=runs/ClutterReach-v1/none-seed0"
+    python -m benchmarks.learning.baselines --env ClutterReach-v1 --no-scripted --run "another row=RUN_DIR"
+    python -m benchmarks.learning.baselines --env ClutterFly-v1 --run "PPO residual=runs/ClutterFly-v1/none-seed0"
 """
 
 from __future__ import annotations
@@ -51,18 +51,18 @@ from clutter_gym.util.atomic import write_text_atomically
 #: The subgoal lookahead the planner reference runs with, metres.
 PLANNER_LOOKAHEAD = 0.5
 #: The shipped ClutterReach settings: the subgoal pursuit row runs with their lookahead and gain.
-REACH = config_for("ClutterReach-v0")
+REACH = config_for("ClutterReach-v1")
 #: The last round's sensor-only ClutterReach settings (PPO): the proximity field row runs with their gain.
-REACH_SENSORS = config_for("ClutterReach-v0", user_settings(read_hyperparams_file("sensors-ppo"), "ClutterReach-v0"))
+REACH_SENSORS = config_for("ClutterReach-v1", user_settings(read_hyperparams_file("sensors-ppo"), "ClutterReach-v1"))
 #: The shipped ClutterFly settings: the planner reference runs with their lookahead.
-FLY = config_for("ClutterFly-v0")
+FLY = config_for("ClutterFly-v1")
 #: The shipped robust ClutterFly settings: their base (the flyer reading its thrust estimate, with their gains).
-FLY_ROBUST = config_for("ClutterFly-v0", user_settings(read_hyperparams_file("robust"), "ClutterFly-v0"))
+FLY_ROBUST = config_for("ClutterFly-v1", user_settings(read_hyperparams_file("robust"), "ClutterFly-v1"))
 
 #: Per env: the gym.make argument that sets the clutter, its default levels, and the scripted rows as
 #: (name, extra gym.make arguments, policy factory from the env).
 TABLES: dict[str, dict[str, Any]] = {
-    "ClutterNav-v0": {
+    "ClutterNav-v1": {
         "knob": "obstacle_density", "levels": [0.05, 0.12, 0.2],
         "scripted": [
             ("potential field (mapless, scripted)", {}, PotentialFieldNavigator.for_env),
@@ -70,7 +70,7 @@ TABLES: dict[str, dict[str, Any]] = {
              {"subgoal_lookahead": PLANNER_LOOKAHEAD}, lambda env: PotentialFieldNavigator.for_env(env, "subgoal")),
         ],
     },
-    "ClutterReach-v0": {
+    "ClutterReach-v1": {
         "knob": "n_obstacles", "levels": [3, 6, 10],
         "scripted": [
             ("straight line (scripted IK)", {"control": "ee_position"}, StraightLineReacher.for_env),
@@ -79,10 +79,10 @@ TABLES: dict[str, dict[str, Any]] = {
             ("planner reference (map-based: RRT-Connect in joint space)", {}, JointPlannerReacher),
             ("subgoal pursuit (map-based: the PPO residual's base alone)",
              {"subgoal_lookahead": REACH.env_kwargs["subgoal_lookahead"]},
-             lambda env: subgoal_pursuit("ClutterReach-v0", REACH.residual_gain)),
+             lambda env: subgoal_pursuit("ClutterReach-v1", REACH.residual_gain)),
         ],
     },
-    "ClutterFly-v0": {
+    "ClutterFly-v1": {
         "knob": "obstacle_density", "levels": [0.05, 0.1, 0.15],
         "scripted": [
             ("cascaded flyer on the goal (mapless, scripted)", {}, CascadedFlyer.for_env),
@@ -126,7 +126,7 @@ def cell_text(rows: list[dict[str, float]]) -> str:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--env", choices=sorted(TABLES), default="ClutterNav-v0")
+    parser.add_argument("--env", choices=sorted(TABLES), default="ClutterNav-v1")
     parser.add_argument("--run", action="append", default=[], metavar="NAME=RUN_DIR",
                         help="a trained run to add as a row (repeatable)")
     parser.add_argument("--episodes", type=int, default=50)

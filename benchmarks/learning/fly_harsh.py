@@ -31,7 +31,7 @@ from clutter_gym.training.config import EVAL_SEED, config_for
 from clutter_gym.training.evaluate import rollouts
 from clutter_gym.util.atomic import write_text_atomically
 
-FLY = config_for("ClutterFly-v0")
+FLY = config_for("ClutterFly-v1")
 #: Column name and the noise it flies under: each part of ``harsh`` alone on the clean profile, then all of it.
 _HARSH = resolve_noise("harsh")
 COLUMNS: dict[str, Any] = {
@@ -51,7 +51,7 @@ ROWS = [
 
 
 def cell(reads_ratio: bool, attitude_gain: float, noise: Any, episodes: int) -> list[dict[str, float]]:
-    env = gym.make("ClutterFly-v0", noise=noise, subgoal_lookahead=FLY.env_kwargs["subgoal_lookahead"],
+    env = gym.make("ClutterFly-v1", noise=noise, subgoal_lookahead=FLY.env_kwargs["subgoal_lookahead"],
                    observe_thrust_ratio=reads_ratio)
     try:
         flyer = CascadedFlyer.for_env(env, "subgoal", position_gain=FLY.residual_gain, attitude_gain=attitude_gain)
@@ -77,7 +77,7 @@ def main() -> None:
         results = {name: {column: futures[name, column].result() for column in columns} for name, _, _ in ROWS}
     for name, _, _ in ROWS:
         lines.append(f"| {name} | " + " | ".join(cell_text(rows) for rows in results[name].values()) + " |")
-    lines.append(f"\nClutterFly-v0 at its default density. Success / collision episodes, {args.episodes} episodes per "
+    lines.append(f"\nClutterFly-v1 at its default density. Success / collision episodes, {args.episodes} episodes per "
                  f"cell (seeds {EVAL_SEED}..), 95% Wilson intervals.")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

@@ -1,4 +1,4 @@
-"""Learning benchmark: the main job (PPO on ClutterNav-v0 with its ppo.yml defaults) for several seeds.
+"""Learning benchmark: the main job (PPO on ClutterNav-v1 with its ppo.yml defaults) for several seeds.
 
 Target (issue 5): at least 90% success and at most 5% collision episodes over 100 clean evaluation episodes,
 within 15 minutes of wall time per seed on the 2-core reference machine. Prints, per seed, the wall time of the
@@ -28,7 +28,7 @@ from clutter_gym.util.machine import machine_state
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--env", default="ClutterNav-v0")
+    parser.add_argument("--env", default="ClutterNav-v1")
     parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1])
     parser.add_argument("--timesteps", type=int, default=None)
     parser.add_argument("--episodes", type=int, default=100)

@@ -1,4 +1,4 @@
-"""Why a ClutterNav-v0 policy fails where the scripted potential field succeeds: episode traces, the observation
+"""Why a ClutterNav-v1 policy fails where the scripted potential field succeeds: episode traces, the observation
 normalisation's view of each density, and the training curves.
 
 For each density, the run's policy and the potential field drive the same held-out layouts (episode ``i`` reset
@@ -133,7 +133,7 @@ def curves(run: Path) -> list[str]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--run", required=True, help="a ClutterNav-v0 run folder")
+    parser.add_argument("--run", required=True, help="a ClutterNav-v1 run folder")
     parser.add_argument("--episodes", type=int, default=30)
     parser.add_argument("--densities", type=float, nargs="+", default=[0.05, 0.12, 0.2])
     args = parser.parse_args()

@@ -4,8 +4,8 @@ the obstacles its LIDAR has hit this episode (``seen-map``: what a student with 
 hits of its current scan alone (``in-range``: what a memoryless student sees). The gap between the last two rows
 and the first is the part of the student-teacher gap that no imitation can close without memory, or at all.
 
-    python -m benchmarks.learning.teacher_realisability --env ClutterNav-v0 --episodes 100
-    python -m benchmarks.learning.teacher_realisability --env ClutterFly-v0 --episodes 50 --levels 0.05
+    python -m benchmarks.learning.teacher_realisability --env ClutterNav-v1 --episodes 100
+    python -m benchmarks.learning.teacher_realisability --env ClutterFly-v1 --episodes 50 --levels 0.05
 """
 
 from __future__ import annotations
@@ -22,8 +22,8 @@ from clutter_gym.training.config import EVAL_SEED, config_for, read_hyperparams_
 from clutter_gym.training.evaluate import rollouts, summarize
 from clutter_gym.training.teachers import TEACHERS, TeacherLabels, make_teacher
 
-LEVELS = {"ClutterNav-v0": ("obstacle_density", (0.05, 0.12, 0.2)), "ClutterFly-v0": ("obstacle_density", (0.05,)),
-          "ClutterReach-v0": ("n_obstacles", (6,))}
+LEVELS = {"ClutterNav-v1": ("obstacle_density", (0.05, 0.12, 0.2)), "ClutterFly-v1": ("obstacle_density", (0.05,)),
+          "ClutterReach-v1": ("n_obstacles", (6,))}
 
 
 def drive(env_id: str, teacher: str, level: tuple[str, float], episodes: int, noise: str = "none") -> dict:
@@ -42,7 +42,7 @@ def drive(env_id: str, teacher: str, level: tuple[str, float], episodes: int, no
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--env", default="ClutterNav-v0", choices=sorted(TEACHERS))
+    parser.add_argument("--env", default="ClutterNav-v1", choices=sorted(TEACHERS))
     parser.add_argument("--episodes", type=int, default=100)
     parser.add_argument("--teachers", nargs="+", default=None, help="default: every teacher of the env")
     parser.add_argument("--levels", type=float, nargs="+", default=None, help="clutter levels (default: the env's)")

@@ -69,7 +69,7 @@ What could not be reproduced, and the stand-ins
   reproduced only where it is numpy work of the same kind; the deque and the wrappers are not.
 
 ``python -m benchmarks.peers.drones_peer`` times this workload alone (figures measured here in its docstring);
-``python -m benchmarks.speed.camera_throughput`` times it against ClutterNav-v0 with a camera.
+``python -m benchmarks.speed.camera_throughput`` times it against ClutterNav-v1 with a camera.
 """
 
 from __future__ import annotations

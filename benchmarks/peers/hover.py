@@ -52,7 +52,7 @@ What could not be reproduced, and the stand-ins
   2 ms). The stand-in is ``benchmarks.peers.drone_body``'s generated COLLADA file of about the same triangle count
   and size; ``visual_mesh=False`` drops it, to show how much of the peer's figure the reset's mesh parse is.
 * Upstream's env is a ``gymnasium.Env`` built directly (its training script wraps it in stable-baselines3's
-  ``Monitor``, not ``gym.make``'s checkers), so no wrapper is added here; ClutterFly-v0 is timed through
+  ``Monitor``, not ``gym.make``'s checkers), so no wrapper is added here; ClutterFly-v1 is timed through
   ``gym.make`` with its wrappers (about 11 us a step).
 * Upstream's Python around the calls (``if`` chains on GUI, recording and physics enums; the per-drone loops of
   one drone) is reproduced as the same numpy work and comparable branches, not line for line.

@@ -22,7 +22,7 @@ from clutter_gym.util.atomic import atomic_path
 from clutter_gym.util.images import labelled_strip
 
 #: Each env's picture: the seed (an episode the demo policy finishes at the goal) and how far into the episode.
-SHOTS = {"ClutterNav-v0": (0, 0.75), "ClutterReach-v0": (1, 0.5), "ClutterFly-v0": (2, 0.6)}
+SHOTS = {"ClutterNav-v1": (0, 0.75), "ClutterReach-v1": (1, 0.5), "ClutterFly-v1": (2, 0.6)}
 MAX_STEPS = 600
 
 

@@ -25,7 +25,7 @@ from clutter_gym.noise.profiles import PROFILE_NAMES  # noqa: E402
 
 def capture(profile: str, seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
     """(beam angles, LIDAR ranges, depth image, lidar_range) a few steps into an episode, robot at rest."""
-    env = gym.make("ClutterNav-v0", sensors=("lidar", "camera"), camera_modes=("depth",), noise=profile)
+    env = gym.make("ClutterNav-v1", sensors=("lidar", "camera"), camera_modes=("depth",), noise=profile)
     env.reset(seed=seed)
     for _ in range(3):  # past any latency, so every profile shows a reading taken at the same pose
         obs, _, _, _, info = env.step(np.zeros(2, dtype=np.float32))
@@ -59,7 +59,7 @@ def main() -> None:
         ax.set_xticks([])
         ax.set_yticks([])
     fig.colorbar(image, ax=fig.axes[1::2], shrink=0.6, location="bottom")
-    fig.suptitle(f"ClutterNav-v0 seed {args.seed}: clean (grey) and noisy readings at the same pose", fontsize=11)
+    fig.suptitle(f"ClutterNav-v1 seed {args.seed}: clean (grey) and noisy readings at the same pose", fontsize=11)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(suffix=".png", dir=out.parent)  # atomic: a complete PNG or none

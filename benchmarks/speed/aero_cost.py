@@ -1,4 +1,4 @@
-"""What ClutterFly-v0's aerodynamic effects cost and what leaving them out costs: steps per CPU-second against the
+"""What ClutterFly-v1's aerodynamic effects cost and what leaving them out costs: steps per CPU-second against the
 trajectory error, for ``aero`` off, ``("drag",)``, ``("ground_effect",)`` and both (the reference).
 
 Each setting flies the same two closed-loop flights with the scripted position controller
@@ -72,7 +72,7 @@ def label(aero: tuple[str, ...]) -> str:
 
 
 def make_env(aero: tuple[str, ...]) -> gym.Env:
-    return gym.make("ClutterFly-v0", sensors=(), aero=aero, success_radius=SUCCESS_RADIUS, max_episode_steps=10_000)
+    return gym.make("ClutterFly-v1", sensors=(), aero=aero, success_radius=SUCCESS_RADIUS, max_episode_steps=10_000)
 
 
 def fly(env: gym.Env, flight: Flight) -> tuple[np.ndarray, float]:
@@ -156,7 +156,7 @@ def main() -> None:
     args = parser.parse_args()
     measured = rows(args.rounds)
     spawn = measured[0]["spawn_height"]
-    print(f"ClutterFly-v0 without sensors; {', '.join(f'{f.name} {f.steps} steps' for f in FLIGHTS)}; median of "
+    print(f"ClutterFly-v1 without sensors; {', '.join(f'{f.name} {f.steps} steps' for f in FLIGHTS)}; median of "
           f"{args.rounds} alternating rounds; error against aero={REFERENCE}\n")
     print(table_header("aero", "steps per CPU-s", "max error (mm)", "mean error (mm)",
                        *(f"{f.name} max (mm)" for f in FLIGHTS), f"hover lift at {1e3 * LOW_START_Z:.0f} mm (% of g)",

@@ -1,4 +1,4 @@
-"""ClutterNav-v0 with an 84x84 RGB-D camera against gym-pybullet-drones' 64x48-camera env, side by side.
+"""ClutterNav-v1 with an 84x84 RGB-D camera against gym-pybullet-drones' 64x48-camera env, side by side.
 
 The peer is rebuilt call for call in ``benchmarks.peers.drones`` (the package cannot be installed here). Both
 run in alternating blocks of uniform-random actions in one process; each block counts the time in ``step`` and in
@@ -22,10 +22,10 @@ from benchmarks.peers.drones import make_drone_camera_workload
 
 CAMERA = {"sensors": ("lidar", "imu", "camera"), "camera_modes": ("rgb", "depth")}
 VARIANTS = {
-    "ClutterNav-v0, LIDAR + IMU, no camera": {},
-    "ClutterNav-v0 + camera 64x48 RGB-D": {**CAMERA, "camera_size": (64, 48)},
-    "ClutterNav-v0 + camera 84x84 RGB-D": {**CAMERA, "camera_size": (84, 84)},
-    "ClutterNav-v0 + camera 84x84 RGB-D, nominal noise": {**CAMERA, "camera_size": (84, 84), "noise": "nominal"},
+    "ClutterNav-v1, LIDAR + IMU, no camera": {},
+    "ClutterNav-v1 + camera 64x48 RGB-D": {**CAMERA, "camera_size": (64, 48)},
+    "ClutterNav-v1 + camera 84x84 RGB-D": {**CAMERA, "camera_size": (84, 84)},
+    "ClutterNav-v1 + camera 84x84 RGB-D, nominal noise": {**CAMERA, "camera_size": (84, 84), "noise": "nominal"},
 }
 PEER = "gym-pybullet-drones HoverAviary, 64x48 RGB camera (reconstructed)"
 
@@ -43,7 +43,7 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
 
-    envs = {label: gym.make("ClutterNav-v0", **kwargs) for label, kwargs in VARIANTS.items()}
+    envs = {label: gym.make("ClutterNav-v1", **kwargs) for label, kwargs in VARIANTS.items()}
     for env in envs.values():
         env.reset(seed=args.seed)
     peer = make_drone_camera_workload()

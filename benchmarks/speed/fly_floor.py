@@ -1,5 +1,5 @@
-"""The raw pybullet work one ClutterFly-v0 step needs, replayed on a twin env's client: the floor the env's step is
-measured against, as ``benchmarks.speed.throughput`` measures ClutterNav-v0 against its own.
+"""The raw pybullet work one ClutterFly-v1 step needs, replayed on a twin env's client: the floor the env's step is
+measured against, as ``benchmarks.speed.throughput`` measures ClutterNav-v1 against its own.
 
 A recorder env flies the action stream through ``env.step`` (untimed) and records, every physics tick, the rotor
 forces and the body wrench its robot applied. A twin env, built and reset with the same seed, replays them through
@@ -22,10 +22,10 @@ from benchmarks.harness import pb
 
 
 class FlyFloor:
-    """A recorder and a twin ClutterFly-v0 (IMU only, its defaults) with one seed."""
+    """A recorder and a twin ClutterFly-v1 (IMU only, its defaults) with one seed."""
 
     def __init__(self, seed: int = 0) -> None:
-        self.recorder, self.twin = gym.make("ClutterFly-v0"), gym.make("ClutterFly-v0")
+        self.recorder, self.twin = gym.make("ClutterFly-v1"), gym.make("ClutterFly-v1")
         self.recorder.reset(seed=seed)
         self.twin.reset(seed=seed)
         self._ticks: list[tuple] = []

@@ -1,22 +1,22 @@
-"""ClutterFly-v0 against gym-pybullet-drones' HoverAviary, side by side: kinematic, LIDAR and camera workloads.
+"""ClutterFly-v1 against gym-pybullet-drones' HoverAviary, side by side: kinematic, LIDAR and camera workloads.
 
 Every workload runs in one process, one block each per round in alternating rounds, on uniform-random actions,
 resetting where an episode ends as a training loop would (the reset counted). Each block keeps wall-clock and
 process CPU time of ``step`` and of the resets apart; figures are medians over blocks (the first round's one-time
-costs land in one block of several), and on a shared machine the CPU-time ones are the steadier. The ClutterFly-v0
+costs land in one block of several), and on a shared machine the CPU-time ones are the steadier. The ClutterFly-v1
 variants share one seed and one action stream, so they fly the same trajectories and differ only in their sensors.
 The peers are rebuilt call for call because gym-pybullet-drones is not installable here:
 ``benchmarks.peers.hover`` (HoverAviary, KIN observation, RPM action, its defaults: 240 Hz physics, 30 Hz control)
 and ``benchmarks.peers.drones`` (the same env with its 64x48 RGB camera at 24 FPS, 48 Hz control).
 
-The workloads: the KIN peer; ClutterFly-v0 at its defaults (IMU only; FCL clearance, contacts and the swept
+The workloads: the KIN peer; ClutterFly-v1 at its defaults (IMU only; FCL clearance, contacts and the swept
 audit every step); with a 16-channel x 64-ray LIDAR cast every control step (30 Hz) and at a 3D LIDAR's 10 Hz
 (the rate is the noise profile's ``lidar.rate_hz``, set through ``noise={"lidar": {"rate_hz": 10}}`` on the clean
 "none" profile: no noise is added, the scan is held between updates); with an 84x84 depth camera rendered every
 control step, ray cast (the default) and by TinyRenderer; and the RGB peer. Then the ratios against the issue's
 2x targets, what a camera frame costs either way, the IMU-only step against the raw pybullet work it needs
 (``benchmarks.speed.fly_floor``, replayed on a twin of that env in the same rounds), what the LIDAR's rays cost,
-whether the comparison held (the ClutterFly-v0 variants flew one flight, the floor's twin retraced it to the bit),
+whether the comparison held (the ClutterFly-v1 variants flew one flight, the floor's twin retraced it to the bit),
 and a per-phase profile of the IMU-only step from a stopwatched copy of that env, run as one more block per round.
 
     python -m benchmarks.speed.fly_throughput [--steps 400] [--rounds 6]    # about 2 minutes on 2 shared cores
@@ -46,14 +46,14 @@ LIDAR = {"sensors": ("imu", "lidar"), "lidar_channels": 16, "n_rays": 64}
 #: label -> (factory, action shape)
 WORKLOADS: dict[str, tuple[Callable[[], Any], tuple[int, ...]]] = {
     "peer: HoverAviary KIN (rebuilt)": (HoverKinPeer, (1, 4)),
-    "ClutterFly-v0, IMU only": (lambda: gym.make("ClutterFly-v0"), (4,)),
-    "ClutterFly-v0 + LIDAR 16x64 at 30 Hz": (lambda: gym.make("ClutterFly-v0", **LIDAR), (4,)),
-    "ClutterFly-v0 + LIDAR 16x64 at 10 Hz": (
-        lambda: gym.make("ClutterFly-v0", **LIDAR, noise={"lidar": {"rate_hz": 10.0}}), (4,)),
-    "ClutterFly-v0 + depth camera 84x84 (rays)": (
-        lambda: gym.make("ClutterFly-v0", sensors=("imu", "camera"), camera_size=(84, 84)), (4,)),
-    "ClutterFly-v0 + depth camera 84x84 (TinyRenderer)": (
-        lambda: gym.make("ClutterFly-v0", sensors=("imu", "camera"), camera_size=(84, 84), camera_renderer="tiny"),
+    "ClutterFly-v1, IMU only": (lambda: gym.make("ClutterFly-v1"), (4,)),
+    "ClutterFly-v1 + LIDAR 16x64 at 30 Hz": (lambda: gym.make("ClutterFly-v1", **LIDAR), (4,)),
+    "ClutterFly-v1 + LIDAR 16x64 at 10 Hz": (
+        lambda: gym.make("ClutterFly-v1", **LIDAR, noise={"lidar": {"rate_hz": 10.0}}), (4,)),
+    "ClutterFly-v1 + depth camera 84x84 (rays)": (
+        lambda: gym.make("ClutterFly-v1", sensors=("imu", "camera"), camera_size=(84, 84)), (4,)),
+    "ClutterFly-v1 + depth camera 84x84 (TinyRenderer)": (
+        lambda: gym.make("ClutterFly-v1", sensors=("imu", "camera"), camera_size=(84, 84), camera_renderer="tiny"),
         (4,)),
     "peer: HoverAviary 64x48 RGB (rebuilt)": (make_drone_camera_workload, (1, 4)),
 }
@@ -145,7 +145,7 @@ def time_scans(env) -> PhaseTimers:
 
 
 def action_rng(label: str, seed: int) -> np.random.Generator:
-    """The action stream of a workload: every ClutterFly-v0 variant draws the same one, so that (reset with the
+    """The action stream of a workload: every ClutterFly-v1 variant draws the same one, so that (reset with the
     same seed) they fly the same trajectory and differ only in their sensors; the two peers share another."""
     return np.random.default_rng([seed, 1 if label in FLY else 0])
 
@@ -178,7 +178,7 @@ def measure(workloads: dict[str, tuple[Any, tuple[int, ...]]], steps: int, round
 
 
 def one_flight(workloads: dict[str, tuple[Any, tuple[int, ...]]]) -> bool:
-    """Whether the ClutterFly-v0 variants' robots are where the IMU-only one is, to the bit: they flew one flight
+    """Whether the ClutterFly-v1 variants' robots are where the IMU-only one is, to the bit: they flew one flight
     (:func:`action_rng`)."""
     positions = [workloads[label][0].unwrapped.robot.state().position for label in FLY]
     return all(np.array_equal(p, positions[0]) for p in positions)
@@ -236,7 +236,7 @@ PHASES = (
 
 
 class StepProfile:
-    """ClutterFly-v0 (IMU only) with a CPU stopwatch around each part of its step (``PHASES``).
+    """ClutterFly-v1 (IMU only) with a CPU stopwatch around each part of its step (``PHASES``).
 
     Process CPU time, because wall time on a shared machine swings by 2x between runs; each stopwatch reading
     costs about 0.8 us (a system call), some 45 us over the ~30 timed calls of a step, mostly charged to the
@@ -244,7 +244,7 @@ class StepProfile:
     """
 
     def __init__(self, seed: int = 0) -> None:
-        self.env = env = gym.make("ClutterFly-v0")
+        self.env = env = gym.make("ClutterFly-v1")
         env.reset(seed=seed)
         self.rng = action_rng(IMU, seed)  # the IMU-only workload's actions: the same trajectory
         self.steps, self.total = 0, 0.0
@@ -328,9 +328,9 @@ def report(blocks: dict[str, list[Block]], calls: dict[str, float], scans: dict[
                 for label in (DEPTH, DEPTH_TINY)}
     lines += [
         "",
-        f"Kinematic: ClutterFly-v0 (IMU) / HoverAviary KIN = {kin:.2f}x per CPU-s with resets, {kin_step:.2f}x "
+        f"Kinematic: ClutterFly-v1 (IMU) / HoverAviary KIN = {kin:.2f}x per CPU-s with resets, {kin_step:.2f}x "
         f"in step() alone: {verdict(kin)}.",
-        f"Camera: ClutterFly-v0 (84x84 depth) / HoverAviary 64x48 RGB = {cam:.2f}x with resets, {cam_step:.2f}x "
+        f"Camera: ClutterFly-v1 (84x84 depth) / HoverAviary 64x48 RGB = {cam:.2f}x with resets, {cam_step:.2f}x "
         f"in step() alone: {verdict(cam)}. With TinyRenderer instead of the ray caster: {tiny:.2f}x with resets, "
         f"{tiny_step:.2f}x in step() alone. A frame costs {frame_us[DEPTH]:,.0f} us of CPU a step ray cast, "
         f"{frame_us[DEPTH_TINY]:,.0f} us rasterised (each over the IMU-only step).",
@@ -395,9 +395,9 @@ def main() -> None:
     print(f"{args.rounds} alternating rounds of {args.steps} uniform-random-action steps per workload, resets "
           f"counted; medians over blocks\n")
     print(report(blocks, calls, scans))
-    print(f"Checks: the ClutterFly-v0 variants {'flew' if same_flight else 'did NOT fly'} one flight; the floor's twin "
+    print(f"Checks: the ClutterFly-v1 variants {'flew' if same_flight else 'did NOT fly'} one flight; the floor's twin "
           f"{'retraced' if retraced else 'did NOT retrace'} the recorded flight to the bit.")
-    print(f"\nWhere a ClutterFly-v0 (IMU only) step goes: a seventh workload in the same rounds, stopwatches around "
+    print(f"\nWhere a ClutterFly-v1 (IMU only) step goes: a seventh workload in the same rounds, stopwatches around "
           f"each part (process CPU time, resets excluded; {profile.steps:,} steps)\n")
     print(profile_report(step_s, phases))
     print(f"\n(benchmark took {time.perf_counter() - started:.0f} s)")

@@ -1,4 +1,4 @@
-"""What noise costs: ClutterNav-v0 steps/s under each noise profile, measured side by side in one run.
+"""What noise costs: ClutterNav-v1 steps/s under each noise profile, measured side by side in one run.
 
 Each profile runs twice. "As specified" is the profile itself: its slower LIDARs (5-5.5 Hz for low-cost and
 harsh) cast fewer rays, and its action noise and dynamics randomisation change the trajectory and so the contact
@@ -91,7 +91,7 @@ def configs() -> dict[str, dict]:
 def measure(rounds: int, steps: int, seed: int) -> tuple[dict[str, float], dict[str, float]]:
     """Median steps/s per config (:func:`configs`), and the noise code's median share of the step for the
     "sensor noise only" configs."""
-    runners = {label: EnvRunner(gym.make("ClutterNav-v0", noise=spec), seed) for label, spec in configs().items()}
+    runners = {label: EnvRunner(gym.make("ClutterNav-v1", noise=spec), seed) for label, spec in configs().items()}
     rates: dict[str, list[float]] = {label: [] for label in runners}
     shares: dict[str, list[float]] = {label: [] for label in runners if label.endswith("sensor noise only")}
     rng = np.random.default_rng(seed)
@@ -121,7 +121,7 @@ def lidar_deviation_m(profile: str, steps: int = 300, seed: int = 0) -> float:
     one, on the same trajectory (the "sensor noise only" settings keep it the clean env's); dropouts and spurious
     returns count in full."""
     spec = {"profile": profile, **SENSOR_NOISE_ONLY} if profile != "none" else "none"
-    clean, noisy = gym.make("ClutterNav-v0"), gym.make("ClutterNav-v0", noise=spec)
+    clean, noisy = gym.make("ClutterNav-v1"), gym.make("ClutterNav-v1", noise=spec)
     scale = next(s for s in clean.unwrapped.sensors if s.name == "lidar").config.max_range  # obs = range / scale
     clean.reset(seed=seed)
     noisy.reset(seed=seed)
@@ -144,7 +144,7 @@ def main() -> None:
 
     rates, shares = measure(args.rounds, args.steps, args.seed)
     base = rates["none"]
-    print(f"ClutterNav-v0 defaults (64-beam LIDAR + IMU), {args.rounds} alternating blocks of {args.steps} "
+    print(f"ClutterNav-v1 defaults (64-beam LIDAR + IMU), {args.rounds} alternating blocks of {args.steps} "
           "random-walk steps\n")
     print(table_header("noise", "steps/s", "us/step", "step time vs none", "noise code, share of the step"))
     for label, rate in rates.items():

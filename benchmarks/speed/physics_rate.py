@@ -1,4 +1,4 @@
-"""Speed against error of the physics settings: ClutterNav-v0's robot trajectory at several physics rates and
+"""Speed against error of the physics settings: ClutterNav-v1's robot trajectory at several physics rates and
 solver iteration counts, compared with a 3840 Hz / 200-iteration reference driven by the same 8 s of commands,
 and how deep the robot sinks into a wall it is driven against at full speed for 3 s.
 
@@ -35,7 +35,7 @@ def commands(n: int) -> np.ndarray:
 
 
 def trajectory(physics_hz: float, iterations: int, actions: np.ndarray) -> tuple[np.ndarray, float]:
-    env = gym.make("ClutterNav-v0", physics_hz=physics_hz, solver_iterations=iterations, sensors=())
+    env = gym.make("ClutterNav-v1", physics_hz=physics_hz, solver_iterations=iterations, sensors=())
     env.reset(options={"scene": SCENE})
     robot, path, seconds = env.unwrapped.robot, [], 0.0
     for a in actions:
@@ -49,7 +49,7 @@ def trajectory(physics_hz: float, iterations: int, actions: np.ndarray) -> tuple
 
 def wall_penetration_mm(physics_hz: float, iterations: int, seconds: float = 3.0) -> float:
     """Deepest FCL penetration (mm) while driving at full speed into a wall for ``seconds``."""
-    env = gym.make("ClutterNav-v0", physics_hz=physics_hz, solver_iterations=iterations, sensors=(),
+    env = gym.make("ClutterNav-v1", physics_hz=physics_hz, solver_iterations=iterations, sensors=(),
                    max_episode_steps=10_000)
     env.reset(options={"scene": WALL})
     deepest = 0.0

@@ -1,4 +1,4 @@
-"""ClutterNav-v0 steps/s and reset time against the raw pybullet work it needs, measured side by side.
+"""ClutterNav-v1 steps/s and reset time against the raw pybullet work it needs, measured side by side.
 
 The floor replays, through bare pybullet calls on a twin env's client, what one ClutterNav step cannot avoid:
 the motor command, the ``stepSimulation`` calls, the three batched state reads and one ``rayTestBatch``. The
@@ -90,7 +90,7 @@ def reset_times(env: gym.Env, n: int, warmup: int) -> np.ndarray:
 
 def scenario(name: str, seed: int, rounds: int, steps: int, peer: EnvRunner | None) -> dict[str, float]:
     """Alternate env, floor (and peer) blocks; medians over blocks."""
-    env, twin = gym.make("ClutterNav-v0"), gym.make("ClutterNav-v0")
+    env, twin = gym.make("ClutterNav-v1"), gym.make("ClutterNav-v1")
     runner = EnvRunner(env, seed)
     twin.reset(seed=seed)
     floor = Floor(twin)
@@ -130,10 +130,10 @@ def main() -> None:
     figures: dict[str, object] = {
         name: scenario(name, args.seed, args.rounds, args.steps, peer) for name in ("navigator", "random-walk")
     }
-    resets = reset_times(gym.make("ClutterNav-v0"), args.resets, warmup=200) * 1e3
+    resets = reset_times(gym.make("ClutterNav-v1"), args.resets, warmup=200) * 1e3
     figures["reset_ms"] = {"median": float(np.median(resets)), "p95": float(np.percentile(resets, 95))}
 
-    print(f"ClutterNav-v0 defaults (64-beam LIDAR + IMU + FCL clearance and contacts), one process, "
+    print(f"ClutterNav-v1 defaults (64-beam LIDAR + IMU + FCL clearance and contacts), one process, "
           f"{args.rounds} alternating blocks of {args.steps} steps per scenario\n")
     print(table_header("scenario", "env steps/s", "raw pybullet floor steps/s", "env time / floor time"))
     for name, label in (("navigator", "scripted navigator (drives around clutter)"),

@@ -1,4 +1,4 @@
-"""Samples per second of the main job's ClutterNav-v0 envs: one env alone against vector envs over worker processes.
+"""Samples per second of the main job's ClutterNav-v1 envs: one env alone against vector envs over worker processes.
 
 Target (issue 12): two workers step at least 1.8x one env alone on a 2-core machine. Every configuration
 steps the main job's env settings (subgoal, terminate on collision; ``--bare``: the env's defaults) with random-walk
@@ -94,7 +94,7 @@ def vector(venv: VecEnv | gym.vector.VectorEnv, steps: int, seed: int) -> float:
 def training_loop(samples: int, seed: int) -> tuple[float, int, int]:
     """Samples/s of PPO.learn with the main job's settings; returns (rate, n_envs, env workers)."""
     torch.set_num_threads(1)  # as train() does
-    config = config_for("ClutterNav-v0", {"seed": seed})
+    config = config_for("ClutterNav-v1", {"seed": seed})
     venv = training_env(config, seed=seed)
     model = build_model(config, venv)
     t0 = time.perf_counter()
@@ -106,7 +106,7 @@ def training_loop(samples: int, seed: int) -> tuple[float, int, int]:
 
 def measure(args: argparse.Namespace, folder: Path) -> dict[str, list[float]]:
     """The samples/s of each configuration in each round (the commit's package, if any, built in ``folder``)."""
-    config = config_for("ClutterNav-v0", {})
+    config = config_for("ClutterNav-v1", {})
     factory = functools.partial(make_env, config.env_id, {} if args.bare else config.make_kwargs())
     kwargs = {} if args.bare else config.make_kwargs()
     configurations = {"one env, one process": lambda: one_env(factory, args.steps, args.seed)}
@@ -144,7 +144,7 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=2000, help="samples per configuration per round")
     parser.add_argument("--ppo-steps", type=int, default=16384, help="samples of the training-loop measurement")
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--bare", action="store_true", help="step ClutterNav-v0's defaults, not the main job's")
+    parser.add_argument("--bare", action="store_true", help="step ClutterNav-v1's defaults, not the main job's")
     parser.add_argument("--commit", default=None, help="also step this commit's WorkerVecEnv and BlockVectorEnv")
     parser.add_argument("--vector-only", action="store_true",
                         help="only one env and the two vector envs of clutter-gym (and the commit's)")
@@ -153,7 +153,7 @@ def main() -> None:
         rates = measure(args, Path(folder))
     base = statistics.median(rates["one env, one process"])
     settings = "its default settings" if args.bare else "the main job's env settings"
-    print(f"ClutterNav-v0 with {settings}, {os.cpu_count()} cores, random-walk actions, "
+    print(f"ClutterNav-v1 with {settings}, {os.cpu_count()} cores, random-walk actions, "
           f"{args.steps} samples per configuration, median of {args.rounds} alternating rounds\n")
     print(table_header("configuration", "samples/s", "vs one env"))
     for name, values in rates.items():

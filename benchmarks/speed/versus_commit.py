@@ -7,8 +7,8 @@ machine the same run's reset median moved between 4.4 and 7.4 ms). Here the comm
 temporary folder under the name ``clutter_gym_base`` (its sources' imports renamed to match), both envs are made
 with ``gym.make``, and blocks of each alternate, so that noise hits both alike; figures are medians over blocks.
 
-    python -m benchmarks.speed.versus_commit    # ClutterNav-v0 against HEAD
-    python -m benchmarks.speed.versus_commit --commit 3f62401 --env ClutterNav-v0 \
+    python -m benchmarks.speed.versus_commit    # ClutterNav-v1 against HEAD
+    python -m benchmarks.speed.versus_commit --commit 3f62401 --env ClutterNav-v1 \
         --env-kwargs '{"subgoal_lookahead": 0.5}'
 
 Needs git and the commit in this repository; the commit's package is copied, not installed (no build, no downloads).
@@ -138,7 +138,7 @@ def reset_block(env: gym.Env, n: int) -> float:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--commit", default="HEAD", help="the commit to compare with (default: HEAD)")
-    parser.add_argument("--env", default="ClutterNav-v0")
+    parser.add_argument("--env", default="ClutterNav-v1")
     parser.add_argument("--env-kwargs", default="{}", help="JSON keyword arguments for both envs")
     parser.add_argument("--rounds", type=int, default=12)
     parser.add_argument("--steps", type=int, default=500, help="random-action steps per step block")

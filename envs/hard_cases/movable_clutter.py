@@ -46,10 +46,10 @@ def push_box(env: gym.Env, seconds: float = 6.0) -> tuple[list[dict], np.ndarray
 
 
 def tabletop_creep(seconds: float = 10.0, seed: int = 2) -> tuple[float, float, int, float]:
-    """ClutterReach-v0 with every object movable: after half a second to settle onto the table, ``seconds`` with
+    """ClutterReach-v1 with every object movable: after half a second to settle onto the table, ``seconds`` with
     the arm at rest. Returns the largest move (m) and tilt (degrees) of any object, how many obstacles stayed
     static (the shelf's), and env steps/s."""
-    env = gym.make("ClutterReach-v0", movable_obstacles=1.0)
+    env = gym.make("ClutterReach-v1", movable_obstacles=1.0)
     try:
         env.reset(seed=seed)
         rest = np.zeros(7, dtype=np.float32)

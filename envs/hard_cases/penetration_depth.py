@@ -9,10 +9,10 @@ import numpy as np
 
 
 def panda_depth_errors(steps: int, seed: int = 0) -> tuple[float, int, int, float]:
-    """ClutterReach-v0 (10 obstacles) driven at full joint speed in random directions for ``steps`` steps: the
+    """ClutterReach-v1 (10 obstacles) driven at full joint speed in random directions for ``steps`` steps: the
     largest |contact depth - max(0, -signed distance)| of the checker's contacts after each step (m), the
     contacts and those deeper than 1 mm, and env steps/s (the extra check and signed distances excluded)."""
-    env = gym.make("ClutterReach-v0", n_obstacles=10)
+    env = gym.make("ClutterReach-v1", n_obstacles=10)
     checker = env.unwrapped.checker
     env.reset(seed=seed)
     rng = np.random.default_rng(seed)

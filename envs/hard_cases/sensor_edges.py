@@ -15,7 +15,7 @@ OBSTACLE = SEGMENTATION_CLASSES.index("obstacle")
 
 
 def wall_camera(make, far: float) -> tuple[gym.Env, dict]:
-    """ClutterNav-v0 with an 84x64 depth and segmentation camera (far plane ``far`` metres) at the origin facing
+    """ClutterNav-v1 with an 84x64 depth and segmentation camera (far plane ``far`` metres) at the origin facing
     the arena wall, reset on an empty scene: the env and its first observation. ``make(**kwargs)`` makes the
     env; the caller closes it."""
     env = make(sensors=("camera",), camera_modes=("depth", "segmentation"), camera_size=(84, 64), camera_far=far)
@@ -34,7 +34,7 @@ def wall_depth_error(far: float, steps: int) -> tuple[float, float, int, float]:
     pose the closed form is for), the same over ``steps`` more frames at zero command (the base settles by about
     10 um on its wheels, which the closed form does not follow), the wall's pixel count in the first frame, and env
     steps/s (camera on)."""
-    env, first = wall_camera(lambda **kwargs: gym.make("ClutterNav-v0", **kwargs), far)
+    env, first = wall_camera(lambda **kwargs: gym.make("ClutterNav-v1", **kwargs), far)
     try:
         frames, rate = timed_steps(env, STILL, steps)
     finally:
@@ -49,7 +49,7 @@ def wall_depth_error(far: float, steps: int) -> tuple[float, float, int, float]:
 def imu_impact(make, accel_range: float | None = None) -> tuple[np.ndarray, int, float]:
     """Full command from 0.3 m in front of the arena wall for 2 s: the IMU readings (40, 6) (m/s^2, rad/s), the
     steps in contact, and env steps/s. ``accel_range``: the accelerometer's full scale, m/s^2 (None: noiseless
-    and unlimited); ``make(**kwargs)`` makes the ClutterNav-v0 env."""
+    and unlimited); ``make(**kwargs)`` makes the ClutterNav-v1 env."""
     noise = "none" if accel_range is None else {"profile": "none", "imu": {"accel_range": accel_range}}
     env = make(sensors=("imu",), noise=noise, terminate_on_collision=False)
     env.reset(options={"scene": nav_scene(start=(2.5, 0.0, 0.0))})

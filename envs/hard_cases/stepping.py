@@ -8,7 +8,7 @@ import time
 import gymnasium as gym
 import numpy as np
 
-CONTROL_HZ = 20.0  # ClutterNav-v0 and ClutterReach-v0 control steps per second
+CONTROL_HZ = 20.0  # ClutterNav-v1 and ClutterReach-v1 control steps per second
 STILL = np.zeros(2, dtype=np.float32)
 FULL_AHEAD = np.array([1.0, 0.0], dtype=np.float32)
 

@@ -8,9 +8,9 @@ The runs:
   :class:`~clutter_gym.sim.Sim` at an env's physics rate, audited by a
   :class:`~clutter_gym.collision.CollisionChecker` of the body with that env's checker settings
   (:func:`free_body_run`);
-* the ClutterNav-v0 robot (``assets/robots/diffbot.urdf``) launched along its heading with
+* the ClutterNav-v1 robot (``assets/robots/diffbot.urdf``) launched along its heading with
   ``pybullet.resetBaseVelocity`` into a wall of a user scene, at zero command, in the env itself (:func:`nav_run`);
-* the ClutterReach-v0 Panda at its full joint speed (``max_joint_speed`` at its maximum) bringing its hand down onto
+* the ClutterReach-v1 Panda at its full joint speed (``max_joint_speed`` at its maximum) bringing its hand down onto
   a shelf board or sideways into a shelf side, in the env itself (:data:`HAND_CASES`, :func:`hand_run`).
 
 Whether a body tunnels depends on where the physics ticks fall against the wall, so a run starts from an offset
@@ -197,7 +197,7 @@ def free_body_run(settings: Settings, shape: str, speed: float, thickness: float
 
 # ------------------------------------------------------------------------------------------------ nav robot
 def make_nav_env() -> gym.Env:
-    return gym.make("ClutterNav-v0", arena_size=NAV_ARENA, sensors=())
+    return gym.make("ClutterNav-v1", arena_size=NAV_ARENA, sensors=())
 
 
 def nav_run(env: gym.Env, speed: float, thickness: float, offset: float, *, ccd: bool) -> Run:
@@ -260,7 +260,7 @@ HAND_CASES = (
 
 
 def make_reach_env() -> gym.Env:
-    return gym.make("ClutterReach-v0", max_joint_speed=1.0, n_obstacles=0, shelf=False)
+    return gym.make("ClutterReach-v1", max_joint_speed=1.0, n_obstacles=0, shelf=False)
 
 
 def hand_run(env: gym.Env, case: HandCase, thickness: float, offset: float, *, ccd: bool) -> Run:

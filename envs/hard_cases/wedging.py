@@ -36,7 +36,7 @@ class Wedged:
 
 def wedge(name: str, seconds: float = 60.0) -> Wedged:
     """Full forward command into :data:`WEDGES` ``name`` for ``seconds``."""
-    env = gym.make("ClutterNav-v0", noise="none", max_episode_steps=10_000, terminate_on_collision=False)
+    env = gym.make("ClutterNav-v1", noise="none", max_episode_steps=10_000, terminate_on_collision=False)
     try:
         env.reset(options={"scene": WEDGES[name]})
         steps, rate = timed_steps(env, FULL_AHEAD, int(round(seconds * CONTROL_HZ)))

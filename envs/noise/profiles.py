@@ -3,7 +3,7 @@
 ``noise`` may be a profile name (``"none"``, ``"nominal"``, ``"low-cost"``, ``"harsh"``), a mapping that starts
 from a profile and overrides parameters per section, or a :class:`NoiseProfile`::
 
-    gym.make("ClutterNav-v0", noise={"profile": "nominal", "lidar": {"range_sigma": 0.02, "latency_steps": 1}})
+    gym.make("ClutterNav-v1", noise={"profile": "nominal", "lidar": {"range_sigma": 0.02, "latency_steps": 1}})
 
 Sections: ``lidar``, ``imu``, ``camera_rgb``, ``camera_depth``, ``camera`` (timing only), ``action`` and
 ``dynamics``. The sensor sections ``lidar``, ``imu`` and ``camera`` also take the timing keys ``rate_hz`` and

@@ -1,7 +1,7 @@
 """Robots by name: each env takes ``robot=`` a registered name, a spec mapping, or the path of a YAML spec file.
 
-A robot has a kind, and a task takes the kinds it can drive: ClutterNav-v0 a wheeled base (``diff_drive``),
-ClutterReach-v0 a fixed-base arm (``arm``), ClutterFly-v0 a multirotor (``multirotor``). Registering a robot of a
+A robot has a kind, and a task takes the kinds it can drive: ClutterNav-v1 a wheeled base (``diff_drive``),
+ClutterReach-v1 a fixed-base arm (``arm``), ClutterFly-v1 a multirotor (``multirotor``). Registering a robot of a
 known kind takes a name and a spec (or a function that makes the robot's model); a user's robot of a known kind
 needs no Python at all: ``robot={"kind": "diff_drive", "urdf": ..., ...}`` or ``robot="my_robot.yaml"``.
 """

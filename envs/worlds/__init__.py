@@ -1,6 +1,6 @@
 """Worlds: scenes as plain data, seeded layouts with a reachability guarantee, the path distance to the goal, and
 the body pool that puts a scene into a Sim. One subpackage per world, with one file per role: ``floor``
-(ClutterNav-v0), ``table`` (ClutterReach-v0) and ``volume`` (ClutterFly-v0); the parts they share sit here.
+(ClutterNav-v1), ``table`` (ClutterReach-v1) and ``volume`` (ClutterFly-v1); the parts they share sit here.
 
 The names below are imported on first use (PEP 562 ``__getattr__``), so that importing one world's data (a task
 importing its scene type) loads neither the other worlds nor, through the arenas, the simulator.

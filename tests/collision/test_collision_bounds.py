@@ -225,10 +225,10 @@ def test_moved_obstacles_keep_exact_point_distances_at_any_orientation():
 # ------------------------------------------------------------------------ the nearest pair alone (per_link=False)
 @pytest.mark.parametrize("fidelity, padding", [("primitive", 0.0), ("mesh", 0.01), ("spheres", 0.005)])
 def test_nearest_pair_checker_reports_what_the_per_link_checker_does(make_env, fidelity, padding):
-    """ClutterFly-v0 measures only the robot's nearest pair. Along random-action flights through generated volumes
+    """ClutterFly-v1 measures only the robot's nearest pair. Along random-action flights through generated volumes
     (crashes into the floor and the clutter included), a per-link checker of the same model, given the same scenes
     and states, must report the same clearance, nearest pair, witness points, contacts and swept hits."""
-    env = make_env("ClutterFly-v0", volume_size=(6.0, 6.0, 3.0), obstacle_density=0.15,
+    env = make_env("ClutterFly-v1", volume_size=(6.0, 6.0, 3.0), obstacle_density=0.15,
                    collision_fidelity=fidelity, collision_padding=padding)
     checker = env.unwrapped.checker
     assert not checker.per_link

@@ -38,7 +38,7 @@ def synced(model: RobotCollisionModel, q) -> RobotCollisionModel:
 
 # ------------------------------------------------------------------------------------------ geometry, FK
 def test_forward_kinematics_matches_pybullet_link_frames(make_env):
-    env = make_env("ClutterReach-v0").unwrapped
+    env = make_env("ClutterReach-v1").unwrapped
     env.reset(seed=0)
     rng = np.random.default_rng(0)
     for _ in range(5):

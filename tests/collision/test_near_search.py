@@ -354,9 +354,9 @@ def checked_both_ways(checker: CollisionChecker, monkeypatch, seen: dict):
 
 
 def test_clutterfly_in_a_large_volume_reports_what_every_obstacle_gives(make_env, monkeypatch):
-    """ClutterFly-v0 measures only the robot's nearest pair: along random flights through a volume of some 400
+    """ClutterFly-v1 measures only the robot's nearest pair: along random flights through a volume of some 400
     obstacles (crashes included), every report is the one every obstacle bounded gives."""
-    env = make_env("ClutterFly-v0", volume_size=(12.0, 12.0, 3.0), obstacle_density=0.25)
+    env = make_env("ClutterFly-v1", volume_size=(12.0, 12.0, 3.0), obstacle_density=0.25)
     checker = env.unwrapped.checker
     assert not checker.per_link
     seen = {"in range": 0, "contacts": 0, "tunneling": 0}

@@ -178,7 +178,7 @@ def test_an_arm_link_that_only_swings_through_a_thin_pole(make_env, pole_at):
     """The Panda's first joint swings 1.2 rad between two checks (the env's checker, the arm's real link poses):
     the hand turns about the base's axis past a 5 mm pole standing where its middle pose puts the hand. Both ends
     are clear; the sweep flags the pass. The same pole 15 cm beyond the hand's reach is not flagged."""
-    env = make_env("ClutterReach-v0", robot="panda")
+    env = make_env("ClutterReach-v1", robot="panda")
     env.reset(seed=0, options={"scene": {"obstacles": [], "target": [0.4, 0.0, 0.3]}})
     robot, checker = env.unwrapped.robot, env.unwrapped.checker
     ready = np.array(robot.model.ready)

@@ -14,7 +14,7 @@ from clutter_gym.worlds.pool import PARK_DEPTH
 
 @pytest.fixture(scope="module")
 def env():
-    env = gym.make("ClutterNav-v0", arena_size=30.0)
+    env = gym.make("ClutterNav-v1", arena_size=30.0)
     env.unwrapped.arena.near_field = False  # every obstacle a body, as in an env that renders (test_near_field.py)
     yield env
     env.close()

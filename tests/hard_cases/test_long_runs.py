@@ -72,7 +72,7 @@ def test_every_profile_and_fidelity_level_stays_finite_with_flat_memory(env_id):
 @linux_only
 def test_resets_hold_memory_and_reset_time_flat():
     out = Collect()
-    resets_run("ClutterNav-v0", 5_000, out)
+    resets_run("ClutterNav-v1", 5_000, out)
     rows = out.value
     assert growth_per(rows) < 1.0
     assert rows[-1][2] < 1.5 * rows[0][2]

@@ -39,7 +39,7 @@ def test_obstacle_objects_are_reused_and_placed_as_new_ones_would_be():
 
 
 def test_generated_layouts_share_shapes_and_hold_memory_flat():
-    env = gym.make("ClutterReach-v0")
+    env = gym.make("ClutterReach-v1")
     env.reset(seed=0)
     sim = env.unwrapped.sim
     for _ in range(300):  # warm up: the pool and the shape cache fill
@@ -55,7 +55,7 @@ def test_generated_layouts_share_shapes_and_hold_memory_flat():
 
 def test_new_sizes_every_reset_rebuild_the_world_and_hold_memory_flat(monkeypatch):
     monkeypatch.setattr(clutter_gym.sim.core, "MAX_SHAPES", 60)  # a rebuild every 12 resets instead of every ~100
-    env = gym.make("ClutterNav-v0")
+    env = gym.make("ClutterNav-v1")
     env.reset(seed=0)
     rng = np.random.default_rng(0)
     for _ in range(100):
@@ -83,13 +83,13 @@ def test_a_rebuilt_world_runs_as_a_fresh_one(monkeypatch):
     """The same seed, scene and actions give the same trajectory after a rebuild as in a fresh env, with the same
     body ids and names."""
     scene = new_sizes_scene(np.random.default_rng(5))
-    fresh = gym.make("ClutterNav-v0")
+    fresh = gym.make("ClutterNav-v1")
     expected = rollout(fresh, scene, seed=3)
     names = fresh.unwrapped.sim.body_names()
     fresh.close()
 
     monkeypatch.setattr(clutter_gym.sim.core, "MAX_SHAPES", 8)
-    env = gym.make("ClutterNav-v0")
+    env = gym.make("ClutterNav-v1")
     rng = np.random.default_rng(0)
     for _ in range(2):
         env.reset(options={"scene": new_sizes_scene(rng)})
@@ -105,10 +105,10 @@ def test_a_rebuilt_world_runs_as_a_fresh_one(monkeypatch):
 def test_make_and_close_cycles_give_their_memory_back():
     """The target is under 50 MB over 1,000 cycles; 200 cycles measured 0.9 MiB, the bound is that target's share."""
     for _ in range(20):  # warm-up: imports, caches and the allocator's first arenas
-        gym.make("ClutterNav-v0").close()
+        gym.make("ClutterNav-v1").close()
     before = resident_mib()
     for seed in range(200):
-        env = gym.make("ClutterNav-v0")
+        env = gym.make("ClutterNav-v1")
         env.reset(seed=seed)
         env.close()
     growth = resident_mib() - before
@@ -121,7 +121,7 @@ def _connected_clients() -> list[int]:
     return [c for c in range(4096) if pb.isConnected(physicsClientId=c)]
 
 
-@pytest.mark.parametrize("env_id", ["ClutterNav-v0", "ClutterReach-v0", "ClutterFly-v0"])
+@pytest.mark.parametrize("env_id", ["ClutterNav-v1", "ClutterReach-v1", "ClutterFly-v1"])
 def test_an_env_dropped_without_close_gives_its_physics_server_back(env_id):
     """Notebooks and evaluation loops drop envs unclosed; each one kept its pybullet server (29 MiB a ClutterNav or
     ClutterFly env, 86 MiB a ClutterReach one) until the Sim got a finalizer. The bound is a small fraction of one

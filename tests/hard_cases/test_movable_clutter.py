@@ -44,14 +44,14 @@ def test_mass_is_a_scene_field_with_a_range():
     assert parse_obstacle(o.to_dict(), "o", 6.0) == o
 
 
-@pytest.mark.parametrize("env_id", ["ClutterNav-v0", "ClutterReach-v0"])
+@pytest.mark.parametrize("env_id", ["ClutterNav-v1", "ClutterReach-v1"])
 def test_movable_fraction_is_checked_at_make(env_id):
     for bad in (-0.1, 1.5, "half", None):
         with pytest.raises(ValueError, match="movable_obstacles must be"):
             gym.make(env_id, movable_obstacles=bad)
 
 
-@pytest.mark.parametrize("env_id", ["ClutterNav-v0", "ClutterReach-v0"])
+@pytest.mark.parametrize("env_id", ["ClutterNav-v1", "ClutterReach-v1"])
 def test_the_fraction_changes_masses_not_the_layout(env_id):
     layouts = {}
     for fraction in (0.0, 0.5, 1.0):
@@ -62,7 +62,7 @@ def test_the_fraction_changes_masses_not_the_layout(env_id):
     geometry = {f: [(o.shape, o.size, o.position, o.yaw, o.z) for o in obs] for f, obs in layouts.items()}
     assert geometry[0.0] == geometry[0.5] == geometry[1.0]
     counts = {f: sum(o.movable for o in obs) for f, obs in layouts.items()}
-    eligible = len(layouts[1.0]) - (5 if env_id == "ClutterReach-v0" else 0)  # the shelf stays put
+    eligible = len(layouts[1.0]) - (5 if env_id == "ClutterReach-v1" else 0)  # the shelf stays put
     assert counts == {0.0: 0, 0.5: round(0.5 * eligible), 1.0: eligible}
 
 
@@ -78,7 +78,7 @@ def test_inertia_is_the_closed_form_of_the_solid():
 @pytest.fixture(scope="module")
 def pushed():
     """The robot drives a 1 kg box 0.5 m ahead of it into a static wall 1.2 m ahead, for 6 s at full speed."""
-    env = gym.make("ClutterNav-v0", max_linear_speed=1.0)
+    env = gym.make("ClutterNav-v1", max_linear_speed=1.0)
     infos, positions, _ = push_box(env, seconds=6.0)
     assert all(np.isfinite(info["reward"]) for info in infos)
     yield env, infos, positions
@@ -118,7 +118,7 @@ def test_the_checker_measures_the_box_where_the_physics_has_it(pushed):
 
 def test_a_seed_gives_the_same_pushes():
     def run() -> np.ndarray:
-        env = gym.make("ClutterNav-v0", movable_obstacles=1.0, obstacle_density=0.25)
+        env = gym.make("ClutterNav-v1", movable_obstacles=1.0, obstacle_density=0.25)
         env.reset(seed=11)
         env.action_space.seed(11)
         out = []
@@ -150,7 +150,7 @@ def test_extreme_masses_and_ratios_in_contact_stay_finite_and_put(masses, physic
     (``python -m benchmarks.hard_cases.stacking`` has the table)."""
     boxes = [{"shape": "box", "size": [0.3, 0.3, 0.2], "position": [1.5, 0.0], "z": 0.2 * k, "mass": m}
              for k, m in enumerate(masses)]
-    env = gym.make("ClutterNav-v0", sensors=(), physics_hz=physics_hz, solver_iterations=iterations, physics="fixed")
+    env = gym.make("ClutterNav-v1", sensors=(), physics_hz=physics_hz, solver_iterations=iterations, physics="fixed")
     env.reset(seed=0, options={"scene": empty_scene(obstacles=boxes)})
     start, _ = movable_poses(env)
     for _ in range(200):
@@ -167,7 +167,7 @@ def test_extreme_masses_and_ratios_in_contact_stay_finite_and_put(masses, physic
 def test_a_short_stack_holds_at_the_settings_it_needs():
     """Five boxes, 30 s, at 240 Hz and 100 solver iterations (``python -m benchmarks.hard_cases.stacking`` has the
     table): within a millimetre and a degree."""
-    env = gym.make("ClutterNav-v0", sensors=(), physics_hz=240.0, solver_iterations=100, physics="fixed")
+    env = gym.make("ClutterNav-v1", sensors=(), physics_hz=240.0, solver_iterations=100, physics="fixed")
     env.reset(seed=0, options={"scene": stack_scene(5)})
     start, start_rotation = movable_poses(env)
     for _ in range(600):

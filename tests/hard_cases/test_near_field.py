@@ -21,7 +21,7 @@ N = 1000  # 0.9 m apart on the 30 m grid: room to drive between them
 
 
 def make(near: bool = True, **kwargs) -> gym.Env:
-    env = gym.make("ClutterNav-v0", arena_size=ARENA, **kwargs)
+    env = gym.make("ClutterNav-v1", arena_size=ARENA, **kwargs)
     env.unwrapped.arena.near_field = near
     return env
 
@@ -74,7 +74,7 @@ def test_a_large_scene_keeps_only_near_obstacles_as_bodies():
 @pytest.mark.parametrize("kwargs", [{"render_mode": "rgb_array"}, {"lidar_caster": "pybullet"},
                                     {"sensors": ("lidar", "camera"), "camera_renderer": "tiny"}])
 def test_an_env_that_reads_bodies_keeps_every_obstacle_a_body(kwargs):
-    env = gym.make("ClutterNav-v0", arena_size=ARENA, **kwargs)
+    env = gym.make("ClutterNav-v1", arena_size=ARENA, **kwargs)
     scene = grid_scene(NEAR_FIELD_FROM + 10)
     env.reset(seed=0, options={"scene": scene})
     assert not env.unwrapped.arena.near_field_engaged

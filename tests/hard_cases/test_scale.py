@@ -283,7 +283,7 @@ def test_the_largest_arena_measures_its_walls_exactly():
     is the distance to the nearer wall less the chassis radius; after a few steps the readings stay finite."""
     half, n = 15.0, 360
     start = (13.0, -14.0, 2.5)
-    env = gym.make("ClutterNav-v0", arena_size=30.0, lidar_range=100.0, n_rays=n, noise="none")
+    env = gym.make("ClutterNav-v1", arena_size=30.0, lidar_range=100.0, n_rays=n, noise="none")
     try:
         obs, info = env.reset(options={"scene": empty_scene(start=start, goal=(-14.0, 14.0))})
         x, y, yaw = start
@@ -305,7 +305,7 @@ def test_the_largest_arena_measures_its_walls_exactly():
 
 
 def test_the_largest_arena_seen_by_a_short_lidar_reads_its_maximum_range():
-    env = gym.make("ClutterNav-v0", arena_size=30.0, noise="none")  # lidar_range 3.5 m, walls 15 m away
+    env = gym.make("ClutterNav-v1", arena_size=30.0, noise="none")  # lidar_range 3.5 m, walls 15 m away
     try:
         obs, info = env.reset(options={"scene": empty_scene(goal=(10.0, 10.0))})
         assert (info["lidar_ranges"] == 3.5).all() and (obs["lidar"] == 1.0).all()

@@ -11,7 +11,7 @@ from helpers import empty_scene
 
 
 def test_the_largest_arena_at_the_highest_density_resets_and_steps():
-    env = gym.make("ClutterNav-v0", arena_size=30.0, obstacle_density=0.3)
+    env = gym.make("ClutterNav-v1", arena_size=30.0, obstacle_density=0.3)
     for seed in (0, 1):
         obs, info = env.reset(seed=seed)
         assert len(env.unwrapped.scene.obstacles) > 1000
@@ -27,7 +27,7 @@ def test_the_largest_arena_at_the_highest_density_resets_and_steps():
 def test_clutter_fly_volumes_at_the_edges_of_their_sizes_reset_and_hover(size, density):
     """volume_size z down to 1 m, as docs/envs.md gives it (the env refused heights under 2 m, where its wall openings
     did not fit under the top); x and y from 2 to 30 m. Two seeded layouts each, ten hover steps without an end."""
-    env = gym.make("ClutterFly-v0", volume_size=size, obstacle_density=density, sensors=("imu", "lidar"))
+    env = gym.make("ClutterFly-v1", volume_size=size, obstacle_density=density, sensors=("imu", "lidar"))
     hover = env.unwrapped.robot.hover_action(9.81).astype(np.float32)
     for seed in (0, 1):
         obs, info = env.reset(seed=seed)
@@ -55,7 +55,7 @@ def test_at_its_lowest_physics_rate_clutter_nav_stops_and_stays_stopped():
     two and never tilts (at 15 Hz it crept 32 mm, at 2 Hz it turned over)."""
     from clutter_gym.clutter_nav import MIN_PHYSICS_HZ
 
-    env = gym.make("ClutterNav-v0", physics_hz=MIN_PHYSICS_HZ, control_hz=20.0, sensors=())
+    env = gym.make("ClutterNav-v1", physics_hz=MIN_PHYSICS_HZ, control_hz=20.0, sensors=())
     env.reset(seed=0, options={"scene": empty_scene(start=(-2.0, 0.0, 0.0))})
     robot, tilt = env.unwrapped.robot, 0.0
     for action, seconds in (((1.0, 0.0), 2.0), ((0.0, 0.0), 1.0)):
@@ -77,7 +77,7 @@ def test_at_its_lowest_physics_rate_clutter_fly_comes_back_level():
     level and still (at 5 Hz it was 11 degrees off and swinging at 3 rad/s, at 1-2 Hz it fell)."""
     from clutter_gym.clutter_fly import MIN_PHYSICS_HZ
 
-    env = gym.make("ClutterFly-v0", physics_hz=MIN_PHYSICS_HZ, control_hz=30.0)
+    env = gym.make("ClutterFly-v1", physics_hz=MIN_PHYSICS_HZ, control_hz=30.0)
     env.reset(seed=0, options={"scene": {"obstacles": [], "start": [0.0, 0.0, 2.0, 0.7], "goal": [3.0, 3.0, 2.0]}})
     robot = env.unwrapped.robot
     hover = robot.hover_action(9.81).astype(np.float32)
@@ -95,7 +95,7 @@ def test_at_its_lowest_physics_rate_the_panda_holds_still_after_a_move():
     still moved at 2.5e-3 rad/s, at 10 Hz the arm sagged 0.1 rad under gravity)."""
     from clutter_gym.clutter_reach import MIN_PHYSICS_HZ
 
-    env = gym.make("ClutterReach-v0", physics_hz=MIN_PHYSICS_HZ, control_hz=20.0, noise="none")
+    env = gym.make("ClutterReach-v1", physics_hz=MIN_PHYSICS_HZ, control_hz=20.0, noise="none")
     env.reset(seed=0)
     move = np.array([0.5, -0.5, 0.5, 0.5, -0.5, 0.5, 0.5], dtype=np.float32)
     for action, steps in ((move, 20), (np.zeros(7, dtype=np.float32), 40)):

@@ -17,7 +17,7 @@ from clutter_gym.hard_cases.stepping import STILL
 
 @pytest.fixture(scope="module")
 def env():
-    env = gym.make("ClutterNav-v0", noise="none", max_episode_steps=10_000)
+    env = gym.make("ClutterNav-v1", noise="none", max_episode_steps=10_000)
     yield env
     env.close()
 

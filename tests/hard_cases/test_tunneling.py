@@ -2,7 +2,7 @@
 FCL audit's swept check flags every such pass, and nothing else would. pybullet's CCD stops the ball only when it
 is a rigid body, not a multibody. The nav robot launched into a thin wall ends inside it, and the audit reports it.
 
-Rates and the audit's settings are ClutterNav-v0's defaults; the runs are :mod:`clutter_gym.hard_cases.tunneling`'s,
+Rates and the audit's settings are ClutterNav-v1's defaults; the runs are :mod:`clutter_gym.hard_cases.tunneling`'s,
 which ``python -m benchmarks.hard_cases.tunneling`` tabulates.
 """
 

@@ -34,7 +34,7 @@ def test_ik_solutions_put_the_simulated_end_effector_on_the_target(checker, make
     seeds = np.random.default_rng(0).uniform(-1.0, 1.0, (16, 7)) + READY
     solutions = inverse_kinematics(checker, target, seeds)
     assert len(solutions) >= 4
-    env = make_env("ClutterReach-v0")
+    env = make_env("ClutterReach-v1")
     for q in solutions[:4]:  # pybullet's own kinematics agree with the numpy FK the planner uses
         obs, _ = env.reset(seed=0, options={"scene": {"obstacles": [], "start": q.tolist(), "target": [0.3, 0, 0.5]}})
         assert np.linalg.norm(obs["ee_position"] - target) < 0.006
@@ -60,7 +60,7 @@ def test_a_blocked_batch_stops_at_its_first_blocked_configuration(checker):
 
 
 def test_shelf_path_is_collision_free_at_five_times_the_planning_resolution(make_env):
-    env = make_env("ClutterReach-v0")
+    env = make_env("ClutterReach-v1")
     env.reset(seed=SHELF_SEED)
     scene = env.unwrapped.scene
     planner = ArmPlanner()
@@ -76,7 +76,7 @@ def test_shelf_path_is_collision_free_at_five_times_the_planning_resolution(make
 
 
 def test_reference_reaches_seeded_layouts_without_contact(make_env):
-    env = make_env("ClutterReach-v0")
+    env = make_env("ClutterReach-v1")
     planner = JointPlannerReacher(env)
     for seed in range(SHELF_SEED, SHELF_SEED + 4):
         obs, _ = env.reset(seed=seed)
@@ -91,7 +91,7 @@ def test_reference_reaches_seeded_layouts_without_contact(make_env):
 
 def test_reference_needs_joint_velocity_control(make_env):
     with pytest.raises(ValueError, match="joint_velocity"):
-        JointPlannerReacher(make_env("ClutterReach-v0", control="ee_position"))
+        JointPlannerReacher(make_env("ClutterReach-v1", control="ee_position"))
 
 
 def test_time_parameterisation_keeps_every_joint_under_its_speed():
@@ -126,7 +126,7 @@ def test_joint_path_walks_by_arc_length():
 
 
 def test_subgoal_points_along_the_planned_path(make_env):
-    env = make_env("ClutterReach-v0", subgoal_lookahead=0.2)
+    env = make_env("ClutterReach-v1", subgoal_lookahead=0.2)
     obs, _ = env.reset(seed=SHELF_SEED)
     task = env.unwrapped.task
     assert task.path is not None and task.path.length > 0.5
@@ -149,20 +149,20 @@ def test_subgoal_points_along_the_planned_path(make_env):
 
 
 def test_subgoal_is_seeded_by_the_layout_and_planned_once_per_layout(make_env):
-    env = make_env("ClutterReach-v0", subgoal_lookahead=0.2)
+    env = make_env("ClutterReach-v1", subgoal_lookahead=0.2)
     first, _ = env.reset(seed=SHELF_SEED)
     checker = env.unwrapped.task.planner.checker
     checks = checker.checks
     again, _ = env.reset(seed=SHELF_SEED)
     assert checker.checks == checks  # the cached plan
     assert np.array_equal(first["subgoal"], again["subgoal"])
-    other = make_env("ClutterReach-v0", subgoal_lookahead=0.2)
+    other = make_env("ClutterReach-v1", subgoal_lookahead=0.2)
     fresh, _ = other.reset(seed=SHELF_SEED)  # a new env plans the same path from the same layout
     assert np.array_equal(first["subgoal"], fresh["subgoal"])
-    assert "subgoal" not in make_env("ClutterReach-v0").observation_space.spaces
+    assert "subgoal" not in make_env("ClutterReach-v1").observation_space.spaces
 
 
 @pytest.mark.parametrize("value", [-0.1, 3.5, float("nan")])
 def test_subgoal_lookahead_out_of_range_is_refused(make_env, value):
     with pytest.raises(ValueError, match=r"subgoal_lookahead must be in \[0, 3\] radians"):
-        make_env("ClutterReach-v0", subgoal_lookahead=value)
+        make_env("ClutterReach-v1", subgoal_lookahead=value)

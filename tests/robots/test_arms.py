@@ -1,4 +1,4 @@
-"""Arms in ClutterReach-v0 by ``robot=``: the KUKA iiwa and the xArm6 from pybullet_data, and an arm spec's refusals."""
+"""Arms in ClutterReach-v1 by ``robot=``: the KUKA iiwa and the xArm6 from pybullet_data, and an arm spec's refusals."""
 
 from __future__ import annotations
 
@@ -31,9 +31,9 @@ def _cache(tmp_path, monkeypatch):
 
 def test_the_arms_are_registered_and_clutterreach_takes_them():
     assert registered("arm") == ["panda", *ARMS]
-    with pytest.raises(ValueError, match=r"ClutterReach-v0 takes a fixed-base arm: robot= one of \['panda', "
+    with pytest.raises(ValueError, match=r"ClutterReach-v1 takes a fixed-base arm: robot= one of \['panda', "
                                          r"'kuka_iiwa', 'xarm6'\], or a spec with kind 'arm'"):
-        gym.make("ClutterReach-v0", robot="husky")
+        gym.make("ClutterReach-v1", robot="husky")
 
 
 @pytest.mark.parametrize("robot, n", [("kuka_iiwa", 7), ("xarm6", 6)])
@@ -41,7 +41,7 @@ def test_each_arm_passes_the_env_checks_with_its_own_joint_count(robot, n, tmp_p
     from gymnasium.utils.env_checker import check_env
     from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
-    env = gym.make("ClutterReach-v0", robot=robot)
+    env = gym.make("ClutterReach-v1", robot=robot)
     assert env.action_space.shape == (n,) and env.observation_space["joint_position"].shape == (n,)
     check_env(env.unwrapped, skip_render_check=True)
     sb3_check_env(env.unwrapped, warn=False)
@@ -51,7 +51,7 @@ def test_each_arm_passes_the_env_checks_with_its_own_joint_count(robot, n, tmp_p
 
 @pytest.mark.parametrize("robot", ARMS)
 def test_each_arm_replays_its_seeded_trajectory_in_lockstep(robot):
-    envs = [gym.make("ClutterReach-v0", robot=robot) for _ in range(2)]
+    envs = [gym.make("ClutterReach-v1", robot=robot) for _ in range(2)]
     for env in envs:
         env.reset(seed=3)
     rng = np.random.default_rng(0)
@@ -67,7 +67,7 @@ def test_each_arm_replays_its_seeded_trajectory_in_lockstep(robot):
 
 @pytest.mark.parametrize("robot", ARMS)
 def test_each_arm_reaches_every_target_on_an_empty_table_and_plans_among_clutter(robot):
-    env = gym.make("ClutterReach-v0", robot=robot, control="ee_position", n_obstacles=0, shelf=False)
+    env = gym.make("ClutterReach-v1", robot=robot, control="ee_position", n_obstacles=0, shelf=False)
     for seed in range(4):
         obs, _ = env.reset(seed=seed)
         reacher = StraightLineReacher.for_env(env)
@@ -77,11 +77,11 @@ def test_each_arm_reaches_every_target_on_an_empty_table_and_plans_among_clutter
                 break
         assert info["is_success"], (robot, seed)
     env.close()
-    env = gym.make("ClutterReach-v0", robot=robot, subgoal_lookahead=0.1)
+    env = gym.make("ClutterReach-v1", robot=robot, subgoal_lookahead=0.1)
     obs, _ = env.reset(seed=1)
     assert obs["subgoal"].shape == env.action_space.shape and np.abs(obs["subgoal"]).max() > 0.0
     env.close()
-    env = gym.make("ClutterReach-v0", robot=robot)
+    env = gym.make("ClutterReach-v1", robot=robot)
     planner, successes = JointPlannerReacher(env, seed=0), 0
     for seed in range(100, 104):
         obs, _ = env.reset(seed=seed)
@@ -101,7 +101,7 @@ def test_fcl_and_pybullet_agree_on_each_arms_clearance(robot):
     clearance exceeds pybullet's closest distance (which takes off its 1 mm collision margin) by 0 to 1.2 mm, the
     band the Panda meets: measured 0.27-1.05 mm for each of the three arms, boxes and cylinders alike. The xArm at
     ``convex`` differs by up to 20 mm, where a hull fills its meshes' hollows."""
-    env = gym.make("ClutterReach-v0", robot=robot, collision_fidelity=PYBULLETS_LEVEL[robot], n_obstacles=12)
+    env = gym.make("ClutterReach-v1", robot=robot, collision_fidelity=PYBULLETS_LEVEL[robot], n_obstacles=12)
     u = env.unwrapped
     model, rng, gaps = u.robot.model, np.random.default_rng(0), []
     bolted = {u.robot.link_index[link] for link in model.fixed_links} | {-1}
@@ -197,7 +197,7 @@ def test_an_arm_whose_urdf_has_more_moving_joints_is_refused():
 
 
 def test_a_user_arm_spec_drives_in_clutterreach():
-    env = gym.make("ClutterReach-v0", robot=SPEC)
+    env = gym.make("ClutterReach-v1", robot=SPEC)
     assert env.unwrapped.robot.name == "model" and env.action_space.shape == (7,)
     env.reset(seed=0)
     for _ in range(5):

@@ -1,4 +1,4 @@
-"""Multirotors read from specs: a hexarotor from a YAML file (tests/robots/data/) flies in ClutterFly-v0, the quadrotor
+"""Multirotors read from specs: a hexarotor from a YAML file (tests/robots/data/) flies in ClutterFly-v1, the quadrotor
 written as a spec is the registered one, and bad specs are refused naming the field."""
 
 from __future__ import annotations
@@ -80,10 +80,10 @@ def assert_same(a: list, b: list) -> None:
 def test_the_quadrotor_written_as_a_spec_flies_the_registered_quadrotors_trajectory(make_env, settings):
     """Same URDF (the spec's prepared copy), rotors and coefficients: the same seeded trajectory bit for bit, clean
     and under every effect the airframe's values reach (drag, ground effect, harsh dynamics, the thrust estimate)."""
-    spec_env = make_env("ClutterFly-v0", robot=quadrotor_spec(), **settings)
+    spec_env = make_env("ClutterFly-v1", robot=quadrotor_spec(), **settings)
     model, built_in = spec_env.unwrapped.robot.model, quadrotor_model()
     assert model.urdf != built_in.urdf and set(model.tracked_links) == set(built_in.tracked_links)
-    assert_same(rollout(spec_env, 200, seed=4), rollout(make_env("ClutterFly-v0", robot="quadrotor", **settings),
+    assert_same(rollout(spec_env, 200, seed=4), rollout(make_env("ClutterFly-v1", robot="quadrotor", **settings),
                                                          200, seed=4))
 
 
@@ -106,7 +106,7 @@ def test_the_hexarotor_holds_a_hover_under_the_rate_control(make_env):
     T_max / m = 2 g / (a0 + 1) the climb is at most 2^-26 2 g / (a0 + 1) t^2 / 2 (3.5 um here). Horizontally
     only float64 rounding acts: the shares' torque left over is about 1e-18 N m against the rate loop's kp J, so
     the tilt stays near 1e-13 rad and the drift near 1e-12 m; the bounds below leave three orders of magnitude."""
-    env = make_env("ClutterFly-v0", robot=str(HEXAROTOR), volume_size=SIZE)
+    env = make_env("ClutterFly-v1", robot=str(HEXAROTOR), volume_size=SIZE)
     robot = env.unwrapped.robot
     assert env.action_space.shape == (4,) and env.observation_space["rotor_speeds"].shape == (6,)
     env.reset(seed=0, options={"scene": OPEN})
@@ -181,13 +181,13 @@ def test_the_hexarotor_passes_gymnasiums_and_sb3s_env_checks(make_env):
     from gymnasium.utils.env_checker import check_env
     from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
-    env = make_env("ClutterFly-v0", robot=hexarotor_spec(), volume_size=SIZE)
+    env = make_env("ClutterFly-v1", robot=hexarotor_spec(), volume_size=SIZE)
     check_env(env.unwrapped, skip_render_check=True)
     sb3_check_env(env.unwrapped, warn=False)
 
 
 def test_the_hexarotor_replays_its_seeded_trajectory_in_lockstep(make_env):
-    a, b = (make_env("ClutterFly-v0", robot=str(HEXAROTOR), volume_size=SIZE) for _ in range(2))
+    a, b = (make_env("ClutterFly-v1", robot=str(HEXAROTOR), volume_size=SIZE) for _ in range(2))
     first = rollout(a, 90, seed=6)
     assert_same(first, rollout(b, 90, seed=6))
     assert any(row[0]["velocity"][3:].any() for row in first)  # it moved
@@ -196,7 +196,7 @@ def test_the_hexarotor_replays_its_seeded_trajectory_in_lockstep(make_env):
 def test_the_hexarotors_clearance_is_its_shapes_and_a_contact_costs(make_env):
     """FCL measures the hexarotor's own shapes: at the start 1 m up in an open 2 m high volume the nearest face is
     the ceiling, 2 - 1 - 0.022 m from the propeller tops. Flying up into a slab is a contact both engines see."""
-    env = make_env("ClutterFly-v0", robot=str(HEXAROTOR), volume_size=SIZE, terminate_on_collision=True)
+    env = make_env("ClutterFly-v1", robot=str(HEXAROTOR), volume_size=SIZE, terminate_on_collision=True)
     u = env.unwrapped
     env.reset(options={"scene": OPEN})
     report = u.checker.check(u.robot.state(), u.sim.contact_distances(u.robot.body))
@@ -216,7 +216,7 @@ def test_fcl_and_pybullet_agree_on_the_hexarotors_clearance(make_env):
     """At seeded level poses in generated volumes with clearance in (0, 0.5) m, FCL's clearance and pybullet's
     closest points differ by at most 1 mm, the band the built-in quadrotor's shapes meet at the same poses (FCL
     reads shorter near the propeller discs and the battery than pybullet's convex distance query does)."""
-    env = make_env("ClutterFly-v0", robot=str(HEXAROTOR), obstacle_density=0.15)
+    env = make_env("ClutterFly-v1", robot=str(HEXAROTOR), obstacle_density=0.15)
     u = env.unwrapped
     rng = np.random.default_rng(0)
     gaps = []
@@ -243,9 +243,9 @@ def test_a_registered_multirotor_spec_is_read_when_an_env_first_asks_for_it(monk
     register_robot("my_hex", "multirotor", {**hexarotor_spec(), "max_rotor_speed": -1.0})
     assert registered("multirotor") == ["quadrotor", "my_hex"]
     with pytest.raises(ValueError, match=r"robot 'my_hex': max_rotor_speed must be a number in \(0.0, 10000.0\]"):
-        make_env("ClutterFly-v0", robot="my_hex")
+        make_env("ClutterFly-v1", robot="my_hex")
     register_robot("hex", "multirotor", hexarotor_spec())
-    assert make_env("ClutterFly-v0", robot="hex", volume_size=SIZE).unwrapped.robot.name == "hexarotor"
+    assert make_env("ClutterFly-v1", robot="hex", volume_size=SIZE).unwrapped.robot.name == "hexarotor"
 
 
 # -- bad specs --------------------------------------------------------------------------------------------------
@@ -347,8 +347,8 @@ def test_a_yaml_spec_that_is_not_a_mapping_is_refused(tmp_path):
     spec = tmp_path / "hex.yaml"
     spec.write_text("- kind: multirotor\n")
     with pytest.raises(ValueError, match=r"robot spec .*hex.yaml: expected a mapping of keys, got list"):
-        gym.make("ClutterFly-v0", robot=str(spec))
+        gym.make("ClutterFly-v1", robot=str(spec))
     spec.write_text("kind: diff_drive\n")
-    with pytest.raises(ValueError, match=r"kind 'diff_drive' does not fit; ClutterFly-v0 takes a multirotor: robot= "
+    with pytest.raises(ValueError, match=r"kind 'diff_drive' does not fit; ClutterFly-v1 takes a multirotor: robot= "
                                          r"one of \['quadrotor'\], or a spec with kind 'multirotor'"):
-        gym.make("ClutterFly-v0", robot=str(spec))
+        gym.make("ClutterFly-v1", robot=str(spec))

@@ -413,7 +413,7 @@ def test_env_calls_before_tick_once_per_physics_tick(make_env, monkeypatch):
             Ticked.ticks += 1
 
     monkeypatch.setattr(nav, "DiffDriveRobot", Ticked)
-    env = make_env("ClutterNav-v0", sensors=())
+    env = make_env("ClutterNav-v1", sensors=())
     env.reset(seed=0)
     env.step(np.zeros(2))
     assert Ticked.ticks == env.unwrapped.substeps > 1

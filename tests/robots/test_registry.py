@@ -36,16 +36,16 @@ def _cache(tmp_path, monkeypatch):
 def test_each_env_takes_its_kind_and_names_the_robots_it_takes():
     assert registered("diff_drive") == ["diffbot", "husky"]
     assert registered("arm") == ["panda", "kuka_iiwa", "xarm6"] and registered("multirotor") == ["quadrotor"]
-    with pytest.raises(ValueError, match=r"'panda' is a fixed-base arm; ClutterNav-v0 takes a wheeled base: robot= "
+    with pytest.raises(ValueError, match=r"'panda' is a fixed-base arm; ClutterNav-v1 takes a wheeled base: robot= "
                                          r"one of \['diffbot', 'husky'\], or a spec with kind 'diff_drive'"):
-        gym.make("ClutterNav-v0", robot="panda")
-    with pytest.raises(ValueError, match=r"unknown robot 'nope'; ClutterFly-v0 takes a multirotor: robot= one of "
+        gym.make("ClutterNav-v1", robot="panda")
+    with pytest.raises(ValueError, match=r"unknown robot 'nope'; ClutterFly-v1 takes a multirotor: robot= one of "
                                          r"\['quadrotor'\], or a spec with kind 'multirotor'$"):
-        gym.make("ClutterFly-v0", robot="nope")
+        gym.make("ClutterFly-v1", robot="nope")
     with pytest.raises(ValueError, match=r"robot: missing 'rotor_links' \(a multirotor spec needs \['urdf'"):
-        gym.make("ClutterFly-v0", robot={"kind": "multirotor", "urdf": "drone.urdf"})
-    with pytest.raises(ValueError, match="kind 'arm' does not fit; ClutterNav-v0 takes a wheeled base"):
-        gym.make("ClutterNav-v0", robot={"kind": "arm", "urdf": "arm.urdf"})
+        gym.make("ClutterFly-v1", robot={"kind": "multirotor", "urdf": "drone.urdf"})
+    with pytest.raises(ValueError, match="kind 'arm' does not fit; ClutterNav-v1 takes a wheeled base"):
+        gym.make("ClutterNav-v1", robot={"kind": "arm", "urdf": "arm.urdf"})
 
 
 def test_a_registered_spec_is_read_when_an_env_first_asks_for_it(monkeypatch):
@@ -54,7 +54,7 @@ def test_a_registered_spec_is_read_when_an_env_first_asks_for_it(monkeypatch):
     monkeypatch.setattr(registry, "_ROBOTS", dict(registry._ROBOTS))  # the test's registrations end with it
     register_robot("my_bot", "diff_drive", {**DIFFBOT_SPEC, "name": "my_bot", "wheel_radius": 0.0})
     with pytest.raises(ValueError, match=r"robot 'my_bot': wheel_radius must be a number in \[0.005, 2\], got 0.0"):
-        gym.make("ClutterNav-v0", robot="my_bot")
+        gym.make("ClutterNav-v1", robot="my_bot")
     with pytest.raises(ValueError, match="a robot named 'husky' is already registered"):
         register_robot("husky", "diff_drive", DIFFBOT_SPEC)
     with pytest.raises(ValueError, match=r"robot kind must be one of \['diff_drive', 'arm', 'multirotor'\]"):
@@ -63,10 +63,10 @@ def test_a_registered_spec_is_read_when_an_env_first_asks_for_it(monkeypatch):
 
 
 def test_the_default_robots_are_todays():
-    env = gym.make("ClutterNav-v0")
+    env = gym.make("ClutterNav-v1")
     assert env.unwrapped.robot.base == diffbot()
     env.close()
-    for env_id, robot in (("ClutterReach-v0", "panda"), ("ClutterFly-v0", "quadrotor")):
+    for env_id, robot in (("ClutterReach-v1", "panda"), ("ClutterFly-v1", "quadrotor")):
         env = gym.make(env_id, robot=robot)
         assert env.unwrapped.robot.name == robot
         env.close()
@@ -151,7 +151,7 @@ def test_a_yaml_spec_file_with_a_relative_urdf_drives_in_clutternav(tmp_path):
     spec = tmp_path / "mybot.yaml"
     spec.write_text("kind: diff_drive\nname: mybot\nurdf: robots/mybot.urdf\nleft_wheels: [left_wheel_joint]\n"
                     "right_wheels: [right_wheel_joint]\nmax_wheel_torque: 1.5\n")
-    env = gym.make("ClutterNav-v0", robot=str(spec))
+    env = gym.make("ClutterNav-v1", robot=str(spec))
     assert env.unwrapped.robot.name == "mybot"
     env.reset(seed=0)
     for _ in range(5):
@@ -159,9 +159,9 @@ def test_a_yaml_spec_file_with_a_relative_urdf_drives_in_clutternav(tmp_path):
     env.close()
     spec.write_text("- not a mapping\n")
     with pytest.raises(ValueError, match="expected a mapping of keys, got list"):
-        gym.make("ClutterNav-v0", robot=str(spec))
+        gym.make("ClutterNav-v1", robot=str(spec))
     with pytest.raises(ValueError, match="robot spec file .*nope.yaml' not found"):
-        gym.make("ClutterNav-v0", robot=str(tmp_path / "nope.yaml"))
+        gym.make("ClutterNav-v1", robot=str(tmp_path / "nope.yaml"))
 
 
 def test_a_spec_file_in_capitals_is_read_and_a_binary_one_refused_in_one_line(tmp_path):
@@ -170,22 +170,22 @@ def test_a_spec_file_in_capitals_is_read_and_a_binary_one_refused_in_one_line(tm
     spec = tmp_path / "MYBOT.YAML"
     spec.write_text(f"kind: diff_drive\nurdf: {asset_path('robots/diffbot.urdf')}\nleft_wheels: [left_wheel_joint]\n"
                     "right_wheels: [right_wheel_joint]\n")
-    env = gym.make("ClutterNav-v0", robot=str(spec))
+    env = gym.make("ClutterNav-v1", robot=str(spec))
     assert env.unwrapped.robot.name == "diffbot"
     env.close()
     spec.write_bytes(bytes(range(256)))
     with pytest.raises(ValueError, match=r"^robot spec file .*MYBOT.YAML is not UTF-8 text \(is it a YAML file\?\)$"):
-        gym.make("ClutterNav-v0", robot=str(spec))
+        gym.make("ClutterNav-v1", robot=str(spec))
     spec.write_text("kind: [diff_drive\n")
     with pytest.raises(ValueError, match=r"^robot spec file .*MYBOT.YAML is not valid YAML: while parsing a flow "
                                          r"sequence [^\n]*$"):
-        gym.make("ClutterNav-v0", robot=str(spec))
+        gym.make("ClutterNav-v1", robot=str(spec))
 
 
 def test_a_urdf_given_as_the_robot_is_pointed_to_a_spec():
     with pytest.raises(ValueError, match=r"robot '.*diffbot.urdf' is a URDF: robot= takes its spec, e.g. \{'kind': "
                                          r"'diff_drive', 'urdf': '.*diffbot.urdf', ...\} \(docs/robots.md\)"):
-        gym.make("ClutterNav-v0", robot=str(asset_path("robots/diffbot.urdf")))
+        gym.make("ClutterNav-v1", robot=str(asset_path("robots/diffbot.urdf")))
 
 
 def test_a_sensor_without_its_link_is_refused_at_make():
@@ -193,7 +193,7 @@ def test_a_sensor_without_its_link_is_refused_at_make():
             "right_wheels": ["front_right_wheel", "rear_right_wheel"],
             "mounts": {"lidar_link": {"parent": "base_link", "xyz": [0, 0, 0.4]}}}
     with pytest.raises(ValueError, match=r"robot 'husky' has no \['camera_link'\] for sensors"):
-        gym.make("ClutterNav-v0", robot=spec, sensors=("lidar", "camera"))
+        gym.make("ClutterNav-v1", robot=spec, sensors=("lidar", "camera"))
 
 
 # -- the Husky --------------------------------------------------------------------------------------------------
@@ -202,14 +202,14 @@ def test_the_husky_passes_gymnasiums_and_sb3s_env_checks():
     from gymnasium.utils.env_checker import check_env
     from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
-    env = gym.make("ClutterNav-v0", robot="husky")
+    env = gym.make("ClutterNav-v1", robot="husky")
     check_env(env.unwrapped, skip_render_check=True)
     sb3_check_env(env.unwrapped, warn=False)
     env.close()
 
 
 def test_the_husky_replays_its_seeded_trajectory_in_lockstep():
-    envs = [gym.make("ClutterNav-v0", robot="husky") for _ in range(2)]
+    envs = [gym.make("ClutterNav-v1", robot="husky") for _ in range(2)]
     observations = [env.reset(seed=5)[0] for env in envs]
     rng = np.random.default_rng(1)
     for _ in range(60):
@@ -226,7 +226,7 @@ def test_the_husky_drives_at_the_commanded_speed_and_turns_on_the_spot():
     """Open floor: 0.5 m/s forward within 3% after two seconds. The skid-steer turn slips: a commanded 1 rad/s spin
     turns at about half that (measured 0.53 rad/s) and walks (0.28 m in 2 s: the centre of mass sits 8.7 cm behind
     the wheels' centre, so the rear wheels grip harder), but stays within its own footprint."""
-    env = gym.make("ClutterNav-v0", robot="husky", arena_size=10.0)
+    env = gym.make("ClutterNav-v1", robot="husky", arena_size=10.0)
     scene = {"obstacles": [], "start": [-3.0, 0.0, 0.0], "goal": [4.0, 0.0]}
     obs, _ = env.reset(seed=0, options={"scene": scene})
     for _ in range(40):
@@ -245,7 +245,7 @@ def test_the_husky_drives_at_the_commanded_speed_and_turns_on_the_spot():
 def test_fcl_and_pybullet_agree_on_the_huskys_clearance(fidelity):
     """At 150 seeded poses with clearance in (0, 0.5) m, FCL's clearance and pybullet's closest points differ by
     at most 1 mm (measured 0.6 mm: pybullet's cylinders are 64-gon prisms, 0.5 mm inside the true ones)."""
-    env = gym.make("ClutterNav-v0", robot="husky", collision_fidelity=fidelity)
+    env = gym.make("ClutterNav-v1", robot="husky", collision_fidelity=fidelity)
     u = env.unwrapped
     rng = np.random.default_rng(0)
     gaps = []
@@ -266,7 +266,7 @@ def test_fcl_and_pybullet_agree_on_the_huskys_clearance(fidelity):
 def test_the_huskys_lidar_reads_a_box_ahead_at_its_true_range():
     """Mounted at the front bumper (0.5 m ahead of the base, 0.345 m up), below the clutter's 0.5 m tops: a box face
     2.0 m ahead of the base reads 1.5 m on the forward beam (a scan from the top plate would pass over it)."""
-    env = gym.make("ClutterNav-v0", robot="husky")
+    env = gym.make("ClutterNav-v1", robot="husky")
     box = {"shape": "box", "size": [0.2, 1.0, 0.5], "position": [2.1, 0.0]}
     _, info = env.reset(seed=0, options={"scene": {"obstacles": [box], "start": [0.0, 0.0, 0.0], "goal": [-2.0, 0.0]}})
     lidar = env.unwrapped.sensors[0]

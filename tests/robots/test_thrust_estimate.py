@@ -97,12 +97,12 @@ def test_quadrotor_estimates_its_motor_strength_over_its_mass_scale_in_flight(ma
 
 
 def test_env_entry_is_off_by_default_and_new_each_episode():
-    plain = gym.make("ClutterFly-v0")
+    plain = gym.make("ClutterFly-v1")
     try:
         assert "thrust_ratio" not in plain.observation_space.spaces
     finally:
         plain.close()
-    env = gym.make("ClutterFly-v0", sensors=[], noise="harsh", observe_thrust_ratio=True)
+    env = gym.make("ClutterFly-v1", sensors=[], noise="harsh", observe_thrust_ratio=True)
     try:
         assert env.observation_space["thrust_ratio"].shape == (1,)
         obs, _ = env.reset(seed=3)
@@ -117,7 +117,7 @@ def test_env_entry_is_off_by_default_and_new_each_episode():
     finally:
         env.close()
     with pytest.raises(ValueError, match="observe_thrust_ratio"):
-        gym.make("ClutterFly-v0", observe_thrust_ratio=1)
+        gym.make("ClutterFly-v1", observe_thrust_ratio=1)
 
 
 def hover_error(mass_scale: float, motor_scale: float, reads_ratio: bool, seconds: float = 10.0) -> float:

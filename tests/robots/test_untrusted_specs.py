@@ -63,7 +63,7 @@ def test_a_name_that_is_not_a_plain_file_name_is_refused_and_nothing_is_written(
     (tmp_path / "esc").mkdir()
     name = name.format(tmp=tmp_path) if isinstance(name, str) else name
     with pytest.raises(ValueError) as error:
-        gym.make("ClutterNav-v0", robot=spec(DIFFBOT, name=name))
+        gym.make("ClutterNav-v1", robot=spec(DIFFBOT, name=name))
     assert str(error.value).startswith("robot: name must be a plain file name: 1 to 64 letters, digits")
     assert "\n" not in str(error.value) and len(str(error.value)) < 300
     assert files_under(tmp_path / "esc") == [] and files_under(cache) == []
@@ -74,7 +74,7 @@ def test_a_spec_file_whose_name_is_a_path_is_refused_naming_the_file(tmp_path, c
     spec_file = tmp_path / "bot.yaml"
     spec_file.write_text(json.dumps(spec(DIFFBOT, name=str(tmp_path / "esc" / "evil"))))
     with pytest.raises(ValueError, match=rf"^robot spec {spec_file}: name must be a plain file name"):
-        gym.make("ClutterNav-v0", robot=str(spec_file))
+        gym.make("ClutterNav-v1", robot=str(spec_file))
     assert files_under(tmp_path / "esc") == []
 
 
@@ -108,7 +108,7 @@ def test_a_mesh_outside_the_urdf_folder_is_refused_before_anything_is_copied(for
     (folder / "link.obj").symlink_to(secret)
     urdf = diffbot_with(folder, "part.obj", form.format(secret=secret))
     with pytest.raises(ValueError) as error:
-        gym.make("ClutterNav-v0", robot=spec(urdf))
+        gym.make("ClutterNav-v1", robot=spec(urdf))
     message = str(error.value)
     assert message.startswith(f"robot: the URDF was refused: {urdf}: <mesh filename=") and "\n" not in message
     assert ("outside the URDF's folder" in message or "not found" in message) and "package_roots" in message
@@ -151,14 +151,14 @@ def test_a_package_root_is_read_only_when_the_spec_grants_it_and_copies_keep_the
     spec_file = tmp_path / "bot.yaml"
     spec_file.write_text(json.dumps(spec(urdf.relative_to(tmp_path))))
     with pytest.raises(ValueError, match=r"not found .*needs its folder granted: package_roots: \{my_pkg: ...\}"):
-        gym.make("ClutterNav-v0", robot=str(spec_file))
+        gym.make("ClutterNav-v1", robot=str(spec_file))
     spec_file.write_text(json.dumps(spec(urdf.relative_to(tmp_path), package_roots={"my_pkg": "my_pkg"})))
-    gym.make("ClutterNav-v0", robot=str(spec_file)).close()
+    gym.make("ClutterNav-v1", robot=str(spec_file)).close()
     copies = [p for p in files_under(cache) if p.suffix == ".obj"]
     assert len(copies) == 1 and copies[0].read_text() == TETRA and stat.S_IMODE(copies[0].stat().st_mode) == 0o600
     spec_file.write_text(json.dumps(spec(urdf.relative_to(tmp_path), package_roots={"my_pkg": "nowhere"})))
     with pytest.raises(ValueError, match=rf"^robot spec {spec_file}: package_roots.my_pkg must be a folder"):
-        gym.make("ClutterNav-v0", robot=str(spec_file))
+        gym.make("ClutterNav-v1", robot=str(spec_file))
 
 
 # -- item 11: the cache, checked on every use -------------------------------------------------------------------
@@ -201,7 +201,7 @@ def test_an_unwritable_cache_falls_back_to_a_temporary_folder_and_says_so_once(t
     code = ("import warnings, gymnasium as gym, clutter_gym\n"
             "warnings.simplefilter('always')\n"
             "for _ in range(2):\n"
-            "    gym.make('ClutterNav-v0', robot='husky').close()\n")
+            "    gym.make('ClutterNav-v1', robot='husky').close()\n")
     result = run_capped(code, timeout=300, env={**os.environ, "XDG_CACHE_HOME": str(blocker)})
     assert result.returncode == 0, result.stderr[-2000:]
     assert result.stderr.count("RuntimeWarning: clutter-gym cannot use its cache") == 1, result.stderr

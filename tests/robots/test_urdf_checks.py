@@ -79,7 +79,7 @@ def test_a_link_with_two_parent_joints_is_refused_before_pybullet_loads_it(tmp_p
     urdf = variant(tmp_path, "</robot>", '<joint name="extra" type="fixed"><parent link="base_link"/>'
                                          '<child link="imu_link"/></joint></robot>')
     out = in_a_child(f"""
-        env = gym.make("ClutterNav-v0", robot=spec({str(urdf)!r}))
+        env = gym.make("ClutterNav-v1", robot=spec({str(urdf)!r}))
         env.reset(seed=0)
     """)
     assert re.fullmatch(r"robot: the URDF was refused: .*v.urdf: link 'imu_link' is the child of two joints, "
@@ -105,7 +105,7 @@ def test_a_nan_mass_is_refused_before_the_first_step(tmp_path):
     """Before: the base's NaN mass passed, and the first step segfaulted in FCL."""
     urdf = variant(tmp_path, '<mass value="2.5"/>', '<mass value="nan"/>')
     out = in_a_child(f"""
-        env = gym.make("ClutterNav-v0", robot=spec({str(urdf)!r}))
+        env = gym.make("ClutterNav-v1", robot=spec({str(urdf)!r}))
         env.reset(seed=0)
         for _ in range(5):
             env.step(np.array([1.0, 0.0], dtype=np.float32))
@@ -238,7 +238,7 @@ def test_a_collision_mesh_over_the_face_limit_is_refused_at_once(tmp_path):
         import time
         start = time.perf_counter()
         try:
-            gym.make("ClutterNav-v0", robot=spec({str(_with_mesh(tmp_path, mesh))!r}))
+            gym.make("ClutterNav-v1", robot=spec({str(_with_mesh(tmp_path, mesh))!r}))
         finally:
             out["seconds"] = time.perf_counter() - start
     """)
@@ -275,7 +275,7 @@ def test_a_urdf_of_too_many_links_is_refused_at_once(tmp_path):
                     f'<joint name="j{i}" type="fixed"><parent link="base_link"/><child link="l{i}"/>'
                     f'<origin xyz="{0.005 * (i % 40)} {0.005 * (i // 40)} 0.1"/></joint>\n' for i in range(2000))
     urdf = variant(tmp_path, "</robot>", links + "</robot>")
-    out = in_a_child(f"""gym.make("ClutterNav-v0", robot=spec({str(urdf)!r}))""", timeout=60.0)
+    out = in_a_child(f"""gym.make("ClutterNav-v1", robot=spec({str(urdf)!r}))""", timeout=60.0)
     assert out["refused"].endswith("v.urdf: has 2009 links; a URDF here has 1 to 128") and out["peak_mb"] < 1024
 
 

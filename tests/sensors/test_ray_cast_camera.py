@@ -1,6 +1,6 @@
 """The ray-cast depth camera (Sim.ray_cast_image, camera_renderer="rays"): depths against closed forms for a box
 face, a cylinder, the ground and the near and far planes; the shape table following the Sim's bodies; agreement
-with TinyRenderer on generated ClutterFly-v0 scenes; the env boundary."""
+with TinyRenderer on generated ClutterFly-v1 scenes; the env boundary."""
 
 from __future__ import annotations
 
@@ -133,14 +133,14 @@ def depth_buffer_step(z: np.ndarray, near: float, far: float) -> np.ndarray:
 
 
 def test_agrees_with_tiny_renderer_on_generated_scenes():
-    """ClutterFly-v0 scenes from the drone's camera along random flights, cast through TinyRenderer's sample points
+    """ClutterFly-v1 scenes from the drone's camera along random flights, cast through TinyRenderer's sample points
     (its principal point is half a pixel off): on the faces of boxes, away from every edge (the 3x3 block around a
     pixel shows one body in both images), the depths agree within 4 steps of TinyRenderer's float32 depth buffer
     (a step is 0.12 mm at 10 m). Cylinders are left to the closed forms above: TinyRenderer draws them as polygon
     prisms."""
     worst, compared = 0.0, 0
     for seed in range(2):
-        env = gym.make("ClutterFly-v0", sensors=("camera",), camera_size=(64, 48), camera_renderer="tiny")
+        env = gym.make("ClutterFly-v1", sensors=("camera",), camera_size=(64, 48), camera_renderer="tiny")
         env.reset(seed=seed)
         env.action_space.seed(seed)
         u = env.unwrapped
@@ -171,7 +171,7 @@ def test_agrees_with_tiny_renderer_on_generated_scenes():
 
 
 def test_env_boundary():
-    env = gym.make("ClutterFly-v0", sensors=("camera",), camera_modes=("depth", "segmentation"))
+    env = gym.make("ClutterFly-v1", sensors=("camera",), camera_modes=("depth", "segmentation"))
     env.reset(seed=0)
     u = env.unwrapped
     assert u.sensors[0].config.renderer == "rays" and not u.sim.visuals
@@ -180,8 +180,8 @@ def test_env_boundary():
     classes = set(np.unique(obs["camera_segmentation"]).tolist())
     assert classes <= {1, 2, 4} and 2 in classes  # ground, obstacle, goal; never nothing inside the walls
     env.close()
-    rgbd = gym.make("ClutterFly-v0", sensors=("camera",), camera_modes=("rgb", "depth"))
+    rgbd = gym.make("ClutterFly-v1", sensors=("camera",), camera_modes=("rgb", "depth"))
     assert rgbd.unwrapped.sensors[0].config.renderer == "tiny"  # the default renderer draws what is asked for
     rgbd.close()
     with pytest.raises(ValueError, match=r"camera_renderer='rays' draws only .*rgb"):
-        gym.make("ClutterFly-v0", sensors=("camera",), camera_modes=("rgb", "depth"), camera_renderer="rays")
+        gym.make("ClutterFly-v1", sensors=("camera",), camera_modes=("rgb", "depth"), camera_renderer="rays")

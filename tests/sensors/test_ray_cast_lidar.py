@@ -1,6 +1,6 @@
 """The exact LIDAR ray caster (``caster="exact"``, the default): hit fractions against closed forms on the ground
 plane, turned boxes and cylinders (side and caps), rays given in a link's frame; when the Sim falls back to
-pybullet; and agreement with ``rayTestBatch`` on seeded ClutterNav-v0 scans, within the 1 mm Bullet's casts are
+pybullet; and agreement with ``rayTestBatch`` on seeded ClutterNav-v1 scans, within the 1 mm Bullet's casts are
 off the true surfaces (its convex cast on boxes, the 64-gon prisms of cylinders)."""
 
 from __future__ import annotations
@@ -138,7 +138,7 @@ def test_a_bad_caster_is_named():
     finally:
         s.close()
     with pytest.raises(ValueError, match="lidar_caster"):
-        gym.make("ClutterNav-v0", lidar_caster="fast").reset()
+        gym.make("ClutterNav-v1", lidar_caster="fast").reset()
 
 
 def sandwich(sim: Sim, lidar: Lidar, state, grow: float) -> np.ndarray:
@@ -171,7 +171,7 @@ def test_exact_scans_agree_with_pybullet_within_its_surface_error():
     world grown and shrunk by 1 mm (Bullet's box cast stops up to 0.9 mm outside a face, its cylinders are 64-gon
     prisms 0.5 mm off the circle at r = 0.3 m), and 99% of beams agree within 0.6 mm; they differ by more only on
     beams grazing an edge. (Movable cylinders are left out: pybullet misses them, see the test above.)"""
-    env = gym.make("ClutterNav-v0", noise="none")
+    env = gym.make("ClutterNav-v1", noise="none")
     env.reset(seed=3)
     env.action_space.seed(3)
     u = env.unwrapped

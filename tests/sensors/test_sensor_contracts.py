@@ -41,8 +41,8 @@ def test_the_first_observation_after_a_reset_is_the_new_scene_whatever_came_befo
 
 
 @pytest.mark.parametrize("env_id,kwargs", [
-    ("ClutterFly-v0", dict(sensors=SENSORS, camera_modes=("depth",), camera_size=(32, 24), noise=LATE)),
-    ("ClutterReach-v0", dict(noise=LATE)),
+    ("ClutterFly-v1", dict(sensors=SENSORS, camera_modes=("depth",), camera_size=(32, 24), noise=LATE)),
+    ("ClutterReach-v1", dict(noise=LATE)),
 ])
 def test_every_env_observes_only_the_new_episode_after_a_reset(make_env, env_id, kwargs):
     """The same contract on the other envs, on generated scenes: after an episode, a reset with a seed observes

@@ -8,11 +8,11 @@ import pytest
 
 from clutter_gym.tasks.terms import cost_by_cause
 
-CAUSES = {"ClutterNav-v0": ("contact",), "ClutterReach-v0": ("contact", "self_contact", "tunneling"),
-          "ClutterFly-v0": ("contact", "tunneling")}
+CAUSES = {"ClutterNav-v1": ("contact",), "ClutterReach-v1": ("contact", "self_contact", "tunneling"),
+          "ClutterFly-v1": ("contact", "tunneling")}
 # Settings under which random actions touch things often within a few hundred steps.
-KWARGS = {"ClutterNav-v0": {"obstacle_density": 0.3}, "ClutterReach-v0": {"collision_fidelity": "primitive"},
-          "ClutterFly-v0": {"obstacle_density": 0.25}}
+KWARGS = {"ClutterNav-v1": {"obstacle_density": 0.3}, "ClutterReach-v1": {"collision_fidelity": "primitive"},
+          "ClutterFly-v1": {"obstacle_density": 0.25}}
 
 
 def test_the_first_cause_that_holds_takes_the_step_cost():

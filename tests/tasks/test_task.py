@@ -65,7 +65,7 @@ def test_the_reverse_term_charges_backward_speed_only_when_asked():
 
     scene = {"obstacles": [], "start": [0.0, 0.0, 0.3], "goal": [2.5, 2.5]}
     for weight, command in ((0.5, -1.0), (0.5, 1.0), (0.0, -1.0)):
-        env = gym.make("ClutterNav-v0", reverse_weight=weight)
+        env = gym.make("ClutterNav-v1", reverse_weight=weight)
         obs, _ = env.reset(seed=0, options={"scene": scene})
         for _ in range(20):
             obs, _, _, _, info = env.step(np.array([command, 0.0], dtype=np.float32))

@@ -22,7 +22,7 @@ TINY = {"timesteps": 128, "n_envs": 1, "checkpoint_every": 64, "final_eval_episo
 @pytest.fixture(scope="module", params=[True, False], ids=["normalized", "raw"])
 def run(request, tmp_path_factory):
     """A finished tiny run with and without observation normalisation (the wrappers a run can hold today)."""
-    config = config_for("ClutterNav-v0", {**TINY, "ppo": {**TINY["ppo"], "normalize_obs": request.param}})
+    config = config_for("ClutterNav-v1", {**TINY, "ppo": {**TINY["ppo"], "normalize_obs": request.param}})
     run = start(config, tmp_path_factory.mktemp("agent") / "run")
     train(run, progress=False)
     return run
@@ -72,7 +72,7 @@ def test_make_env_rebuilds_the_run_env_with_overrides(run):
     env.close()
     with pytest.raises(ValueError, match=r"observations of shape .*'lidar': \(64,\).* trained on .*'lidar': \(32,\)"):
         agent.make_env(n_rays=64)
-    with pytest.raises(ValueError, match=r"unknown env_kwargs key\(s\) for ClutterNav-v0 \['bogus'\]; allowed: \["):
+    with pytest.raises(ValueError, match=r"unknown env_kwargs key\(s\) for ClutterNav-v1 \['bogus'\]; allowed: \["):
         agent.make_env(bogus=1)
     with pytest.raises(ValueError, match="noise must be one of"):
         agent.make_env(noise="loud")
@@ -127,7 +127,7 @@ def test_a_run_folder_is_readable_by_other_users_under_umask_022(tmp_path):
 
     old = os.umask(0o022)
     try:
-        config = config_for("ClutterNav-v0", {**TINY, "timesteps": 64, "checkpoint_every": 64})
+        config = config_for("ClutterNav-v1", {**TINY, "timesteps": 64, "checkpoint_every": 64})
         run = start(config, tmp_path / "run")
         train(run, progress=False)
     finally:
@@ -139,7 +139,7 @@ def test_a_run_folder_is_readable_by_other_users_under_umask_022(tmp_path):
 
 
 def test_make_env_takes_noise_overrides_on_top_of_the_runs(tmp_path):
-    config = config_for("ClutterNav-v0", {**TINY, "timesteps": 64, "checkpoint_every": 64,
+    config = config_for("ClutterNav-v1", {**TINY, "timesteps": 64, "checkpoint_every": 64,
                                           "env_kwargs": {"noise": {"lidar": {"range_sigma": 0.03}}}})
     run = start(config, tmp_path / "run")
     train(run, progress=False)

@@ -32,7 +32,7 @@ def test_a_label_between_two_bins_is_split_between_them_by_nearness():
 
 
 def test_the_wrapper_hands_the_env_the_bins_values(make_env):
-    env = BinnedActions(make_env("ClutterNav-v0", sensors=["lidar"]), 9)
+    env = BinnedActions(make_env("ClutterNav-v1", sensors=["lidar"]), 9)
     assert env.action_space == spaces.MultiDiscrete([9, 9])
     np.testing.assert_array_equal(env.action(np.array([8, 0])), [1.0, -1.0])
 

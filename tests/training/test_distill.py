@@ -22,15 +22,15 @@ SMALL = {"arena_size": 3.0, "obstacle_density": 0.05, "n_rays": 16, "sensors": [
 
 
 def _student(**settings):
-    return config_for("ClutterNav-v0", {
+    return config_for("ClutterNav-v1", {
         "n_envs": 2, "env_workers": 1, "timesteps": 1, "validate_episodes": 2, "final_eval_episodes": 0,
         "teacher": {"name": "planner"}, "env_kwargs": SMALL, **settings})
 
 
 def test_labels_are_the_teachers_action_at_the_state_the_policy_acted_in(make_env):
-    env = make_env("ClutterNav-v0", **{**SMALL, "subgoal_lookahead": 0.5})
+    env = make_env("ClutterNav-v1", **{**SMALL, "subgoal_lookahead": 0.5})
     field = PotentialFieldNavigator.for_env(env, goal_key="subgoal")
-    labelled = TeacherLabels(env, make_teacher("ClutterNav-v0", "planner", env), teacher_share=0.0)
+    labelled = TeacherLabels(env, make_teacher("ClutterNav-v1", "planner", env), teacher_share=0.0)
     obs, _ = labelled.reset(seed=3)
     rng = np.random.default_rng(0)
     for _ in range(30):
@@ -45,9 +45,9 @@ def test_labels_are_the_teachers_action_at_the_state_the_policy_acted_in(make_en
 
 def test_a_teacher_driven_episode_takes_the_teachers_actions_and_the_draw_leaves_the_layouts_alone(make_env):
     kwargs = {**SMALL, "subgoal_lookahead": 0.5}
-    driven = make_env("ClutterNav-v0", **kwargs)
-    labelled = TeacherLabels(driven, make_teacher("ClutterNav-v0", "planner", driven), teacher_share=1.0)
-    plain = make_env("ClutterNav-v0", **kwargs)
+    driven = make_env("ClutterNav-v1", **kwargs)
+    labelled = TeacherLabels(driven, make_teacher("ClutterNav-v1", "planner", driven), teacher_share=1.0)
+    plain = make_env("ClutterNav-v1", **kwargs)
     field = PotentialFieldNavigator.for_env(plain, goal_key="subgoal")
     a, _ = labelled.reset(seed=5)
     b, _ = plain.reset(seed=5)
@@ -69,7 +69,7 @@ def test_the_data_set_aggregates_rounds_and_keeps_the_newest_samples():
 
 
 def test_the_critic_reads_the_privileged_entries_and_the_actor_does_not(make_env):
-    env = make_env("ClutterNav-v0", **{**SMALL, "subgoal_lookahead": 0.5})
+    env = make_env("ClutterNav-v1", **{**SMALL, "subgoal_lookahead": 0.5})
     policy = PrivilegedCriticPolicy(env.observation_space, env.action_space, lambda _: 1e-3, critic_inputs=["subgoal"],
                                     net_arch=[16, 16])
     obs, _ = env.reset(seed=1)
@@ -153,24 +153,24 @@ def test_a_loaded_student_acts_from_an_env_whose_map_based_parts_are_switched_of
 def test_a_teacher_the_env_does_not_have_is_refused_by_name():
     with pytest.raises(ValueError, match=r"teacher.name must be one of \['committed', 'in-range', 'planner', "
                                          r"'seen-map'\]"):
-        config_for("ClutterNav-v0", {"teacher": {"name": "oracle"}})
+        config_for("ClutterNav-v1", {"teacher": {"name": "oracle"}})
     with pytest.raises(ValueError, match="critic_inputs needs a teacher"):
-        config_for("ClutterNav-v0", {"critic_inputs": ["subgoal"]})
+        config_for("ClutterNav-v1", {"critic_inputs": ["subgoal"]})
     with pytest.raises(ValueError, match="distill.rounds must be an integer in"):
-        config_for("ClutterNav-v0", {"teacher": {"name": "planner"}, "distill": {"rounds": 0}})
+        config_for("ClutterNav-v1", {"teacher": {"name": "planner"}, "distill": {"rounds": 0}})
 
 
 def test_a_waypoint_student_is_labelled_with_the_subgoals_bearing_and_steers_the_field_there(make_env):
-    """ClutterNav-v0's waypoint interface: the label is the planner's subgoal bearing in units of pi, and the field
+    """ClutterNav-v1's waypoint interface: the label is the planner's subgoal bearing in units of pi, and the field
     steering for a bearing equal to the goal's acts as the field on the goal."""
     import math
 
     from clutter_gym.training.residual import SubgoalResidual
 
-    env = make_env("ClutterNav-v0", **{**SMALL, "subgoal_lookahead": 0.5})
+    env = make_env("ClutterNav-v1", **{**SMALL, "subgoal_lookahead": 0.5})
     wrapped = SubgoalResidual(env, 0.0, space="waypoint")
     assert wrapped.action_space.shape == (1,)
-    labelled = TeacherLabels(wrapped, make_teacher("ClutterNav-v0", "planner", wrapped, "waypoint"))
+    labelled = TeacherLabels(wrapped, make_teacher("ClutterNav-v1", "planner", wrapped, "waypoint"))
     obs, _ = labelled.reset(seed=4)
     field = PotentialFieldNavigator.for_env(env)
     goal_bearing = math.atan2(float(obs["goal"][1]), float(obs["goal"][2]))
@@ -184,8 +184,8 @@ def test_the_seen_map_teacher_knows_more_as_it_sees_more_and_the_in_range_one_on
     kwargs = {"sensors": ["lidar"], "obstacle_density": 0.2, "reverse": False, "subgoal_lookahead": 0.5}
     known = {}
     for name in ("seen-map", "in-range"):
-        env = make_env("ClutterNav-v0", **kwargs)
-        labelled = TeacherLabels(env, make_teacher("ClutterNav-v0", name, env), teacher_share=1.0)
+        env = make_env("ClutterNav-v1", **kwargs)
+        labelled = TeacherLabels(env, make_teacher("ClutterNav-v1", name, env), teacher_share=1.0)
         labelled.reset(seed=7)
         sizes = []
         for _ in range(60):

@@ -67,7 +67,7 @@ def test_ctrl_c_in_train_writes_a_checkpoint_and_the_run_resumes_from_it(tmp_pat
 def test_ctrl_c_in_the_main_job_through_tasks_py_says_to_run_it_again(tmp_path):
     """``python3 tasks.py main``: tasks.py waits for the job to write its checkpoint and prints nothing of its own."""
     settings = tmp_path / "small.yml"
-    settings.write_text(yaml.safe_dump({"ClutterNav-v0": {
+    settings.write_text(yaml.safe_dump({"ClutterNav-v1": {
         "n_envs": 2, "checkpoint_every": 100000, "ppo": {"n_steps": 64, "batch_size": 64, "n_epochs": 1}}}))
     out = tmp_path / "main"
     status, text = interrupt_once_training([sys.executable, REPO / "tasks.py", "main", "--timesteps", "100000",

@@ -19,7 +19,7 @@ def layouts(env: LayoutPool, n: int) -> list[tuple]:
 
 
 def test_pool_resets_cycle_through_its_own_layouts(make_env):
-    env = LayoutPool(make_env("ClutterReach-v0"), n_layouts=3)
+    env = LayoutPool(make_env("ClutterReach-v1"), n_layouts=3)
     env.reset(seed=7)
     assert len(env.pool) == 3 and np.all(env.pool >= POOL_SEEDS)
     seen = layouts(env, 30)
@@ -27,8 +27,8 @@ def test_pool_resets_cycle_through_its_own_layouts(make_env):
 
 
 def test_pool_is_fixed_by_the_first_seed(make_env):
-    a = LayoutPool(make_env("ClutterReach-v0"), n_layouts=4)
-    b = LayoutPool(make_env("ClutterReach-v0"), n_layouts=4)
+    a = LayoutPool(make_env("ClutterReach-v1"), n_layouts=4)
+    b = LayoutPool(make_env("ClutterReach-v1"), n_layouts=4)
     a.reset(seed=3)
     b.reset(seed=3)
     assert np.array_equal(a.pool, b.pool) and layouts(a, 6) == layouts(b, 6)
@@ -37,7 +37,7 @@ def test_pool_is_fixed_by_the_first_seed(make_env):
 
 
 def test_an_explicit_scene_passes_through(make_env):
-    env = LayoutPool(make_env("ClutterReach-v0"), n_layouts=2)
+    env = LayoutPool(make_env("ClutterReach-v1"), n_layouts=2)
     scene = {"obstacles": [], "start": [0.0, -0.78, 0.0, -2.36, 0.0, 1.57, 0.78], "target": [0.4, 0.0, 0.3]}
     env.reset(seed=0, options={"scene": scene})
     assert env.unwrapped.scene.target == (0.4, 0.0, 0.3)
@@ -46,11 +46,11 @@ def test_an_explicit_scene_passes_through(make_env):
 @pytest.mark.parametrize("n", [0, -1, 2.5])
 def test_pool_size_must_be_a_positive_integer(make_env, n):
     with pytest.raises(ValueError, match="n_layouts must be an integer >= 1"):
-        LayoutPool(make_env("ClutterReach-v0"), n_layouts=n)
+        LayoutPool(make_env("ClutterReach-v1"), n_layouts=n)
 
 
 def test_training_envs_share_out_the_pool():
-    config = TrainConfig(env_id="ClutterReach-v0", n_envs=2, env_workers=1, train_layouts=5)
+    config = TrainConfig(env_id="ClutterReach-v1", n_envs=2, env_workers=1, train_layouts=5)
     assert config.layouts_per_env == 3
     venv = build_vec_env(config, seed=0)
     try:

@@ -39,7 +39,7 @@ def test_push_frame_keeps_the_newest_frames_last_and_zeros_before_the_episode():
 
 @pytest.fixture(scope="module")
 def stacked_run(tmp_path_factory):
-    run = start(config_for("ClutterNav-v0", TINY), tmp_path_factory.mktemp("stack") / "run")
+    run = start(config_for("ClutterNav-v1", TINY), tmp_path_factory.mktemp("stack") / "run")
     train(run, progress=False)
     return run
 

@@ -15,7 +15,7 @@ from clutter_gym.training.train import start, train
 def test_the_training_bar_ends_at_its_total(tmp_path, capsys):
     """A budget of 100 steps in rollouts of 64 trains 128 steps: the bar's total says 128 (a bar that runs past its
     total drops it, and ended as ``128step``)."""
-    config = config_for("ClutterNav-v0", {"timesteps": 100, "n_envs": 1, "checkpoint_every": 1000,
+    config = config_for("ClutterNav-v1", {"timesteps": 100, "n_envs": 1, "checkpoint_every": 1000,
                                           "validate_every": 0, "final_eval_episodes": 0,
                                           "ppo": {"n_steps": 64, "batch_size": 32, "n_epochs": 1}})
     train(start(config, tmp_path / "run"), progress=True)
@@ -26,7 +26,7 @@ def test_the_training_bar_ends_at_its_total(tmp_path, capsys):
 def test_two_full_length_episodes_make_a_gif_a_readme_can_embed_and_a_bar_shows_the_drawing(tmp_path, capsys):
     """The longest evaluation episodes (400 steps, the time limit) side by side: under 2.5 MB (11 MB before, in
     201 frames of 1040 x 580 drawn without a word on the terminal)."""
-    env = gym.make("ClutterNav-v0", subgoal_lookahead=0.5)
+    env = gym.make("ClutterNav-v1", subgoal_lookahead=0.5)
     navigator = PotentialFieldNavigator.for_env(env)  # goal-seeking only: it gets stuck in the clutter of these
     traces = [record_episode(env, lambda obs, state: (navigator(obs), None), seed, f"failure, seed {seed}")
               for seed in (1, 2)]

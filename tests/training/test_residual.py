@@ -16,13 +16,13 @@ from clutter_gym.training.train import start, train
 
 
 def test_the_wrapper_steps_the_env_with_pursuit_plus_residual(make_env):
-    plain = make_env("ClutterReach-v0", subgoal_lookahead=0.2)
-    wrapped = SubgoalResidual(make_env("ClutterReach-v0", subgoal_lookahead=0.2), gain=15.0)
+    plain = make_env("ClutterReach-v1", subgoal_lookahead=0.2)
+    wrapped = SubgoalResidual(make_env("ClutterReach-v1", subgoal_lookahead=0.2), gain=15.0)
     obs, _ = plain.reset(seed=SHELF_SEED)
     same, _ = wrapped.reset(seed=SHELF_SEED)
     residual = np.full(7, 0.1, dtype=np.float32)
     expected = np.clip(np.clip(15.0 * obs["subgoal"], -1.0, 1.0) + residual, -1.0, 1.0)
-    np.testing.assert_allclose(residual_action(obs, residual, subgoal_pursuit("ClutterReach-v0", 15.0)), expected,
+    np.testing.assert_allclose(residual_action(obs, residual, subgoal_pursuit("ClutterReach-v1", 15.0)), expected,
                                rtol=1e-6)
     a, *_ = plain.step(expected)
     b, *_ = wrapped.step(residual)
@@ -30,7 +30,7 @@ def test_the_wrapper_steps_the_env_with_pursuit_plus_residual(make_env):
 
 
 def test_a_zero_residual_is_the_pursuit_that_reaches_the_shelf_target(make_env):
-    env = SubgoalResidual(make_env("ClutterReach-v0", subgoal_lookahead=0.2), gain=15.0)
+    env = SubgoalResidual(make_env("ClutterReach-v1", subgoal_lookahead=0.2), gain=15.0)
     obs, _ = env.reset(seed=SHELF_SEED)
     assert np.abs(env.pursuit(obs)).max() == 1.0  # 0.2 rad ahead saturates some joint: full speed along the path
     done = False
@@ -42,27 +42,27 @@ def test_a_zero_residual_is_the_pursuit_that_reaches_the_shelf_target(make_env):
 
 def test_the_wrapper_needs_an_env_its_base_controller_can_read(make_env):
     with pytest.raises(ValueError, match="needs a ClutterReach env made with observe_directions=True"):
-        SubgoalResidual(make_env("ClutterReach-v0"), gain=15.0)
+        SubgoalResidual(make_env("ClutterReach-v1"), gain=15.0)
     with pytest.raises(ValueError, match="needs a ClutterReach env with control='joint_velocity'"):
-        SubgoalResidual(make_env("ClutterReach-v0", control="ee_position", observe_directions=True), gain=2.0)
+        SubgoalResidual(make_env("ClutterReach-v1", control="ee_position", observe_directions=True), gain=2.0)
     with pytest.raises(ValueError, match="potential field needs 'lidar' in sensors"):
-        SubgoalResidual(make_env("ClutterNav-v0", sensors=["imu"]), gain=1.5)
+        SubgoalResidual(make_env("ClutterNav-v1", sensors=["imu"]), gain=1.5)
     with pytest.raises(ValueError, match="without a subgoal .* needs env_kwargs.observe_directions: true and "
                                          "control: joint_velocity"):
-        config_for("ClutterReach-v0", {"env_kwargs": {"subgoal_lookahead": 0.0}})
-    with pytest.raises(ValueError, match="pursuit, one of .*got 'ClutterReachGoal-v0'"):
-        subgoal_pursuit("ClutterReachGoal-v0", 1.0)
+        config_for("ClutterReach-v1", {"env_kwargs": {"subgoal_lookahead": 0.0}})
+    with pytest.raises(ValueError, match="pursuit, one of .*got 'ClutterReachGoal-v1'"):
+        subgoal_pursuit("ClutterReachGoal-v1", 1.0)
     with pytest.raises(ValueError, match="needs the env"):
-        subgoal_pursuit("ClutterNav-v0", 1.5)
+        subgoal_pursuit("ClutterNav-v1", 1.5)
 
 
 def test_the_nav_pursuit_is_the_potential_field_on_the_goal_with_the_gain_as_turn_gain(make_env):
-    env = SubgoalResidual(make_env("ClutterNav-v0", sensors=["lidar"]), gain=2.5)
+    env = SubgoalResidual(make_env("ClutterNav-v1", sensors=["lidar"]), gain=2.5)
     obs, _ = env.reset(seed=4)
     field = PotentialFieldNavigator.for_env(env)
     field.turn_gain = 2.5
     np.testing.assert_allclose(env.pursuit(obs), field(obs), atol=0)
-    plain = make_env("ClutterNav-v0", sensors=["lidar"])
+    plain = make_env("ClutterNav-v1", sensors=["lidar"])
     plain.reset(seed=4)
     residual = np.array([0.2, -0.3], dtype=np.float32)
     a, *_ = plain.step(np.clip(field(obs) + residual, -1.0, 1.0))
@@ -75,7 +75,7 @@ def test_the_nav_pursuit_is_the_potential_field_on_the_goal_with_the_gain_as_tur
 def test_a_loaded_residual_agent_adds_the_pursuit(tmp_path):
     tiny = {"timesteps": 64, "n_envs": 1, "train_layouts": 2, "validate_every": 0, "final_eval_episodes": 0,
             "checkpoint_every": 64, "ppo": {"n_steps": 32, "batch_size": 32, "n_epochs": 1}}
-    run = start(config_for("ClutterReach-v0", tiny), tmp_path / "run")
+    run = start(config_for("ClutterReach-v1", tiny), tmp_path / "run")
     train(run, progress=False)
     agent = load(run.root)
     env = agent.make_env()
@@ -83,7 +83,7 @@ def test_a_loaded_residual_agent_adds_the_pursuit(tmp_path):
     env.close()
     action, _ = agent.predict(obs)
     raw, _ = agent.model.predict(agent._normalizer.normalize_obs(obs), deterministic=True)
-    pursuit = subgoal_pursuit("ClutterReach-v0", agent.config.residual_gain)
+    pursuit = subgoal_pursuit("ClutterReach-v1", agent.config.residual_gain)
     np.testing.assert_allclose(action, residual_action(obs, raw, pursuit), rtol=1e-6)
     batch = {k: np.stack([v, v]) for k, v in obs.items()}
     actions, _ = agent.predict(batch)
@@ -93,13 +93,13 @@ def test_a_loaded_residual_agent_adds_the_pursuit(tmp_path):
 def test_the_report_says_the_reach_agent_is_a_residual_on_a_planner():
     from clutter_gym.training.report import _observation_line
 
-    line = _observation_line(config_for("ClutterReach-v0"))
+    line = _observation_line(config_for("ClutterReach-v1"))
     assert "**Map-based agent.**" in line and "0.1 rad ahead on a joint-space path" in line
     assert "residuals on a pursuit" in line and "costmap" not in line
 
 
 def test_the_fly_pursuit_is_the_cascaded_flyer_on_the_subgoal_for_one_observation_or_a_batch(make_env):
-    env = SubgoalResidual(make_env("ClutterFly-v0", volume_size=(4.0, 4.0, 2.0), subgoal_lookahead=0.5), gain=1.5)
+    env = SubgoalResidual(make_env("ClutterFly-v1", volume_size=(4.0, 4.0, 2.0), subgoal_lookahead=0.5), gain=1.5)
     obs, _ = env.reset(seed=3)
     flyer = CascadedFlyer.for_env(env, "subgoal")
     np.testing.assert_allclose(env.pursuit(obs), flyer(obs), atol=1e-7)
@@ -116,7 +116,7 @@ def test_the_fly_pursuit_is_the_cascaded_flyer_on_the_subgoal_for_one_observatio
 def test_the_report_says_the_fly_agent_is_a_residual_on_a_position_controller():
     from clutter_gym.training.report import _observation_line
 
-    line = _observation_line(config_for("ClutterFly-v0"))
+    line = _observation_line(config_for("ClutterFly-v1"))
     assert "**Map-based agent.**" in line and "0.5 m ahead on the shortest path" in line
     assert "residuals on a cascaded position controller" in line and "LIDAR" not in line
 
@@ -125,7 +125,7 @@ def test_the_potential_field_drives_the_same_on_a_forward_only_env(make_env):
     """reverse=False remaps the linear action; the field reads that from the env and drives the same path."""
     ends = []
     for reverse in (True, False):
-        env = make_env("ClutterNav-v0", sensors=["lidar"], reverse=reverse)
+        env = make_env("ClutterNav-v1", sensors=["lidar"], reverse=reverse)
         field = PotentialFieldNavigator.for_env(env)
         assert field.forward_only is not reverse
         obs, _ = env.reset(seed=5)
@@ -138,7 +138,7 @@ def test_the_potential_field_drives_the_same_on_a_forward_only_env(make_env):
 def test_the_report_says_a_sensor_only_agent_reads_only_its_sensors():
     from clutter_gym.training.report import _observation_line
 
-    line = _observation_line(config_for("ClutterNav-v0", {"env_kwargs": {"subgoal_lookahead": 0.0,
+    line = _observation_line(config_for("ClutterNav-v1", {"env_kwargs": {"subgoal_lookahead": 0.0,
                                                                          "reverse": False}}))
     assert line.startswith("**Sensor-only agent.**") and "(lidar)" in line and "no map" in line
     assert "forwards only" in line and "Map-based" not in line
@@ -150,9 +150,9 @@ def test_a_loaded_sensor_only_agent_and_a_field_residual_agent_act_as_trained(tm
 
     tiny = {"timesteps": 64, "n_envs": 1, "validate_every": 0, "final_eval_episodes": 0, "checkpoint_every": 64,
             "ppo": {"n_steps": 32, "batch_size": 32, "n_epochs": 1}}
-    sensors = user_settings(read_hyperparams_file("sensors-ppo"), "ClutterNav-v0")
+    sensors = user_settings(read_hyperparams_file("sensors-ppo"), "ClutterNav-v1")
     for name, extra in (("sensors", {}), ("field", {"residual_gain": 1.5})):
-        run = start(config_for("ClutterNav-v0", {**sensors, **tiny, **extra}), tmp_path / name)
+        run = start(config_for("ClutterNav-v1", {**sensors, **tiny, **extra}), tmp_path / name)
         train(run, progress=False)
         agent = load(run.root)
         env = agent.make_env()
@@ -170,25 +170,25 @@ def test_a_loaded_sensor_only_agent_and_a_field_residual_agent_act_as_trained(tm
 
 def test_a_mapless_fly_residual_is_on_the_flyer_aimed_at_the_goal(make_env):
     """Without a subgoal the ClutterFly base is sensor-only: the position controller straight at the goal."""
-    env = SubgoalResidual(make_env("ClutterFly-v0", volume_size=(4.0, 4.0, 2.0), sensors=["lidar"]), gain=1.5)
+    env = SubgoalResidual(make_env("ClutterFly-v1", volume_size=(4.0, 4.0, 2.0), sensors=["lidar"]), gain=1.5)
     obs, _ = env.reset(seed=3)
     flyer = CascadedFlyer.for_env(env, "goal")
     np.testing.assert_allclose(env.pursuit(obs), flyer(obs), atol=1e-7)
-    plain = make_env("ClutterFly-v0", volume_size=(4.0, 4.0, 2.0), sensors=["lidar"])
+    plain = make_env("ClutterFly-v1", volume_size=(4.0, 4.0, 2.0), sensors=["lidar"])
     plain.reset(seed=3)
     residual = np.array([0.1, -0.2, 0.05, 0.0], dtype=np.float32)
     a, *_ = plain.step(np.clip(flyer(obs) + residual, -1.0, 1.0))
     b, *_ = env.step(residual)
     np.testing.assert_array_equal(a["lidar"], b["lidar"])
     with pytest.raises(ValueError, match="proximity field needs the env"):
-        subgoal_pursuit("ClutterReach-v0", 2.0, mapless=True)
+        subgoal_pursuit("ClutterReach-v1", 2.0, mapless=True)
 
 
 def test_a_loaded_mapless_fly_residual_agent_adds_the_flyer_on_the_goal(tmp_path):
     tiny = {"timesteps": 64, "n_envs": 1, "validate_every": 0, "final_eval_episodes": 0, "checkpoint_every": 64,
             "env_kwargs": {"subgoal_lookahead": 0.0, "sensors": ["lidar"], "volume_size": [4.0, 4.0, 2.0]},
             "ppo": {"n_steps": 32, "batch_size": 32, "n_epochs": 1}}
-    run = start(config_for("ClutterFly-v0", tiny), tmp_path / "run")
+    run = start(config_for("ClutterFly-v1", tiny), tmp_path / "run")
     train(run, progress=False)
     agent = load(run.root)
     env = agent.make_env()
@@ -212,7 +212,7 @@ def test_a_velocity_residual_steers_the_flyer_it_does_not_fly_it(make_env):
     from clutter_gym.training.baselines import _capped
     from clutter_gym.training.residual import FACING_GAIN
 
-    env = SubgoalResidual(make_env("ClutterFly-v0", volume_size=(4.0, 4.0, 2.0), sensors=["lidar"]), 1.5, "velocity")
+    env = SubgoalResidual(make_env("ClutterFly-v1", volume_size=(4.0, 4.0, 2.0), sensors=["lidar"]), 1.5, "velocity")
     assert env.action_space.shape == (3,)
     obs, _ = env.reset(seed=3)
     flyer = CascadedFlyer.for_env(env, "goal", yaw_gain=FACING_GAIN)
@@ -223,14 +223,14 @@ def test_a_velocity_residual_steers_the_flyer_it_does_not_fly_it(make_env):
     np.testing.assert_allclose(env.act(obs, sideways), flyer.track(wanted, obs), atol=1e-7)
     batch = {k: np.stack([v, v]) for k, v in obs.items()}
     np.testing.assert_allclose(env.act(batch, np.stack([sideways, sideways]))[1], env.act(obs, sideways), atol=1e-7)
-    with pytest.raises(ValueError, match="'velocity' is ClutterFly-v0's"):
-        subgoal_pursuit("ClutterNav-v0", 1.5, make_env("ClutterNav-v0", sensors=["lidar"]), space="velocity")
+    with pytest.raises(ValueError, match="'velocity' is ClutterFly-v1's"):
+        subgoal_pursuit("ClutterNav-v1", 1.5, make_env("ClutterNav-v1", sensors=["lidar"]), space="velocity")
     with pytest.raises(ValueError, match=r"residual_space must be one of \('action', 'velocity'\), got 'speed'"):
-        subgoal_pursuit("ClutterFly-v0", 1.5, space="speed")
-    with pytest.raises(ValueError, match="residual_space 'velocity' is ClutterFly-v0's"):
-        config_for("ClutterNav-v0", {"residual_space": "velocity", "residual_gain": 1.5})
+        subgoal_pursuit("ClutterFly-v1", 1.5, space="speed")
+    with pytest.raises(ValueError, match="residual_space 'velocity' is ClutterFly-v1's"):
+        config_for("ClutterNav-v1", {"residual_space": "velocity", "residual_gain": 1.5})
     with pytest.raises(ValueError, match="residual_space 'velocity' needs residual_gain > 0"):
-        config_for("ClutterFly-v0", {"residual_space": "velocity", "residual_gain": 0.0})
+        config_for("ClutterFly-v1", {"residual_space": "velocity", "residual_gain": 0.0})
 
 
 def test_a_loaded_velocity_residual_agent_acts_on_plain_observations(tmp_path):
@@ -238,7 +238,7 @@ def test_a_loaded_velocity_residual_agent_acts_on_plain_observations(tmp_path):
             "residual_space": "velocity",
             "env_kwargs": {"subgoal_lookahead": 0.0, "sensors": ["lidar"], "volume_size": [4.0, 4.0, 2.0]},
             "ppo": {"n_steps": 32, "batch_size": 32, "n_epochs": 1}}
-    run = start(config_for("ClutterFly-v0", tiny), tmp_path / "run")
+    run = start(config_for("ClutterFly-v1", tiny), tmp_path / "run")
     train(run, progress=False)
     agent = load(run.root)
     assert agent.model.action_space.shape == (3,)
@@ -259,14 +259,14 @@ def test_a_mapless_reach_residual_is_on_the_proximity_field_and_loads_as_trained
     attraction; the wrapper and a loaded agent add the policy's action to it."""
     from clutter_gym.training.config import read_hyperparams_file, user_settings
 
-    env = SubgoalResidual(make_env("ClutterReach-v0", observe_directions=True), gain=3.0)
+    env = SubgoalResidual(make_env("ClutterReach-v1", observe_directions=True), gain=3.0)
     obs, _ = env.reset(seed=SHELF_SEED)
     field = ProximityFieldReacher.for_env(env, attraction=3.0)
     np.testing.assert_allclose(env.pursuit(obs), field(obs), atol=0)
     tiny = {"timesteps": 64, "n_envs": 1, "validate_every": 0, "final_eval_episodes": 0, "checkpoint_every": 64,
             "ppo": {"n_steps": 32, "batch_size": 32, "n_epochs": 1}}
-    sensors = user_settings(read_hyperparams_file("sensors-ppo"), "ClutterReach-v0")
-    run = start(config_for("ClutterReach-v0", {**sensors, **tiny}), tmp_path / "run")
+    sensors = user_settings(read_hyperparams_file("sensors-ppo"), "ClutterReach-v1")
+    run = start(config_for("ClutterReach-v1", {**sensors, **tiny}), tmp_path / "run")
     train(run, progress=False)
     agent = load(run.root)
     env = agent.make_env()
@@ -289,7 +289,7 @@ def test_residual_base_sets_the_flyers_gains_and_a_loaded_agent_keeps_them(tmp_p
             "residual_base": {"attitude_gain": 4.0, "max_speed": 0.8},
             "env_kwargs": {"subgoal_lookahead": 0.5, "observe_thrust_ratio": True, "volume_size": [4.0, 4.0, 2.0]},
             "ppo": {"n_steps": 32, "batch_size": 32, "n_epochs": 1}}
-    run = start(config_for("ClutterFly-v0", tiny), tmp_path / "run")
+    run = start(config_for("ClutterFly-v1", tiny), tmp_path / "run")
     train(run, progress=False)
     agent = load(run.root)
     assert agent.config.residual_base == {"attitude_gain": 4.0, "max_speed": 0.8}
@@ -316,9 +316,9 @@ def test_residual_base_sets_the_flyers_gains_and_a_loaded_agent_keeps_them(tmp_p
 ])
 def test_residual_base_errors_name_the_field(settings, message):
     with pytest.raises(ValueError, match=message):
-        config_for("ClutterFly-v0", settings)
+        config_for("ClutterFly-v1", settings)
 
 
 def test_residual_base_is_the_flyers_only():
-    with pytest.raises(ValueError, match="residual_base sets the gains of ClutterFly-v0's flyer"):
-        config_for("ClutterNav-v0", {"residual_gain": 1.5, "residual_base": {"attitude_gain": 4.0}})
+    with pytest.raises(ValueError, match="residual_base sets the gains of ClutterFly-v1's flyer"):
+        config_for("ClutterNav-v1", {"residual_gain": 1.5, "residual_base": {"attitude_gain": 4.0}})

@@ -27,7 +27,7 @@ CLI = "import sys\nfrom clutter_gym.cli import main\nsys.exit(main(sys.argv[1:])
 
 def config_text(**env_kwargs) -> str:
     """A small run's config.yaml, as training writes it, with ``env_kwargs``."""
-    config = config_for("ClutterNav-v0", {"timesteps": 128, "n_envs": 1, "checkpoint_every": 64,
+    config = config_for("ClutterNav-v1", {"timesteps": 128, "n_envs": 1, "checkpoint_every": 64,
                                           "final_eval_episodes": 0, "env_kwargs": {"n_rays": 32, **env_kwargs},
                                           "ppo": {"n_steps": 64, "batch_size": 32, "n_epochs": 1,
                                                   "normalize_obs": False, "normalize_reward": False}})
@@ -35,7 +35,7 @@ def config_text(**env_kwargs) -> str:
 
 
 def crafted_run(folder: Path, robot: dict) -> Path:
-    """A run folder whose config makes ClutterNav-v0 with ``robot`` and holds a (blank) model: enough for eval and
+    """A run folder whose config makes ClutterNav-v1 with ``robot`` and holds a (blank) model: enough for eval and
     resume to make the env."""
     (folder / "model").mkdir(parents=True)
     (folder / "model" / "model.zip").write_bytes(b"")
@@ -125,8 +125,8 @@ def test_a_hyperparameter_file_and_a_sweep_spec_of_nested_aliases_are_refused_in
     code = ("import sys\n"
             "from clutter_gym.training.config import config_for, read_hyperparams_file\n"
             "from clutter_gym.training.sweep import SweepSpec, check_spec\n"
-            "for attempt in (lambda: config_for('ClutterNav-v0', read_hyperparams_file(sys.argv[1])),\n"
-            "                lambda: check_spec(SweepSpec('ClutterNav-v0', ('none',), ('none',), 1, None, 1),\n"
+            "for attempt in (lambda: config_for('ClutterNav-v1', read_hyperparams_file(sys.argv[1])),\n"
+            "                lambda: check_spec(SweepSpec('ClutterNav-v1', ('none',), ('none',), 1, None, 1),\n"
             "                                   __import__('pathlib').Path(sys.argv[2]))):\n"
             "    try:\n"
             "        attempt()\n"
@@ -151,5 +151,5 @@ def test_an_env_kwarg_of_nested_aliases_is_refused():
 def test_a_bad_config_value_is_shown_cut_short():
     """On main the message held the whole value's repr."""
     with pytest.raises(ValueError) as error:
-        config_for("ClutterNav-v0", {"seed": list(range(100_000))})
+        config_for("ClutterNav-v1", {"seed": list(range(100_000))})
     assert str(error.value) == "seed must be a number in [0, 2147483647], got [0, 1, 2, 3, 4, 5, ...]"

@@ -30,7 +30,7 @@ TINY = {"timesteps": 768, "n_envs": 1, "checkpoint_every": 384, "final_eval_epis
 
 @pytest.fixture(scope="module")
 def finished(tmp_path_factory):
-    run = start(config_for("ClutterNav-v0", TINY), tmp_path_factory.mktemp("safety") / "run")
+    run = start(config_for("ClutterNav-v1", TINY), tmp_path_factory.mktemp("safety") / "run")
     train(run, progress=False)
     return run
 
@@ -129,7 +129,7 @@ def test_resume_of_a_finished_run_is_a_no_op_that_says_so(finished, tmp_path, ca
 
 
 def test_a_run_killed_before_its_first_checkpoint_starts_over_and_keeps_one_attempts_rows(tmp_path, capsys):
-    run = start(config_for("ClutterNav-v0", {**TINY, "timesteps": 1024, "checkpoint_every": 2048}), tmp_path / "run")
+    run = start(config_for("ClutterNav-v1", {**TINY, "timesteps": 1024, "checkpoint_every": 2048}), tmp_path / "run")
     train(run, progress=False)
     first_attempt = run.read_episodes()
     assert first_attempt and not run.checkpoints()

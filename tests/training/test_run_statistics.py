@@ -34,7 +34,7 @@ SMALL = {"timesteps": 128, "n_envs": 1, "checkpoint_every": 64, "final_eval_epis
 
 @pytest.fixture(scope="module")
 def finished(tmp_path_factory):
-    run = start(config_for("ClutterNav-v0", SMALL), tmp_path_factory.mktemp("statistics") / "run")
+    run = start(config_for("ClutterNav-v1", SMALL), tmp_path_factory.mktemp("statistics") / "run")
     train(run, progress=False)
     return run
 
@@ -161,7 +161,7 @@ def test_non_finite_weights_and_oversized_members_are_named(finished, tmp_path, 
 def test_weights_of_another_shape_are_one_line(finished, tmp_path, capsys):
     """A model.zip of another network (here 16 LIDAR rays where the config says 32) gave torch's many-line size
     mismatch."""
-    other = start(config_for("ClutterNav-v0", {**SMALL, "timesteps": 64, "env_kwargs": {"obstacle_density": 0.05,
+    other = start(config_for("ClutterNav-v1", {**SMALL, "timesteps": 64, "env_kwargs": {"obstacle_density": 0.05,
                                                                                         "n_rays": 16}}),
                   tmp_path / "other")
     train(other, progress=False)

@@ -50,6 +50,6 @@ def test_returns_seen_twice_are_kept_once_and_a_new_episode_forgets():
 
 def test_the_memory_needs_a_2d_lidar(make_env):
     with pytest.raises(ValueError, match="needs a ClutterNav env with a 2D LIDAR"):
-        memory_for(make_env("ClutterNav-v0", sensors=["imu"]), "polar")
+        memory_for(make_env("ClutterNav-v1", sensors=["imu"]), "polar")
     with pytest.raises(ValueError, match="scan_memory must be one of"):
         ScanMemory("map", ANGLES, 3.5, 0.1)

@@ -19,7 +19,7 @@ import pytest
 from clutter_gym.training.run_dir import RunDir
 from clutter_gym.training.sweep import SweepSpec, cell_dir, run_sweep
 
-SPEC = SweepSpec(env_id="ClutterNav-v0", train_noise=("none", "nominal"), eval_noise=("none", "harsh"), seeds=1,
+SPEC = SweepSpec(env_id="ClutterNav-v1", train_noise=("none", "nominal"), eval_noise=("none", "harsh"), seeds=1,
                  timesteps=64, episodes=1, n_envs=1,
                  settings={"env_kwargs": {"obstacle_density": 0.05, "noise": {"lidar": {"range_sigma": 0.03}}},
                            "ppo": {"n_steps": 64, "batch_size": 32}})
@@ -68,7 +68,7 @@ def test_a_sweep_folder_refuses_another_spec(swept):
 
 def test_the_ray_path_runs_the_same_cells(tmp_path):
     pytest.importorskip("ray")
-    spec = SweepSpec(env_id="ClutterNav-v0", train_noise=("none",), eval_noise=("none", "nominal"), seeds=1,
+    spec = SweepSpec(env_id="ClutterNav-v1", train_noise=("none",), eval_noise=("none", "nominal"), seeds=1,
                      timesteps=64, episodes=1, n_envs=1, settings={"ppo": {"n_steps": 64, "batch_size": 32}})
     result = run_sweep(spec, tmp_path, ray_address="local")
     assert result["cells_run"] == 1 and len(result["rows"]) == 2
@@ -105,7 +105,7 @@ def _cli_sweep(out: Path, address: str, env: dict, *extra: str) -> subprocess.Co
     hyperparams = out.parent / f"{out.name}-tiny.yml"
     hyperparams.write_text("default:\n  ppo: {n_steps: 64, batch_size: 32, n_epochs: 1}\n")
     return subprocess.run(
-        [str(Path(sys.executable).with_name("clutter-gym")), "sweep", "--env", "ClutterNav-v0", "--train-noise",
+        [str(Path(sys.executable).with_name("clutter-gym")), "sweep", "--env", "ClutterNav-v1", "--train-noise",
          "none,nominal", "--eval-noise", "none", "--seeds", "1", "--timesteps", "64", "--episodes", "1", "--n-envs",
          "2", "--hyperparams", str(hyperparams), "--env-kwargs", "obstacle_density=0.05", "--out", str(out),
          "--ray-address", address, *extra],
@@ -140,7 +140,7 @@ def test_the_summary_shows_the_diagonal_and_what_noisy_training_costs_clean():
     """Two seeds: means over seeds, each seed's value in brackets, the clean success lost per seed."""
     from clutter_gym.training.sweep import summary_table
 
-    spec = SweepSpec(env_id="ClutterNav-v0", train_noise=("none", "harsh"), eval_noise=("none", "harsh"), seeds=2,
+    spec = SweepSpec(env_id="ClutterNav-v1", train_noise=("none", "harsh"), eval_noise=("none", "harsh"), seeds=2,
                      timesteps=64, episodes=100)
     success = {("none", 0, "none"): 0.9, ("none", 1, "none"): 0.8, ("none", 0, "harsh"): 0.5,
                ("none", 1, "harsh"): 0.4, ("harsh", 0, "none"): 0.8, ("harsh", 1, "none"): 0.6,
@@ -152,7 +152,7 @@ def test_the_summary_shows_the_diagonal_and_what_noisy_training_costs_clean():
                         "| +0 points (+0, +0) |")
     assert lines[3] == ("| `harsh` | 70% / 5% (70% / 0%, 70% / 10%) | 70% / 5% (80% / 0%, 60% / 10%) "
                         "| +15 points (+10, +20) |")
-    clean_eval_only = SweepSpec(env_id="ClutterNav-v0", train_noise=("none", "harsh"), eval_noise=("harsh",),
+    clean_eval_only = SweepSpec(env_id="ClutterNav-v1", train_noise=("none", "harsh"), eval_noise=("harsh",),
                                 seeds=2, timesteps=64, episodes=100)
     assert summary_table([r for r in rows if r["eval_noise"] == "harsh"], clean_eval_only).splitlines()[0] == \
         "| trained under | evaluated under the same profile |"

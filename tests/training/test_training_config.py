@@ -23,13 +23,13 @@ def test_shipped_yaml_has_a_default_block_and_valid_blocks_for_every_env():
 
 
 def test_env_block_and_overrides_merge_key_by_key():
-    config = config_for("ClutterNav-v0", {"timesteps": 1234, "ppo": {"learning_rate": 1e-3}})
+    config = config_for("ClutterNav-v1", {"timesteps": 1234, "ppo": {"learning_rate": 1e-3}})
     assert config.timesteps == 1234
     assert config.ppo.learning_rate == 1e-3
     table = hyperparams_table()
-    assert config.ppo.n_steps == table["ClutterNav-v0"]["ppo"]["n_steps"]  # env block kept
+    assert config.ppo.n_steps == table["ClutterNav-v1"]["ppo"]["n_steps"]  # env block kept
     assert config.ppo.gamma == table["default"]["ppo"]["gamma"]  # default block kept
-    assert config.env_kwargs == table["ClutterNav-v0"]["env_kwargs"]
+    assert config.env_kwargs == table["ClutterNav-v1"]["env_kwargs"]
 
 
 @pytest.mark.parametrize(
@@ -51,11 +51,11 @@ def test_env_block_and_overrides_merge_key_by_key():
 )
 def test_bad_config_values_name_the_field(override, field):
     with pytest.raises(ValueError, match=field.replace(".", r"\.")):
-        config_for("ClutterNav-v0", override)
+        config_for("ClutterNav-v1", override)
 
 
 def test_config_round_trips_through_a_plain_dict():
-    config = config_for("ClutterNav-v0", {"seed": 7, "ppo": {"net_arch": [32, 16]}})
+    config = config_for("ClutterNav-v1", {"seed": 7, "ppo": {"net_arch": [32, 16]}})
     again = TrainConfig.from_dict(config.to_dict())
     assert again == config and again.ppo.net_arch == (32, 16)
 
@@ -109,7 +109,7 @@ def test_mean_interval_covers_the_true_mean_about_95_percent_of_the_time():
 def test_a_training_mix_gives_each_training_env_its_share_and_leaves_evaluation_alone():
     from clutter_gym.training.vec_env import build_vec_env
 
-    config = config_for("ClutterNav-v0", {"n_envs": 3, "env_workers": 1,
+    config = config_for("ClutterNav-v1", {"n_envs": 3, "env_workers": 1,
                                           "train_env_mix": {"obstacle_density": [0.05, 0.2]}})
     assert [config.train_kwargs(i)["obstacle_density"] for i in range(3)] == [0.05, 0.2, 0.05]
     assert "obstacle_density" not in config.make_kwargs()
@@ -122,7 +122,7 @@ def test_a_training_mix_gives_each_training_env_its_share_and_leaves_evaluation_
 
 
 def test_a_noise_mix_gives_each_training_env_its_profile_and_validation_the_run_s():
-    config = config_for("ClutterFly-v0", {"noise": "harsh", "train_env_mix": {"noise": ["none", "harsh"]},
+    config = config_for("ClutterFly-v1", {"noise": "harsh", "train_env_mix": {"noise": ["none", "harsh"]},
                                           "env_kwargs": {"noise": {"imu": {"latency_steps": 1}}}})
     assert config.train_kwargs(0)["noise"] == {"profile": "none", "imu": {"latency_steps": 1}}
     assert config.train_kwargs(3)["noise"] == {"profile": "harsh", "imu": {"latency_steps": 1}}
@@ -135,29 +135,29 @@ def test_a_noise_mix_gives_each_training_env_its_profile_and_validation_the_run_
                                               ([0.1], "must map gym.make arguments")])
 def test_a_bad_training_mix_is_named(mix, message):
     with pytest.raises(ValueError, match=message):
-        config_for("ClutterNav-v0", {"train_env_mix": mix})
+        config_for("ClutterNav-v1", {"train_env_mix": mix})
 
 
 def test_shipped_hyperparameter_files_are_found_by_name(tmp_path, monkeypatch):
     from clutter_gym.training.config import read_hyperparams_file, shipped_hyperparams, user_settings
 
     assert "sensors" in shipped_hyperparams()
-    args = build_parser().parse_args(["train", "--env", "ClutterNav-v0", "--hyperparams", "sensors"])
-    config = config_for("ClutterNav-v0", train_overrides(args))
+    args = build_parser().parse_args(["train", "--env", "ClutterNav-v1", "--hyperparams", "sensors"])
+    config = config_for("ClutterNav-v1", train_overrides(args))
     assert config.env_kwargs["subgoal_lookahead"] == 0.0  # sensor-only: no subgoal from a planner
-    assert config == config_for("ClutterNav-v0", user_settings(read_hyperparams_file("sensors"), "ClutterNav-v0"))
+    assert config == config_for("ClutterNav-v1", user_settings(read_hyperparams_file("sensors"), "ClutterNav-v1"))
     monkeypatch.chdir(tmp_path)  # a file of the user's own by that name comes first
-    (tmp_path / "sensors").write_text("ClutterNav-v0: {timesteps: 77}\n")
-    assert read_hyperparams_file("sensors") == {"ClutterNav-v0": {"timesteps": 77}}
+    (tmp_path / "sensors").write_text("ClutterNav-v1: {timesteps: 77}\n")
+    assert read_hyperparams_file("sensors") == {"ClutterNav-v1": {"timesteps": 77}}
     with pytest.raises(FileNotFoundError, match="nor is it a shipped name: .*sensors"):
         read_hyperparams_file("sensor")
 
 
 def test_the_robust_block_trains_the_fly_residual_under_harsh_with_memory():
-    args = build_parser().parse_args(["train", "--env", "ClutterFly-v0", "--hyperparams", "robust"])
-    config = config_for("ClutterFly-v0", train_overrides(args))
+    args = build_parser().parse_args(["train", "--env", "ClutterFly-v1", "--hyperparams", "robust"])
+    config = config_for("ClutterFly-v1", train_overrides(args))
     assert config.noise == "harsh" and config.frame_stack > 1
-    assert config.residual_gain == config_for("ClutterFly-v0").residual_gain  # the shipped residual, trained harsh
+    assert config.residual_gain == config_for("ClutterFly-v1").residual_gain  # the shipped residual, trained harsh
     assert config.make_kwargs(noise="harsh")["noise"] == "harsh"
     # its base reads the airframe's thrust estimate and keeps a margin for the command delay
     assert config.env_kwargs["observe_thrust_ratio"] and config.residual_base == {"attitude_gain": 4.0}
@@ -175,14 +175,14 @@ def test_the_sensors_blocks_distil_a_teacher_into_a_student_that_reads_no_map(en
 
 
 def test_the_last_rounds_sensor_only_fly_block_reads_no_map():
-    args = build_parser().parse_args(["train", "--env", "ClutterFly-v0", "--hyperparams", "sensors-ppo"])
-    config = config_for("ClutterFly-v0", train_overrides(args))
+    args = build_parser().parse_args(["train", "--env", "ClutterFly-v1", "--hyperparams", "sensors-ppo"])
+    config = config_for("ClutterFly-v1", train_overrides(args))
     assert config.env_kwargs["subgoal_lookahead"] == 0.0 and config.env_kwargs["sensors"] == ["lidar"]
     assert config.residual_gain > 0 and config.residual_space == "velocity"
 
 
 def test_the_last_rounds_sensor_only_reach_block_reads_no_map():
-    args = build_parser().parse_args(["train", "--env", "ClutterReach-v0", "--hyperparams", "sensors-ppo"])
-    config = config_for("ClutterReach-v0", train_overrides(args))
+    args = build_parser().parse_args(["train", "--env", "ClutterReach-v1", "--hyperparams", "sensors-ppo"])
+    config = config_for("ClutterReach-v1", train_overrides(args))
     assert config.env_kwargs["subgoal_lookahead"] == 0.0 and config.env_kwargs["observe_directions"]
     assert config.residual_gain > 0 and config.train_layouts == 0  # no planning, so no layout pool to plan once

@@ -24,7 +24,7 @@ TINY = {"timesteps": 256, "n_envs": 1, "checkpoint_every": 128, "final_eval_epis
 
 
 def tiny_run(tmp_path, **overrides):
-    config = config_for("ClutterNav-v0", {**TINY, **overrides})
+    config = config_for("ClutterNav-v1", {**TINY, **overrides})
     return start(config, tmp_path / "run")
 
 
@@ -127,7 +127,7 @@ def test_evaluate_rejects_bad_arguments(trained):
 
 
 def test_episode_stats_sum_the_step_infos():
-    env = EpisodeStats(gym.make("ClutterNav-v0", max_episode_steps=30))
+    env = EpisodeStats(gym.make("ClutterNav-v1", max_episode_steps=30))
     obs, info = env.reset(seed=3)
     total, costs, clearances, terms = 0.0, 0.0, [info["min_clearance"]], {}
     while True:
@@ -190,7 +190,7 @@ def test_the_same_policy_validates_alike_on_its_fixed_held_out_layouts(tmp_path)
     run = tiny_run(tmp_path, validate_every=64, validate_episodes=2,
                    env_kwargs={"obstacle_density": 0.05, "max_episode_steps": 20})
     config = run.read_config()
-    model = PPO("MultiInputPolicy", gym.make("ClutterNav-v0", **config.make_kwargs()), seed=0, device="cpu",
+    model = PPO("MultiInputPolicy", gym.make("ClutterNav-v1", **config.make_kwargs()), seed=0, device="cpu",
                 n_steps=64, batch_size=32)
     model.set_logger(configure(None, []))
     keepers = [BestPolicyKeeper(run, config) for _ in range(2)]
@@ -210,7 +210,7 @@ def test_the_main_job_reports_its_verdict_and_shows_two_episodes_side_by_side(tm
 
     settings = {"n_envs": 1, "checkpoint_every": 128, "validate_every": 128, "validate_episodes": 1,
                 "env_kwargs": {"max_episode_steps": 25}, "ppo": {"n_steps": 64, "batch_size": 32, "n_epochs": 1}}
-    run = prepare_run("ClutterNav-v0", tmp_path, timesteps=128, seed=0, settings=settings)
+    run = prepare_run("ClutterNav-v1", tmp_path, timesteps=128, seed=0, settings=settings)
     report = main_job(run, tmp_path, timesteps=128, episodes=2, progress=False).read_text()
     assert "**Map-based agent.**" in report  # the shipped ClutterNav settings tell the policy the subgoal
     assert "**Behind a collision monitor**" in report and "next 0.3 s of driving" in report
@@ -228,7 +228,7 @@ def test_episode_pictures_draw_the_planner_path_and_every_step(tmp_path):
     from clutter_gym.training.baselines import PotentialFieldNavigator
     from clutter_gym.training.episode_view import draw_frame, record_episode
 
-    env = gym.make("ClutterNav-v0", subgoal_lookahead=0.5, max_episode_steps=30)
+    env = gym.make("ClutterNav-v1", subgoal_lookahead=0.5, max_episode_steps=30)
     navigator = PotentialFieldNavigator.for_env(env, goal_key="subgoal")
     trace = record_episode(env, lambda obs, state: (navigator(obs), None), seed=3, title="scripted")
     env.close()
@@ -254,7 +254,7 @@ def test_the_verdict_holds_each_env_to_its_own_target():
 
     assert set(TARGETS) == set(ENV_IDS)
     metrics = {"success_rate": {"value": 0.85}, "collision_rate": {"value": 0.08}}
-    assert "**met**" in _verdict("ClutterFly-v0", metrics, 600.0) and "at least 80% success" in _verdict(
-        "ClutterFly-v0", metrics, 600.0)
-    assert "**missed**" in _verdict("ClutterNav-v0", metrics, 600.0)
-    assert "**missed**" in _verdict("ClutterFly-v0", metrics, 16 * 60.0)
+    assert "**met**" in _verdict("ClutterFly-v1", metrics, 600.0) and "at least 80% success" in _verdict(
+        "ClutterFly-v1", metrics, 600.0)
+    assert "**missed**" in _verdict("ClutterNav-v1", metrics, 600.0)
+    assert "**missed**" in _verdict("ClutterFly-v1", metrics, 16 * 60.0)

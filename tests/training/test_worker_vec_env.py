@@ -79,7 +79,7 @@ def test_bad_worker_counts_name_the_field():
 
 
 def test_training_envs_split_over_workers_step_like_one_process():
-    config = config_for("ClutterNav-v0", {"n_envs": 3, "env_workers": 2, "env_kwargs": {"obstacle_density": 0.05}})
+    config = config_for("ClutterNav-v1", {"n_envs": 3, "env_workers": 2, "env_kwargs": {"obstacle_density": 0.05}})
     venv = build_vec_env(config, seed=11)
     reference = DummyVecEnv([functools.partial(make_env, config.env_id, config.make_kwargs())] * 3)
     try:

@@ -28,12 +28,12 @@ def test_the_zoo_blocks_carry_the_shipped_settings():
         assert block["policy_kwargs"] == {"net_arch": list(config.ppo.net_arch),
                                           "log_std_init": config.ppo.log_std_init}
         assert block["normalize"] == {"norm_obs": config.ppo.normalize_obs, "norm_reward": config.ppo.normalize_reward}
-    reach = config_for("ClutterReach-v0")
-    assert hyperparams["ClutterReachTrain-v0"]["env_wrapper"] == [
+    reach = config_for("ClutterReach-v1")
+    assert hyperparams["ClutterReachTrain-v1"]["env_wrapper"] == [
         {"clutter_gym.training.layout_pool.LayoutPool": {"n_layouts": reach.layouts_per_env}},
         {"clutter_gym.training.residual.SubgoalResidual": {"gain": reach.residual_gain, "space": "action"}},
     ]
-    assert "env_wrapper" not in hyperparams["ClutterNavTrain-v0"]
+    assert "env_wrapper" not in hyperparams["ClutterNavTrain-v1"]
 
 
 @pytest.mark.parametrize("train_id", list(TRAIN_IDS))

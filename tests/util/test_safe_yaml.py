@@ -26,7 +26,7 @@ def test_a_spec_file_past_a_bound_is_refused_in_one_line_naming_it(text, message
     path = tmp_path / "bot.yaml"
     path.write_text(text)
     with pytest.raises(ValueError) as error:
-        gym.make("ClutterNav-v0", robot=str(path))
+        gym.make("ClutterNav-v1", robot=str(path))
     assert str(error.value).startswith(f"robot spec file {path} {message}") and "\n" not in str(error.value)
 
 

@@ -1,1 +1,1 @@
-"""The table world of ClutterReach-v0: a table in front of a fixed arm, crowded with boxes, cylinders and a shelf."""
+"""The table world of ClutterReach-v1: a table in front of a fixed arm, crowded with boxes, cylinders and a shelf."""

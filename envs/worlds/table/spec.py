@@ -1,4 +1,4 @@
-"""The table world of ClutterReach-v0: its frame, the table, where targets are drawn for the arm, and what a
+"""The table world of ClutterReach-v1: its frame, the table, where targets are drawn for the arm, and what a
 generated layout looks like.
 
 Frame: the arm's base at the origin, the table top at z = -TABLE_GAP (the base stands on a mounting plate that

@@ -58,7 +58,7 @@ def test_progress_reward_follows_the_path_not_the_straight_line():
 
     wall = {"shape": "box", "size": [0.1, 4.0, 0.5], "position": [0.0, -1.0]}
     scene = {"obstacles": [wall], "start": [-1.0, 0.0, math.pi / 2], "goal": [1.0, 0.0]}
-    env = gym.make("ClutterNav-v0")
+    env = gym.make("ClutterNav-v1")
     env.reset(seed=0, options={"scene": scene})
     # Driving +y (away from the goal in straight-line terms, but along the path around the wall) earns progress.
     progress = 0.0
@@ -127,7 +127,7 @@ def test_the_subgoal_observation_points_at_the_waypoint_in_the_robot_frame():
 
     wall = {"shape": "box", "size": [0.1, 4.0, 0.5], "position": [0.0, -1.0]}
     scene = {"obstacles": [wall], "start": [-1.0, 0.0, 0.0], "goal": [1.0, 0.0]}
-    env = gym.make("ClutterNav-v0", subgoal_lookahead=1.0)
+    env = gym.make("ClutterNav-v1", subgoal_lookahead=1.0)
     obs, _ = env.reset(seed=0, options={"scene": scene})
     field = PathDistance(Scene((Obstacle("box", (0.1, 4.0, 0.5), (0.0, -1.0), 0.0),), (-1.0, 0.0, 0.0), (1.0, 0.0)),
                          SPEC, R, plan_margin=SUBGOAL_PLAN_MARGIN)
@@ -146,11 +146,11 @@ def test_the_subgoal_observation_points_at_the_waypoint_in_the_robot_frame():
 def test_the_subgoal_entry_is_opt_in_and_its_lookahead_is_checked():
     import gymnasium as gym
 
-    env = gym.make("ClutterNav-v0")
+    env = gym.make("ClutterNav-v1")
     assert "subgoal" not in env.observation_space.spaces
     env.close()
     with pytest.raises(ValueError, match="subgoal_lookahead must be in"):
-        gym.make("ClutterNav-v0", subgoal_lookahead=-1.0)
+        gym.make("ClutterNav-v1", subgoal_lookahead=-1.0)
 
 
 # -- the search and the field it starts from, against straightforward versions of them ---------------------------
