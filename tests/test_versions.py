@@ -4,11 +4,11 @@ the new ones, each env's page has a version history, and a run trained on an old
 from __future__ import annotations
 
 import re
-import tomllib
 from pathlib import Path
 
 import gymnasium as gym
 import pytest
+import tomllib
 
 import clutter_gym
 from clutter_gym import ENV_IDS, RENAMED_IDS
