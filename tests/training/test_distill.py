@@ -18,7 +18,7 @@ from clutter_gym.training.vec_env import student_keys
 
 #: A small ClutterNav: a 3 m arena, few obstacles, a short LIDAR scan.
 SMALL = {"arena_size": 3.0, "obstacle_density": 0.05, "n_rays": 16, "sensors": ["lidar"], "reverse": False,
-         "observe_bearing": True, "max_episode_steps": 120}
+         "observe_bearing": True, "max_episode_steps": 120, "subgoal_lookahead": 0.0}
 
 
 def _student(**settings):
@@ -111,7 +111,7 @@ def test_a_student_learns_a_teacher_it_can_see_to_95_percent_agreement(tmp_path,
     env.close()
     assert agreed / total >= 0.95
     rows = run.read_distill_rows()
-    assert [r["samples"] for r in rows] == [1200, 2400, 3600, 4800]  # aggregated: every round's samples kept
+    assert [r["samples"] for r in rows] == [1200, 2400, 3600, 4800, 6000]  # aggregated: every round's samples kept
     assert rows[0]["teacher_share"] == 1.0 and rows[1]["teacher_share"] == 0.0
 
 
@@ -119,7 +119,7 @@ class GoalField(Teacher):
     """The potential field's goal seeking alone (no LIDAR): a scripted teacher that reads only the student's goal
     entry, so a student can match it exactly."""
 
-    def __init__(self, env_id, name, env):
+    def __init__(self, env_id, name, env, space="action"):
         self.field = PotentialFieldNavigator(None, 1.0, forward_only=True)
 
     def __call__(self, obs, info):
@@ -154,6 +154,8 @@ def test_a_teacher_the_env_does_not_have_is_refused_by_name():
     with pytest.raises(ValueError, match=r"teacher.name must be one of \['committed', 'in-range', 'planner', "
                                          r"'seen-map'\]"):
         config_for("ClutterNav-v1", {"teacher": {"name": "oracle"}})
+    with pytest.raises(ValueError, match="env_kwargs.subgoal_lookahead must be 0 for a student"):
+        config_for("ClutterNav-v1", {"teacher": {"name": "planner"}})  # the main job's block has a subgoal
     with pytest.raises(ValueError, match="critic_inputs needs a teacher"):
         config_for("ClutterNav-v1", {"critic_inputs": ["subgoal"]})
     with pytest.raises(ValueError, match="distill.rounds must be an integer in"):
