@@ -49,6 +49,7 @@ DEMOS = {
                           "scripted position controller on the planned path", "multirotor", "airframe"),
 }
 DEMO_ENVS = tuple(DEMOS)
+DEFAULT_DEMO = "ClutterNav-v1"
 #: Without ``--seed``, the demo shows the first of these seeds whose layout the scripted policy has a plan for.
 DEMO_SEEDS = range(10)
 
@@ -63,16 +64,21 @@ def demo(args: argparse.Namespace) -> dict:
     Raises:
         UserError: the env refuses ``args.robot`` (unknown, or of another kind).
     """
-    spec = DEMOS[args.env]
-    kwargs = {**spec.kwargs, **({"robot": args.robot} if args.robot else {})}
-    with user_errors(ValueError):
-        env = gym.make(args.env, render_mode="rgb_array", noise=args.noise, **kwargs)
+    if args.agent:
+        env_id, env, make_policy, policy_name, ringed = _trained_demo(args)
+    else:
+        env_id = args.env or DEFAULT_DEMO
+        spec = DEMOS[env_id]
+        kwargs = {**spec.kwargs, **({"robot": args.robot} if args.robot else {})}
+        with user_errors(ValueError):
+            env = gym.make(env_id, render_mode="rgb_array", noise=args.noise, **kwargs)
+        make_policy, policy_name, ringed = spec.make_policy, spec.name, spec.focus
     try:
         skipped: dict[str, str] = {}
         seeds = DEMO_SEEDS if args.seed is None else [args.seed]
         for seed in seeds:
             obs, info = env.reset(seed=seed)
-            policy = spec.make_policy(env)  # a fresh one per layout: the demo of a seed is the same however reached
+            policy = make_policy(env)  # a fresh one per layout: the demo of a seed is the same however reached
             action = policy(obs)
             no_plan = getattr(policy, "no_plan", None)
             if no_plan is None or seed == seeds[-1]:
@@ -99,14 +105,14 @@ def demo(args: argparse.Namespace) -> dict:
                 break
             action = policy(obs)
         frames.append(env.render())
-        gif = Path(args.out) / f"{args.env}-seed{seed}.gif"
+        gif = Path(args.out) / f"{env_id}-seed{seed}.gif"
         write_video(gif, frames, fps=env.metadata["render_fps"] / args.frame_every)
     finally:
         env.close()
     return {
-        "env": args.env,
+        "env": env_id,
         "robot": base.robot.name,
-        "policy": spec.name,
+        "policy": policy_name,
         "seed": seed,
         "skipped_seeds": skipped,
         "no_plan": getattr(policy, "no_plan", None),
@@ -115,12 +121,46 @@ def demo(args: argparse.Namespace) -> dict:
         "return": round(episode_return, 3),
         "success": bool(info["is_success"]),
         "moved_m": round(moved, 3),
-        "moved": spec.focus,
+        "moved": ringed,
         "contact_steps": int(contact_steps),
         "min_clearance_m": round(float(min_clearance), 4),
         "steps_per_s": round(steps / step_time, 1) if step_time > 0 else None,
         "gif": str(gif),
     }
+
+
+class _AgentPolicy:
+    """A trained agent as the demo's policy: one observation in, one action out, its memory kept between calls."""
+
+    def __init__(self, agent: Any) -> None:
+        self.agent, self.state = agent, None
+
+    def __call__(self, obs: Any) -> np.ndarray:
+        action, self.state = self.agent.predict(obs, self.state)
+        return action
+
+
+def _trained_demo(args: argparse.Namespace) -> tuple[str, gym.Env, Callable[[gym.Env], Callable[[Any], np.ndarray]],
+                                                      str, str]:
+    """The env, policy maker, policy name and ringed part of a demo of the trained agent ``args.agent``.
+
+    Raises:
+        UserError: no such run or shipped agent, a run this version cannot load, or an ``--env`` or ``--robot``
+            other than the agent's.
+    """
+    from clutter_gym.training import load
+    from clutter_gym.training.run_dir import IncompatibleRunError
+
+    with user_errors(FileNotFoundError, ValueError, IncompatibleRunError):
+        agent = load(args.agent)
+    env_id = agent.config.env_id
+    if args.env not in (None, env_id):
+        raise UserError(f"--env {args.env}: the agent {args.agent} drives {env_id}; leave --env out")
+    if args.robot:
+        raise UserError(f"--robot: the agent {args.agent} drives the robot it was trained on; leave --robot out")
+    with user_errors(ValueError):
+        env = agent.make_env(noise=args.noise, render_mode="rgb_array")
+    return env_id, env, lambda env: _AgentPolicy(agent), f"trained agent {args.agent}", DEMOS[env_id].focus
 
 
 def _print_demo(summary: dict) -> None:
@@ -152,14 +192,19 @@ def build_parser() -> argparse.ArgumentParser:
     parser = Parser(prog="clutter-gym", description="Robots in cluttered worlds: a scripted demo, the noise "
                     "profiles, and PPO training, evaluation, sim-to-real sweeps and the main job's report.")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    p = sub.add_parser("demo", help="roll out a scripted policy, write an episode GIF and print a summary",
+    p = sub.add_parser("demo", help="roll out a scripted policy (or a trained agent), write an episode GIF and print "
+                                    "a summary",
                        description="Roll out a scripted policy (ClutterNav: a potential field; ClutterReach: a "
                                    "joint-space planner on the known layout and a path tracker; ClutterFly: a "
                                    "position controller on the planned path), write an episode GIF of the rgb_array "
                                    "frames (robot and goal ringed, the robot's trail drawn) and print a summary. "
                                    "Without --seed it shows the first layout the policy has a plan for, and says "
-                                   "which it skipped and why.")
-    p.add_argument("--env", choices=DEMO_ENVS, default="ClutterNav-v1", help="env id")
+                                   "which it skipped and why. --agent shows a trained agent instead (a run folder, "
+                                   "or pretrained/NAME for one shipped with the package).")
+    p.add_argument("--env", choices=DEMO_ENVS, default=None, help=f"env id (default {DEFAULT_DEMO}, or the agent's)")
+    p.add_argument("--agent", default=None, metavar="RUN",
+                   help="show a trained agent instead of the scripted policy: a run folder, or pretrained/NAME, an "
+                        "agent shipped with the package (needs the training extra)")
     p.add_argument("--seed", type=int, default=None,
                    help="reset seed (the layout); default: the first from 0 on whose layout the scripted policy has "
                         "a plan")
@@ -212,7 +257,11 @@ def _run(argv: list[str] | None) -> int:
 def _dispatch(parser: argparse.ArgumentParser, args: argparse.Namespace) -> int:
     if args.command == "demo":
         try:
+            if args.agent:
+                require_train_extra("demo --agent")
             summary = demo(args)
+        except DependencyNotInstalled as exc:
+            parser.exit(1, f"clutter-gym demo: error: {exc}\n")
         except UserError as exc:
             parser.exit(2, f"clutter-gym demo: error: {exc}\n")
         if args.json:

@@ -72,7 +72,8 @@ def test_the_envs_and_the_scripted_baselines_import_and_make(bare):
     assert result.returncode == 0, result.stderr
 
 
-@pytest.mark.parametrize("args", [["train", "--timesteps", "64"], ["eval", "runs/x"], ["sweep"], ["report"]])
+@pytest.mark.parametrize("args", [["train", "--timesteps", "64"], ["eval", "runs/x"], ["sweep"], ["report"],
+                                  ["demo", "--agent", "pretrained/ClutterNav-v1"]])
 def test_training_commands_name_the_extra_in_one_line(bare, tmp_path, args):
     result = _run(bare, bare / "clutter-gym", *args, cwd=tmp_path)
     lines = result.stderr.strip().splitlines()

@@ -49,6 +49,9 @@ def test_wheel_carries_the_assets(tmp_path):
     assert "clutter_gym/collision/checker.py" in names
     assert "clutter_gym/noise/profiles.yaml" in names
     assert "clutter_gym/py.typed" in names  # type checkers read the package's hints
+    for name in ("ClutterNav-v1", "ClutterNav-v1-student"):  # the shipped agents, whole
+        for file in ("card.yaml", "config.yaml", "model/model.zip", "model/vecnormalize.npz"):
+            assert f"clutter_gym/training/pretrained/{name}/{file}" in names
     metadata = next(n for n in names if n.endswith(".dist-info/METADATA"))
     assert "License: MIT" in zipfile.ZipFile(wheel).read(metadata).decode()
 

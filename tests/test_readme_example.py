@@ -16,3 +16,11 @@ def test_the_first_example_runs():
     done = subprocess.run([sys.executable, "-c", block + "\nvec.step(vec.action_space.sample())\nvec.close()\n"],
                           capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr[-3000:]
+
+
+def test_the_agent_example_runs_on_a_shipped_agent():
+    block = re.findall(r"```python\n(.*?)```", README.read_text(), re.S)[1]
+    assert 'load("pretrained/' in block  # runs without training first
+    done = subprocess.run([sys.executable, "-c", block], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert done.stdout.split()[0] in ("True", "False")

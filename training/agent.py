@@ -38,6 +38,7 @@ from clutter_gym.training.memory import frame_space, push_frame
 from clutter_gym.training.normalizer import NORMALIZER_FILE, detached, normalizer_path
 from clutter_gym.training.policy_file import load_ppo
 from clutter_gym.training.residual import policy_action_space, residual_map, subgoal_pursuit
+from clutter_gym.training.pretrained import resolve_run
 from clutter_gym.training.run_dir import MODEL_FILE, IncompatibleRunError, RunDir
 from clutter_gym.training.scan_memory import ScanMemory, memory_for
 
@@ -237,14 +238,15 @@ def load(run_dir: str | Path, step: int | None = None, trust_pickle: bool = Fals
     """Load a trained run as an :class:`Agent`, unpickling nothing (docs/training.md, "Loading runs from others").
 
     Args:
-        run_dir: a run folder written by ``clutter-gym train`` (or by the main job: ``out/main/run``).
+        run_dir: a run folder written by ``clutter-gym train`` (or by the main job: ``out/main/run``), or
+            ``pretrained/NAME``, an agent shipped with the package (:mod:`clutter_gym.training.pretrained`).
         step: load the checkpoint of this step; None loads the final model, or the newest checkpoint of a
             run that has not finished.
         trust_pickle: read the normalisation statistics of a run written by clutter-gym 0.1, which kept them in
             a pickle (``vecnormalize.pkl``); a pickle can run any code its author put in it.
 
     Raises:
-        FileNotFoundError: no run, model or checkpoint there (the message lists the checkpoints there are), or
+        FileNotFoundError: no run, model or checkpoint there, or no shipped agent of that name (the message lists the checkpoints there are), or
             the normalisation statistics of a run trained with ``normalize_obs`` are missing.
         UntrustedFileError: the statistics are in a pickle and ``trust_pickle`` is False.
         ValueError: the statistics are not what the run's config and its env's observations make (the message
@@ -252,7 +254,7 @@ def load(run_dir: str | Path, step: int | None = None, trust_pickle: bool = Fals
         IncompatibleRunError: a run this version of clutter-gym cannot rebuild; the message names the
             version that wrote it.
     """
-    run = RunDir(run_dir)
+    run = RunDir(resolve_run(run_dir))
     config = run.read_config()
     if step is None:
         folder = run.policy_folder()
