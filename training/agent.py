@@ -37,8 +37,8 @@ from clutter_gym.training.config import TrainConfig, deep_merge
 from clutter_gym.training.memory import frame_space, push_frame
 from clutter_gym.training.normalizer import NORMALIZER_FILE, detached, normalizer_path
 from clutter_gym.training.policy_file import load_ppo
-from clutter_gym.training.residual import policy_action_space, residual_map, subgoal_pursuit
 from clutter_gym.training.pretrained import resolve_run
+from clutter_gym.training.residual import policy_action_space, residual_map, subgoal_pursuit
 from clutter_gym.training.run_dir import MODEL_FILE, IncompatibleRunError, RunDir
 from clutter_gym.training.scan_memory import ScanMemory, memory_for
 
@@ -246,8 +246,9 @@ def load(run_dir: str | Path, step: int | None = None, trust_pickle: bool = Fals
             a pickle (``vecnormalize.pkl``); a pickle can run any code its author put in it.
 
     Raises:
-        FileNotFoundError: no run, model or checkpoint there, or no shipped agent of that name (the message lists the checkpoints there are), or
-            the normalisation statistics of a run trained with ``normalize_obs`` are missing.
+        FileNotFoundError: no run, model or checkpoint there (the message lists the checkpoints there are), no
+            shipped agent of that name, or the normalisation statistics of a run trained with ``normalize_obs`` are
+            missing.
         UntrustedFileError: the statistics are in a pickle and ``trust_pickle`` is False.
         ValueError: the statistics are not what the run's config and its env's observations make (the message
             names the file and the setting or statistic: :mod:`clutter_gym.training.statistics_file`).

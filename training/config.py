@@ -205,8 +205,8 @@ class TrainConfig:
         _check_range("residual_gain", self.residual_gain, 0.0, 1000.0)
         self.teacher.check(self.env_id)
         if self.teacher.name and self.env_kwargs.get("subgoal_lookahead"):
-            raise ValueError("env_kwargs.subgoal_lookahead must be 0 for a student distilled from a teacher: its policy "
-                             "reads no planner subgoal (the teacher's comes with teacher.env_kwargs), got "
+            raise ValueError("env_kwargs.subgoal_lookahead must be 0 for a student distilled from a teacher: its "
+                             "policy reads no planner subgoal (the teacher's comes with teacher.env_kwargs), got "
                              f"{short_repr(self.env_kwargs['subgoal_lookahead'])}")
         if self.critic_inputs and not self.teacher.name:
             raise ValueError("critic_inputs needs a teacher (its env gives the privileged entries)")

@@ -225,7 +225,8 @@ def test_a_velocity_residual_steers_the_flyer_it_does_not_fly_it(make_env):
     np.testing.assert_allclose(env.act(batch, np.stack([sideways, sideways]))[1], env.act(obs, sideways), atol=1e-7)
     with pytest.raises(ValueError, match="'velocity' is ClutterFly-v1's"):
         subgoal_pursuit("ClutterNav-v1", 1.5, make_env("ClutterNav-v1", sensors=["lidar"]), space="velocity")
-    with pytest.raises(ValueError, match=r"residual_space must be one of \('action', 'velocity', 'waypoint'\), got 'speed'"):
+    with pytest.raises(ValueError,
+                       match=r"residual_space must be one of \('action', 'velocity', 'waypoint'\), got 'speed'"):
         subgoal_pursuit("ClutterFly-v1", 1.5, space="speed")
     with pytest.raises(ValueError, match="residual_space 'velocity' is ClutterFly-v1's"):
         config_for("ClutterNav-v1", {"residual_space": "velocity", "residual_gain": 1.5})
