@@ -56,20 +56,32 @@ class _Known:
         return True
 
 
-class SeenMapNavigator(PlannerNavigator):
-    """ClutterNav-v1's planner reference (committed, as its student's teacher) on the obstacles the LIDAR has hit."""
+class _OnWhatIsKnown:
+    """What the seen-map teachers share: the env, the planner's lookahead, the obstacles known so far and the
+    path planned on them (replanned when they change)."""
 
-    def __init__(self, env: gym.Env, commit: float, keep: bool, waypoint: bool = False) -> None:
-        super().__init__(env, commit, waypoint)
-        self.env = env.unwrapped
-        lidar = _lidar(env, 1)
-        self.angles, self.max_range = np.asarray(lidar.config.angles), float(lidar.config.max_range)
+    def _know(self, env: gym.Env, keep: bool) -> None:
+        self.env: Any = env.unwrapped
         self.lookahead = float(self.env.task.subgoal_lookahead)
         self.known = _Known(keep)
         self._path: Any = None
 
     def reset(self) -> None:
         self.known.reset()
+
+    def _replan(self, gaps: np.ndarray) -> bool:
+        """Takes this scan's ``gaps`` (points x obstacles); True when the path must be planned again."""
+        return self.known.update(gaps) or self._path is None
+
+
+class SeenMapNavigator(_OnWhatIsKnown, PlannerNavigator):
+    """ClutterNav-v1's planner reference (committed, as its student's teacher) on the obstacles the LIDAR has hit."""
+
+    def __init__(self, env: gym.Env, commit: float, keep: bool, waypoint: bool = False) -> None:
+        super().__init__(env, commit, waypoint)
+        self._know(env, keep)
+        lidar = _lidar(env, 1)
+        self.angles, self.max_range = np.asarray(lidar.config.angles), float(lidar.config.max_range)
 
     def __call__(self, obs: dict[str, np.ndarray], info: dict[str, Any]) -> np.ndarray:
         from clutter_gym.tasks.navigate import SUBGOAL_PLAN_MARGIN, polar
@@ -85,7 +97,7 @@ class SeenMapNavigator(PlannerNavigator):
         points = np.stack([x + ranges[hit] * np.cos(angle), y + ranges[hit] * np.sin(angle)], axis=1)
         obstacles = env.scene.obstacles
         gaps = np.stack([_footprint_distance(points, o) for o in obstacles], axis=1) if obstacles else np.zeros((0, 0))
-        if self.known.update(gaps) or self._path is None:
+        if self._replan(gaps):
             scene = env.scene
             layout = Scene(tuple(obstacles[i] for i in sorted(self.known.seen)), scene.start, scene.goal)
             self._path = PathDistance(layout, env.task.spec, env.task.robot_radius, plan_margin=SUBGOAL_PLAN_MARGIN)
@@ -103,12 +115,12 @@ def _footprint_distance(points: np.ndarray, obstacle: Any) -> np.ndarray:
     return np.linalg.norm(np.maximum(np.abs(local) - 0.5 * np.asarray(obstacle.size[:2]), 0.0), axis=1)
 
 
-class SeenMapFlyer(PlannerFlyer):
+class SeenMapFlyer(_OnWhatIsKnown, PlannerFlyer):
     """ClutterFly-v1's planner reference on the obstacles its LIDAR has hit."""
 
     def __init__(self, env: gym.Env, keep: bool, waypoint: bool = False) -> None:
         super().__init__(env, waypoint)
-        self.env = env.unwrapped
+        self._know(env, keep)
         lidar = _lidar(env, None)
         c = lidar.config
         azimuth = np.broadcast_to(c.angles, c.shape).reshape(-1)
@@ -116,12 +128,6 @@ class SeenMapFlyer(PlannerFlyer):
         self.directions = np.stack([np.cos(elevation) * np.cos(azimuth), np.cos(elevation) * np.sin(azimuth),
                                     np.sin(elevation)], axis=1)
         self.link, self.max_range = c.link, float(c.max_range)
-        self.lookahead = float(self.env.task.subgoal_lookahead)
-        self.known = _Known(keep)
-        self._path: Any = None
-
-    def reset(self) -> None:
-        self.known.reset()
 
     def __call__(self, obs: dict[str, np.ndarray], info: dict[str, Any]) -> np.ndarray:
         from clutter_gym.worlds.volume.path import VolumePathDistance
@@ -135,7 +141,7 @@ class SeenMapFlyer(PlannerFlyer):
         points = state.links.position[row] + (self.directions[hit] * ranges[hit, None]) @ state.links.rotation[row].T
         obstacles = env.scene.obstacles
         gaps = np.array([[o.distance3d(p) for o in obstacles] for p in points]).reshape(len(points), len(obstacles))
-        if self.known.update(gaps) or self._path is None:
+        if self._replan(gaps):
             scene = env.scene
             layout = VolumeScene(tuple(obstacles[i] for i in sorted(self.known.seen)), scene.start, scene.goal)
             self._path = VolumePathDistance(layout, env.task.spec, env.task.robot_radius)
