@@ -1,8 +1,9 @@
 """How much of a privileged teacher a sensor-reading student could match: each teacher drives the student's env
-(its shipped ``sensors`` settings) on the held-out layouts, when it plans on the whole layout (``planner``), on
-the obstacles its LIDAR has hit this episode (``seen-map``: what a student with a memory could know), or on the
-hits of its current scan alone (``in-range``: what a memoryless student sees). The gap between the last two rows
-and the first is the part of the student-teacher gap that no imitation can close without memory, or at all.
+(its shipped ``sensors`` settings, through the student's action interface, its continuous labels unbinned) on the
+held-out layouts, when it plans on the whole layout (``planner``), on the obstacles its LIDAR has hit this
+episode (``seen-map``: what a student with a memory could know), or on the hits of its current scan alone
+(``in-range``: what a memoryless student sees). The gap between the last two rows and the first is the part of the
+student-teacher gap that no imitation can close without memory, or at all.
 
     python -m benchmarks.learning.teacher_realisability --env ClutterNav-v1 --episodes 100
     python -m benchmarks.learning.teacher_realisability --env ClutterFly-v1 --episodes 50 --levels 0.05
@@ -20,6 +21,7 @@ import clutter_gym  # noqa: F401  (registers the envs)
 from benchmarks.harness import table_header
 from clutter_gym.training.config import EVAL_SEED, config_for, read_hyperparams_file, user_settings
 from clutter_gym.training.evaluate import rollouts, summarize
+from clutter_gym.training.residual import SubgoalResidual
 from clutter_gym.training.teachers import TEACHERS, TeacherLabels, make_teacher
 
 LEVELS = {"ClutterNav-v1": ("obstacle_density", (0.05, 0.12, 0.2)), "ClutterFly-v1": ("obstacle_density", (0.05,)),
@@ -31,7 +33,9 @@ def drive(env_id: str, teacher: str, level: tuple[str, float], episodes: int, no
     config = config_for(env_id, user_settings(read_hyperparams_file("sensors"), env_id))
     kwargs = {**config.make_kwargs(noise), level[0]: level[1], **TEACHERS[env_id][teacher]}
     env = gym.make(env_id, **kwargs)
-    labelled = TeacherLabels(env, make_teacher(env_id, teacher, env), teacher_share=1.0)
+    if config.uses_base:  # the student's interface: a waypoint the pursuit follows, or the flyer's velocity
+        env = SubgoalResidual(env, config.residual_gain, config.residual_space, config.residual_base)
+    labelled = TeacherLabels(env, make_teacher(env_id, teacher, env, config.residual_space), teacher_share=1.0)
     idle = np.zeros(env.action_space.shape, dtype=np.float32)  # ignored: the teacher drives every episode
     try:
         rows = rollouts(labelled, lambda obs, state: (idle, state), episodes, EVAL_SEED)

@@ -3,6 +3,8 @@ learns a known teacher, the privileged critic's split, and a loaded student that
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 import torch as th
@@ -199,3 +201,15 @@ def test_the_seen_map_teacher_knows_more_as_it_sees_more_and_the_in_range_one_on
     assert known["seen-map"] == sorted(known["seen-map"]) and known["seen-map"][-1] > known["seen-map"][0]
     assert all(s <= k for s, k in zip(known["in-range"], known["seen-map"]))
     assert known["in-range"] != sorted(known["in-range"])  # obstacles leave the last scan as the robot moves
+
+
+@pytest.mark.parametrize("env_id", ["ClutterNav-v1", "ClutterFly-v1"])
+def test_the_realisability_benchmark_drives_each_env_through_its_students_interface(env_id):
+    """The teacher drives the shipped student's env as the student acts on it (ClutterNav: a waypoint the pursuit
+    follows; ClutterFly: the flyer's velocity), so its success bounds what imitation of it can reach."""
+    from helpers import run_benchmark
+
+    done = run_benchmark("benchmarks.learning.teacher_realisability", "--env", env_id, "--episodes", "1",
+                         "--teachers", "planner", "--levels", "0.05")
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert re.search(r"^\| planner \| \d+% \[\d+%, \d+%\] / \d+% \|$", done.stdout, re.M), done.stdout
