@@ -31,8 +31,10 @@ SMALL = ["--n-envs", "2", "--checkpoint-every", "100000", "--final-eval-episodes
 def interrupt_once_training(command: list, run: Path, timeout: float = 300) -> tuple[int, str]:
     """Start ``command``, send SIGINT to its process group once ``run`` has logged a training episode; its exit
     status and its stdout and stderr together."""
+    # A shell's background job (`cmd &`, nohup) starts with SIGINT ignored, which its children inherit and Python
+    # keeps: the run would never see the Ctrl-C. A terminal's foreground job, which this imitates, does not ignore it.
     proc = subprocess.Popen([str(a) for a in command], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            start_new_session=True)
+                            start_new_session=True, preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     try:
         deadline = time.monotonic() + timeout
         while not RunDir(run).read_episodes():
