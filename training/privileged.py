@@ -184,5 +184,5 @@ class DistilledPPO(PPO):
                 loss.backward()
                 th.nn.utils.clip_grad_norm_(self.policy.parameters(), self.max_grad_norm)
                 self.policy.optimizer.step()
-                losses.append(float(loss))
+                losses.append(float(loss.detach()))
         self.logger.record("train/teacher_loss", float(np.mean(losses)))
