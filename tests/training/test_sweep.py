@@ -156,3 +156,20 @@ def test_the_summary_shows_the_diagonal_and_what_noisy_training_costs_clean():
                                 seeds=2, timesteps=64, episodes=100)
     assert summary_table([r for r in rows if r["eval_noise"] == "harsh"], clean_eval_only).splitlines()[0] == \
         "| trained under | evaluated under the same profile |"
+
+
+def test_a_sweep_of_students_distils_each_cell_and_evaluates_it_under_every_profile(tmp_path):
+    """The sim-to-real sweep takes the teacher -> student route as it takes PPO: each cell's run distils (its
+    distill.csv has every round) and is evaluated under each profile from the student's own env arguments."""
+    student = {"n_envs": 2, "env_workers": 1, "validate_episodes": 1, "residual_space": "waypoint", "action_bins": 25,
+               "teacher": {"name": "planner"}, "distill": {"rounds": 2, "round_steps": 128, "warmup_steps": 32},
+               "env_kwargs": {"subgoal_lookahead": 0.0, "reverse": False, "obstacle_density": 0.05}}
+    spec = SweepSpec(env_id="ClutterNav-v1", train_noise=("none",), eval_noise=("none", "nominal"), seeds=1,
+                     timesteps=300, episodes=1, n_envs=2, settings=student)
+    result = run_sweep(spec, tmp_path, workers=1)
+    assert result["cells_run"] == 1
+    run = RunDir(cell_dir(tmp_path, "none", 0) / "run")
+    assert [row["round"] for row in run.read_distill_rows()] == [0.0, 1.0]
+    assert run.read_config().teacher.name == "planner" and run.read_config().env_kwargs["subgoal_lookahead"] == 0.0
+    with open(tmp_path / "sweep.csv", newline="") as f:
+        assert sorted(r["eval_noise"] for r in csv.DictReader(f)) == ["nominal", "none"]
