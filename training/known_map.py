@@ -12,7 +12,6 @@ slow to label training data at scale on ClutterFly-v1.
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import gymnasium as gym
@@ -96,23 +95,14 @@ class SeenMapNavigator(_OnWhatIsKnown, PlannerNavigator):
         angle = self.angles[hit] + yaw
         points = np.stack([x + ranges[hit] * np.cos(angle), y + ranges[hit] * np.sin(angle)], axis=1)
         obstacles = env.scene.obstacles
-        gaps = np.stack([_footprint_distance(points, o) for o in obstacles], axis=1) if obstacles else np.zeros((0, 0))
+        gaps = (np.stack([np.maximum(o.distance(points[:, 0], points[:, 1]), 0.0) for o in obstacles], axis=1)
+                if obstacles else np.zeros((0, 0)))
         if self._replan(gaps):
             scene = env.scene
             layout = Scene(tuple(obstacles[i] for i in sorted(self.known.seen)), scene.start, scene.goal)
             self._path = PathDistance(layout, env.task.spec, env.task.robot_radius, plan_margin=SUBGOAL_PLAN_MARGIN)
         point = self._path.waypoint(x, y, lookahead=self.lookahead)
         return self._answer({**obs, "subgoal": polar(point, x, y, yaw, self.lookahead)})
-
-
-def _footprint_distance(points: np.ndarray, obstacle: Any) -> np.ndarray:
-    """(m,) distance from each of ``points`` (m, 2) to ``obstacle``'s footprint, metres (0 inside)."""
-    offset = points - np.asarray(obstacle.position[:2], dtype=float)
-    if obstacle.shape == "cylinder":
-        return np.maximum(np.linalg.norm(offset, axis=1) - obstacle.radius, 0.0)
-    c, s = math.cos(obstacle.yaw), math.sin(obstacle.yaw)
-    local = np.stack([c * offset[:, 0] + s * offset[:, 1], -s * offset[:, 0] + c * offset[:, 1]], axis=1)
-    return np.linalg.norm(np.maximum(np.abs(local) - 0.5 * np.asarray(obstacle.size[:2]), 0.0), axis=1)
 
 
 class SeenMapFlyer(_OnWhatIsKnown, PlannerFlyer):
