@@ -20,6 +20,7 @@ from typing import Any
 from clutter_gym import ENV_IDS
 from clutter_gym.noise.profiles import PROFILE_NAMES
 from clutter_gym.training.config import EVAL_SEED, PPOHyperparams, deep_merge
+from clutter_gym.training.sweep import MIX
 from clutter_gym.util.checks import short_repr
 from clutter_gym.util.safe_yaml import load_yaml
 
@@ -74,6 +75,20 @@ def profile_list(text: str) -> list[str]:
     bad = [n for n in names if n not in PROFILE_NAMES]
     if not names or bad:
         raise argparse.ArgumentTypeError(f"must be a comma-separated list of {PROFILE_NAMES}, got {text!r}")
+    return names
+
+
+def train_profile_list(text: str) -> list[str]:
+    """:func:`profile_list` where an entry may be a mix of distinct profiles, such as ``none+nominal``."""
+    names = [t.strip() for t in text.split(",") if t.strip()]
+    for name in names:
+        parts = name.split(MIX)
+        if len(set(parts)) != len(parts) or not all(part in PROFILE_NAMES for part in parts):
+            raise argparse.ArgumentTypeError(
+                f"must be a comma-separated list of {PROFILE_NAMES}, or of mixes of distinct ones joined by "
+                f"{MIX!r} (none{MIX}nominal), got {text!r}")
+    if not names:
+        raise argparse.ArgumentTypeError(f"must name at least one profile of {PROFILE_NAMES}, got {text!r}")
     return names
 
 
@@ -222,8 +237,8 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
                        description="Train under each --train-noise profile and seed, evaluate every run under "
                                    "each --eval-noise profile; write sweep.csv and heatmap.png.")
     p.add_argument("--env", choices=ENV_IDS, default="ClutterNav-v1", help="env id")
-    p.add_argument("--train-noise", type=profile_list, default=["none", "nominal"],
-                   help="comma-separated profiles to train under")
+    p.add_argument("--train-noise", type=train_profile_list, default=["none", "nominal"],
+                   help="comma-separated profiles to train under; a+b trains a share of the envs under each")
     p.add_argument("--eval-noise", type=profile_list, default=["none", "nominal", "harsh"],
                    help="comma-separated profiles to evaluate every run under")
     p.add_argument("--seeds", type=positive_int, default=2, help="training seeds per train profile (0..N-1)")

@@ -9,6 +9,7 @@ env is built, naming the field.
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import asdict, dataclass, field, fields
 from importlib import resources
@@ -126,11 +127,12 @@ class TrainConfig:
         train_layouts: 0: every training reset samples a new layout; N > 0: the training envs share out N
             fixed layouts (``ceil(N / n_envs)`` each; see :mod:`clutter_gym.training.layout_pool`), so per-layout
             work such as the ClutterReach subgoal's plan is done once. Validation and evaluation are unaffected.
-        train_env_mix: a training device: ``{argument: [v0, v1, ...]}`` gives env ``i`` of the training vector
-            the ``i mod n``-th value of each listed ``gym.make`` argument on top of ``env_kwargs`` (for instance
+        train_env_mix: a training device: ``{argument: [v0, v1, ...]}`` gives the training envs the listed
+            values of each ``gym.make`` argument on top of ``env_kwargs`` (for instance
             ``{obstacle_density: [0.05, 0.12, 0.2]}`` trains over three clutter levels; ``noise`` takes profile
-            names, with the run's noise-section overrides on each). Validation, evaluation and ``load()`` use
-            ``env_kwargs`` and ``noise`` alone.
+            names, with the run's noise-section overrides on each). With several arguments, env ``i`` takes the
+            ``i mod n``-th of their ``n`` combinations, so that no value is tied to another. Validation,
+            evaluation and ``load()`` use ``env_kwargs`` and ``noise`` alone.
         residual_gain: 0: the policy's action is the env's; g > 0: the env's action is
             ``clip(pursuit(obs) + policy action, -1, 1)``, a residual policy on a base controller with gain g
             (ClutterNav-v1's potential field on the goal, or ClutterReach-v1's and ClutterFly-v1's pursuit of the
@@ -241,7 +243,8 @@ class TrainConfig:
     def train_kwargs(self, index: int) -> dict[str, Any]:
         """``gym.make`` keyword arguments of training env ``index``: :meth:`make_kwargs` with its share of
         ``train_env_mix``."""
-        mixed = {key: values[index % len(values)] for key, values in self.train_env_mix.items()}
+        combinations = list(itertools.product(*self.train_env_mix.values()))
+        mixed = dict(zip(self.train_env_mix, combinations[index % len(combinations)]))
         return {**self.make_kwargs(noise=mixed.pop("noise", None)), **mixed}
 
     @property

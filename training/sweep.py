@@ -36,13 +36,16 @@ from clutter_gym.util.checks import short_repr
 from clutter_gym.util.safe_yaml import read_yaml
 
 
+MIX = "+"  # joins the profiles of a mixed train profile, as in "none+nominal+low-cost"
+
+
 @dataclass(frozen=True)
 class SweepSpec:
     """What a sweep trains and evaluates.
 
     Attributes:
         env_id: env to train on.
-        train_noise: profiles to train under.
+        train_noise: profiles to train under; ``"a+b"`` trains a share of the envs under each of a and b.
         eval_noise: profiles to evaluate every run under.
         seeds: training seeds 0..seeds-1 per train profile.
         timesteps: env steps per training run (None: the env's ppo.yml value).
@@ -65,7 +68,12 @@ class SweepSpec:
         return [(noise, seed) for noise in self.train_noise for seed in range(self.seeds)]
 
     def cell_config(self, train_noise: str, seed: int) -> TrainConfig:
-        overrides: dict[str, Any] = {"seed": seed, "noise": train_noise, "final_eval_episodes": 0}
+        """A cell's training config. A train profile ``"a+b+..."`` is a mix: a share of the training envs under
+        each profile (``train_env_mix``), validations under the first."""
+        profiles = train_noise.split(MIX)
+        overrides: dict[str, Any] = {"seed": seed, "noise": profiles[0], "final_eval_episodes": 0}
+        if len(profiles) > 1:
+            overrides["train_env_mix"] = {"noise": profiles}
         for key in ("timesteps", "n_envs"):
             if getattr(self, key) is not None:
                 overrides[key] = getattr(self, key)

@@ -173,3 +173,27 @@ def test_a_sweep_of_students_distils_each_cell_and_evaluates_it_under_every_prof
     assert run.read_config().teacher.name == "planner" and run.read_config().env_kwargs["subgoal_lookahead"] == 0.0
     with open(tmp_path / "sweep.csv", newline="") as f:
         assert sorted(r["eval_noise"] for r in csv.DictReader(f)) == ["nominal", "none"]
+
+
+def test_a_mixed_train_profile_trains_a_share_of_the_envs_under_each_profile_and_keeps_the_run_s_own_mix():
+    """``none+nominal``: the robust cell. The students' density mix stays; the profiles combine with it."""
+    spec = SweepSpec(env_id="ClutterNav-v1", train_noise=("none", "none+low-cost"), eval_noise=("none",), seeds=1,
+                     timesteps=64, episodes=1, n_envs=6,
+                     settings={"train_env_mix": {"obstacle_density": [0.05, 0.2]}})
+    config = spec.cell_config("none+low-cost", 0)
+    assert config.noise == "none"
+    assert config.train_env_mix == {"obstacle_density": [0.05, 0.2], "noise": ["none", "low-cost"]}
+    assert {(config.train_kwargs(i)["obstacle_density"], config.train_kwargs(i)["noise"])
+            for i in range(4)} == {(0.05, "none"), (0.05, "low-cost"), (0.2, "none"), (0.2, "low-cost")}
+    assert spec.cell_config("none", 0).train_env_mix == {"obstacle_density": [0.05, 0.2]}
+
+
+@pytest.mark.parametrize("text", ["none+none", "none+loud", "+nominal", "none,,harsh+"])
+def test_the_sweep_command_refuses_a_mix_it_cannot_train(text):
+    import argparse
+
+    from clutter_gym.training.commands import train_profile_list
+
+    with pytest.raises(argparse.ArgumentTypeError, match="mixes of distinct ones"):
+        train_profile_list(text)
+    assert train_profile_list("none, none+nominal+low-cost") == ["none", "none+nominal+low-cost"]

@@ -121,6 +121,16 @@ def test_a_training_mix_gives_each_training_env_its_share_and_leaves_evaluation_
     assert TrainConfig.from_dict(config.to_dict()) == config
 
 
+def test_a_mix_of_two_arguments_gives_the_envs_every_combination_not_pairs_tied_by_index():
+    """Three densities and three profiles: pairing values by index would train 0.05 only clean and 0.2 only under
+    low-cost; the nine combinations go to envs 0..8 and start over at env 9."""
+    config = config_for("ClutterNav-v1", {"n_envs": 16, "train_env_mix": {
+        "obstacle_density": [0.05, 0.12, 0.2], "noise": ["none", "nominal", "low-cost"]}})
+    pairs = [(config.train_kwargs(i)["obstacle_density"], config.train_kwargs(i)["noise"])
+             for i in range(16)]
+    assert len(set(pairs[:9])) == 9 and pairs[9:] == pairs[:7]
+
+
 def test_a_noise_mix_gives_each_training_env_its_profile_and_validation_the_run_s():
     config = config_for("ClutterFly-v1", {"noise": "harsh", "train_env_mix": {"noise": ["none", "harsh"]},
                                           "env_kwargs": {"noise": {"imu": {"latency_steps": 1}}}})
