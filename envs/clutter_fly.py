@@ -110,7 +110,8 @@ class ClutterFlyEnv(ClutterEnv):
 
     ## Info
 
-    ``reward_terms``, ``cost``, ``is_success``, ``min_clearance`` (m, FCL, negative = penetration, capped at
+    ``reward_terms``, ``cost`` and its causes ``cost_<cause>`` (docs/envs.md, "Costs by cause"),
+    ``is_success``, ``min_clearance`` (m, FCL, negative = penetration, capped at
     1 m or ``clearance_margin``, whichever is larger), ``closest_pair``, ``witness_points``, ``n_contacts``, ``max_penetration`` (m),
     ``self_collision`` (always None: the airframe is rigid), ``tunneling`` (swept hits), ``pybullet_contacts`` and
     ``contact_disagreement``, ``lidar_ranges`` (m, with ``"lidar"``), ``noise_profile`` (at reset).
@@ -152,7 +153,10 @@ class ClutterFlyEnv(ClutterEnv):
 
     ## Version history
 
-    * v0: initial release.
+    * v1 (clutter-gym 0.3.0): the exact LIDAR caster by default (readings differ from v0's by under a
+      millimetre); the swept audit follows rotation (``info["tunneling"]``, and the rewards and costs of the steps
+      whose flag changed).
+    * v0 (clutter-gym 0.1.0-0.2.0): initial release.
     """
 
     def __init__(

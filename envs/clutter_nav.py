@@ -58,7 +58,7 @@ class ClutterNavEnv(ClutterEnv):
     |---|---|---|---|---|
     | ``lidar`` | (n_rays,) or (lidar_channels, n_rays) | range / lidar_range, beams CCW from the robot's +x, channels bottom up | -, lidar link | [0, 1] |
     | ``imu`` | (6,) | specific force (f_x, f_y, f_z), angular rate (w_x, w_y, w_z) | m/s^2, rad/s; IMU link | +-156.9, +-34.9 |
-    | ``camera_rgb`` | (h, w, 3) uint8 | colour image | -, camera link looking along +x | [0, 255] |
+    | ``camera_rgb`` | (h, w, 3) uint8 | colour image | -, the robot's camera link (diffbot's: on its front edge) looking along its +x | [0, 255] |
     | ``camera_depth`` | (h, w) | depth along the optical axis, 0 = no data | m | [0, camera_far] |
     | ``camera_segmentation`` | (h, w) uint8 | class per pixel: nothing, ground, obstacle, robot, goal | - | [0, 4] |
     | ``goal`` | (3,) or (4,) | distance, sin(bearing), cos(bearing) (and bearing / pi with ``observe_bearing``) | m, -, -, -; robot frame | [0, arena diagonal], [-1, 1] |
@@ -93,7 +93,8 @@ class ClutterNavEnv(ClutterEnv):
 
     ## Info
 
-    ``reward_terms``, ``cost``, ``is_success``, ``min_clearance`` (m, FCL, negative = penetration),
+    ``reward_terms``, ``cost`` and its causes ``cost_<cause>`` (docs/envs.md, "Costs by cause"),
+    ``is_success``, ``min_clearance`` (m, FCL, negative = penetration),
     ``n_contacts`` (FCL link/obstacle pairs within ``contact_tolerance``), ``pybullet_contacts`` (pybullet
     contact points within the same tolerance), ``contact_disagreement`` (exactly one engine sees contact),
     ``lidar_ranges`` (m, as the sensor reports them: noisy, and ``inf`` for no return if the profile says so),
@@ -122,11 +123,12 @@ class ClutterNavEnv(ClutterEnv):
     ("tiny", "egl", or "rays": depth and segmentation only, ray cast against the exact shapes); ``physics_hz`` (a
     multiple of ``control_hz``, at least :data:`MIN_PHYSICS_HZ`); ``control_hz`` (at least ``physics_hz`` / 1000);
     ``solver_iterations``; ``max_linear_speed`` m/s; ``max_angular_speed`` rad/s; ``success_radius`` m;
-    ``clearance_margin`` m; ``terminate_on_collision``; ``contact_tolerance`` m;
+    ``clearance_margin`` m; ``terminate_on_collision``; ``contact_tolerance`` m; ``collision_fidelity`` (one of
+    ``FIDELITY_LEVELS``: docs/collision.md); ``collision_padding`` m;
     ``*_weight`` reward weights; ``subgoal_lookahead`` m (0: off); ``safety_horizon`` s [0, 2] (0: off),
     ``safety_margin`` m [0, 0.5] and ``safety_recovery`` s [0, 10] (0: never) (need a 2D ``lidar`` in
     ``sensors``); ``reverse`` (False: forward driving only, see "Action space"); ``robot`` (a registered wheeled
-    base, ``"diffbot"`` or ``"husky"``, a spec mapping or a YAML spec file: docs/robots.md); ``observe_bearing``
+    base, a spec mapping or a YAML spec file: docs/robots.md); ``observe_bearing``
     (the goal entry ends with the bearing angle / pi, which jumps where the goal is straight behind: from sin and cos
     alone, a continuous policy's turn passes through zero there, and a deterministic one can stop for good);
     ``physics`` ("auto": a user scene that stacks movable obstacles ticks faster with more solver iterations, as
@@ -150,7 +152,12 @@ class ClutterNavEnv(ClutterEnv):
 
     ## Version history
 
-    * v0: initial release; camera sensor, noise profiles, sensor timing, action noise and dynamics randomisation
+    * v1 (clutter-gym 0.3.0): ``physics="auto"`` by default (stacked movable obstacles tick at the rate that
+      holds them); the exact LIDAR caster by default (readings differ from v0's by under a millimetre); the swept
+      audit follows rotation (``info["tunneling"]``, and with it rewards and costs, change on the steps whose flag
+      changed).
+    * v0 (clutter-gym 0.1.0-0.2.0): initial release; camera sensor, noise profiles, sensor timing, action noise and
+      dynamics randomisation
       added without changing the clean defaults. The progress term follows the path distance around the
       clutter instead of the straight-line distance (PPO stalled behind obstacles with the latter). The collision
       monitor (``safety_horizon``) and its recovery spin (``safety_recovery``) added, off by default. Movable

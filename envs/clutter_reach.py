@@ -83,7 +83,8 @@ class ClutterReachEnv(ClutterEnv):
 
     ## Info
 
-    ``reward_terms``, ``cost``, ``is_success``, ``min_clearance`` (m, FCL, negative = penetration, capped at
+    ``reward_terms``, ``cost`` and its causes ``cost_<cause>`` (docs/envs.md, "Costs by cause"),
+    ``is_success``, ``min_clearance`` (m, FCL, negative = penetration, capped at
     ``clearance_range``), ``closest_pair`` ((link, obstacle index) or None), ``witness_points`` ((2, 3) world
     points on the link and the obstacle, or None), ``n_contacts``, ``max_penetration`` (m), ``self_collision``
     ((link, link) or None), ``tunneling`` (swept hits), ``pybullet_contacts`` and ``contact_disagreement``
@@ -91,7 +92,8 @@ class ClutterReachEnv(ClutterEnv):
 
     ## Arguments
 
-    ``robot`` (a registered arm: ``"panda"``; docs/robots.md); ``physics`` ("auto" or "fixed", as ClutterNav-v1's);
+    ``robot`` (a registered arm, a spec mapping or a YAML spec file: docs/robots.md); ``physics`` ("auto" or
+    "fixed", as ClutterNav-v1's);
     ``render_mode``; ``control`` ("joint_velocity", "ee_position"); ``max_joint_speed`` (0, 1];
     ``max_ee_step`` m; ``collision_fidelity`` (one of ``FIDELITY_LEVELS``: docs/collision.md);
     ``collision_padding`` m; ``self_collision``; ``n_obstacles`` [0, 20]; ``movable_obstacles`` fraction [0, 1]
@@ -114,7 +116,10 @@ class ClutterReachEnv(ClutterEnv):
 
     ## Version history
 
-    * v0: initial release; movable obstacles (``movable_obstacles``, a scene's ``mass``) added, off by default.
+    * v1 (clutter-gym 0.3.0): ``physics="auto"`` by default; the swept audit follows rotation
+      (``info["tunneling"]``, and the rewards and costs of the steps whose flag changed).
+    * v0 (clutter-gym 0.1.0-0.2.0): initial release; movable obstacles (``movable_obstacles``, a scene's ``mass``)
+      added, off by default.
     """
 
     def __init__(

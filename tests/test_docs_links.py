@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md")), *sorted((ROOT / "docs" / "envs").glob("*.md"))]
 LINK = re.compile(r"\[[^\]]*\]\(([^)\s]+)\)")
 #: a command that runs a benchmark; placeholders in capitals (``python -m benchmarks.GROUP.NAME``) are not matched
 BENCHMARK = re.compile(r"python3? -m (benchmarks(?:\.[a-z_][a-z0-9_]*)*)")

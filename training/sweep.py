@@ -35,7 +35,6 @@ from clutter_gym.util.atomic import atomic_path, write_text_atomically
 from clutter_gym.util.checks import short_repr
 from clutter_gym.util.safe_yaml import read_yaml
 
-
 MIX = "+"  # joins the profiles of a mixed train profile, as in "none+nominal+low-cost"
 
 
