@@ -226,8 +226,9 @@ class ClutterFlyEnv(ClutterEnv):
         profile = resolve_noise(noise)
         sensor_objects = build_sensors(sensors, profile, lidar, ImuConfig(dt=1.0 / control_hz, link=IMU_LINK), camera)
         task = FlyTask(
-            FlyRewardWeights(progress_weight, success_weight, crash_weight, contact_weight, clearance_weight,
-                             control_weight, attitude_weight, rate_weight),
+            FlyRewardWeights(progress=progress_weight, success=success_weight, crash=crash_weight,
+                             contact=contact_weight, clearance=clearance_weight, control=control_weight,
+                             attitude=attitude_weight, rate=rate_weight),
             spec=spec,
             robot_radius=radius,
             success_radius=success_radius,

@@ -230,8 +230,9 @@ class ClutterNavEnv(ClutterEnv):
         sensor_objects = build_sensors(sensors, profile, lidar, ImuConfig(dt=1.0 / control_hz), camera)
         _check_sensor_links(sensors, base)
         task = NavigateTask(
-            NavRewardWeights(progress_weight, success_weight, contact_weight, clearance_weight, control_weight,
-                             time_weight, reverse_weight),
+            NavRewardWeights(progress=progress_weight, success=success_weight, contact=contact_weight,
+                             clearance=clearance_weight, control=control_weight, time=time_weight,
+                             reverse=reverse_weight),
             success_radius=success_radius,
             clearance_margin=clearance_margin,
             terminate_on_collision=terminate_on_collision,

@@ -174,8 +174,9 @@ class ClutterReachEnv(ClutterEnv):
                                     contact_tolerance, clearance_range, control_hz, self_collision=self_collision,
                                     swept_speed=swept_speed, fixed_links=(arm.base_link, *model.fixed_links))
         task = ReachTask(
-            ReachRewardWeights(progress_weight, success_weight, contact_weight, self_contact_weight, clearance_weight,
-                               tunneling_weight, control_weight),
+            ReachRewardWeights(progress=progress_weight, success=success_weight, contact=contact_weight,
+                               self_contact=self_contact_weight, clearance=clearance_weight,
+                               tunneling=tunneling_weight, control=control_weight),
             ee_row=model.ee_row,
             links=checker.links,
             success_radius=success_radius,

@@ -21,7 +21,7 @@ from clutter_gym.worlds.volume.scene import VolumeScene, boundary_distance
 from clutter_gym.worlds.volume.spec import VolumeSpec
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class FlyRewardWeights:
     """Weights of the reward terms (all in [0, 1e4]; the sign of each term is fixed by its meaning).
 

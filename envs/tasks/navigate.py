@@ -23,7 +23,7 @@ MAX_TILT_COS = 0.5  # the base z axis more than 60 degrees from vertical counts 
 SUBGOAL_PLAN_MARGIN = 0.25
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class NavRewardWeights:
     """Weights of the reward terms (all >= 0; the sign of each term is fixed by its meaning).
 

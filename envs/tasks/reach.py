@@ -26,7 +26,7 @@ SUBGOAL_BOUND = 6.0
 PLAN_CACHE = 1024
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class ReachRewardWeights:
     """Weights of the reward terms (all >= 0; the sign of each term is fixed by its meaning).
 
