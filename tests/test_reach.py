@@ -12,6 +12,7 @@ from helpers import SHELF_SEED
 
 from clutter_gym.collision.fidelity import COARSE_LEVELS, FIDELITY_LEVELS
 from clutter_gym.datatypes import Obstacle
+from clutter_gym.robots.panda import REACH_RADIUS, SHOULDER
 from clutter_gym.training.baselines import ProximityFieldReacher, StraightLineReacher
 from clutter_gym.worlds.table.sample import sample_reach_scene
 from clutter_gym.worlds.table.scene import point_clearance
@@ -72,8 +73,8 @@ def test_coarse_levels_report_the_self_collisions_convex_reports_under_random_co
 
 def test_layouts_have_a_shelf_and_are_seeded():
     spec = TableSpec()
-    a = sample_reach_scene(np.random.default_rng(4), spec, READY)
-    b = sample_reach_scene(np.random.default_rng(4), spec, READY)
+    a = sample_reach_scene(np.random.default_rng(4), spec, READY, SHOULDER, REACH_RADIUS)
+    b = sample_reach_scene(np.random.default_rng(4), spec, READY, SHOULDER, REACH_RADIUS)
     assert a == b and len(a.obstacles) == spec.n_obstacles + 5
     assert any(o.z > 0 for o in a.obstacles)  # the shelf's boards
 

@@ -51,7 +51,7 @@ from clutter_gym.collision import (
 from clutter_gym.collision.distance import signed_distance
 from clutter_gym.datatypes import Obstacle
 from clutter_gym.robots import DiffDriveRobot
-from clutter_gym.robots.panda import READY, PandaArm
+from clutter_gym.robots.panda import REACH_RADIUS, READY, SHOULDER, PandaArm
 from clutter_gym.training.figures import plt, save_figure
 from clutter_gym.util.quiet import quiet_c_output
 from clutter_gym.worlds.floor.arena import arena_walls
@@ -130,7 +130,8 @@ def sample_panda(panda: Robot, rng: np.random.Generator, n_scenes: int, per_scen
         q[:, 7:] = FINGER_OPENING
         return q, None
 
-    scenes = [(*sample_reach_scene(rng, TableSpec(), READY).obstacles, TABLE) for _ in range(n_scenes)]
+    scenes = [(*sample_reach_scene(rng, TableSpec(), READY, SHOULDER, REACH_RADIUS).obstacles, TABLE)
+              for _ in range(n_scenes)]
     return near_configs(panda, scenes, per_scene, draw)
 
 

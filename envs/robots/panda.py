@@ -10,7 +10,6 @@ import numpy as np
 from clutter_gym.robots.arm import Arm, ArmConfig
 from clutter_gym.robots.arm_model import ArmModel
 from clutter_gym.sim import pybullet_data_file
-from clutter_gym.worlds.table.spec import REACH_RADIUS, SHOULDER  # where ClutterReach draws targets for it
 
 ARM_JOINTS = tuple(f"panda_joint{i}" for i in range(1, 8))
 FINGER_JOINTS = ("panda_finger_joint1", "panda_finger_joint2")
@@ -21,6 +20,8 @@ TRACKED_LINKS = (*(f"panda_link{i}" for i in range(1, 8)), "panda_hand", "panda_
                  EE_LINK)
 #: Row of the end-effector link in the state's tracked links.
 EE_ROW = TRACKED_LINKS.index(EE_LINK)
+SHOULDER = np.array([0.0, 0.0, 0.333])  # joint 2's axis above the base, metres
+REACH_RADIUS = 0.8  # metres from the shoulder that the hand reaches: ClutterReach draws targets within it
 HAND_RADIUS = 0.08  # metres about the end effector that take in the fingers and most of the hand
 #: Joint positions of the "ready" pose (hand 0.49 m above the base, pointing down), rad.
 READY = (0.0, -math.pi / 4, 0.0, -3 * math.pi / 4, 0.0, math.pi / 2, math.pi / 4)

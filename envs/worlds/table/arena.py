@@ -12,7 +12,7 @@ from clutter_gym.worlds.pool import ObstaclePool
 from clutter_gym.worlds.pooled_arena import PooledArena
 from clutter_gym.worlds.table.sample import sample_reach_scene
 from clutter_gym.worlds.table.scene import ReachScene, parse_reach_scene
-from clutter_gym.worlds.table.spec import REACH_RADIUS, SHOULDER, TABLE, TableSpec
+from clutter_gym.worlds.table.spec import TABLE, TableSpec
 
 #: The rgb_array view (:meth:`TabletopArena.render_camera`), world frame, metres.
 VIEW_EYE, VIEW_TARGET = (1.1, -0.8, 0.8), (0.3, 0.0, 0.3)
@@ -30,7 +30,7 @@ class TabletopArena(PooledArena[ReachScene]):
     """
 
     def __init__(self, spec: TableSpec, ready: Sequence[float], lower: np.ndarray, upper: np.ndarray,
-                 shoulder: np.ndarray | Sequence[float] = SHOULDER, reach: float = REACH_RADIUS) -> None:
+                 shoulder: np.ndarray | Sequence[float], reach: float) -> None:
         self.spec = spec
         self.ready = tuple(ready)
         self._lower, self._upper = lower, upper

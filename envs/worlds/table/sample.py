@@ -11,7 +11,7 @@ import numpy as np
 from clutter_gym.datatypes import Obstacle
 from clutter_gym.worlds.sampling import polyline_distances, with_masses
 from clutter_gym.worlds.table.scene import ReachScene, point_clearance
-from clutter_gym.worlds.table.spec import REACH_RADIUS, SHOULDER, TableSpec
+from clutter_gym.worlds.table.spec import TableSpec
 
 ARM_KEEP_OUT = 0.15  # generated obstacles keep this far from the vertical plane of the start pose's arm, metres
 
@@ -35,9 +35,9 @@ def shelf_parts(centre: tuple[float, float], yaw: float, width: float = 0.4, dep
 
 
 def sample_reach_scene(rng: np.random.Generator, spec: TableSpec, ready: Sequence[float],
-                       shoulder: Sequence[float] = SHOULDER, reach: float = REACH_RADIUS) -> ReachScene:
+                       shoulder: Sequence[float], reach: float) -> ReachScene:
     """A seeded layout: shelf, clutter clear of the start pose's arm, start pose and a target within ``reach``
-    metres of ``shoulder`` (the Panda's by default)."""
+    metres of ``shoulder`` (the arm's: its model's ``shoulder`` and ``reach``)."""
     obstacles: list[Obstacle] = []
     footprints: list[tuple[np.ndarray, float]] = []  # (centre, radius) of every placed footprint
     arm = np.array([[0.0, 0.0], [0.45, 0.0]])

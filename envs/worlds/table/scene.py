@@ -14,7 +14,6 @@ import numpy as np
 
 from clutter_gym.datatypes import Obstacle
 from clutter_gym.worlds.parsing import check_scene_keys, parse_numbers, parse_obstacles
-from clutter_gym.worlds.table.spec import REACH_RADIUS, SHOULDER
 
 TABLE_LIMIT = 0.8  # |x|, |y| of user obstacles and targets, metres
 
@@ -39,7 +38,7 @@ def point_clearance(point: np.ndarray, obstacles: Sequence[Obstacle]) -> float:
 
 
 def parse_reach_scene(spec: Any, n_joints: int, lower: np.ndarray, upper: np.ndarray,
-                      shoulder: Sequence[float] = SHOULDER, reach: float = REACH_RADIUS) -> ReachScene:
+                      shoulder: Sequence[float], reach: float) -> ReachScene:
     """Validate a user scene (``reset(options={"scene": ...})``): obstacles, start joint positions, target.
 
     Raises:

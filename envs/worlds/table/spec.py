@@ -10,15 +10,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numpy as np
-
 from clutter_gym.datatypes import Obstacle
 from clutter_gym.util.checks import check_fraction, check_integer
 
 TABLE_GAP = 0.005
 TABLE = Obstacle("box", (1.6, 1.8, 0.05), (0.4, 0.0), 0.0, -0.05 - TABLE_GAP)
-REACH_RADIUS = 0.8  # metres from the shoulder (0, 0, 0.333) within which targets are drawn
-SHOULDER = np.array([0.0, 0.0, 0.333])
 
 
 @dataclass(frozen=True)
