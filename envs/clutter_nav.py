@@ -8,7 +8,6 @@ from typing import Any
 
 import numpy as np
 
-from clutter_gym.collision.kinematics import UrdfKinematics
 from clutter_gym.core import ClutterEnv, collision_checker
 from clutter_gym.make_checks import check_env_settings, check_flags, check_numbers, check_physics_mode
 from clutter_gym.noise.profiles import NoiseProfile, resolve_noise
@@ -18,6 +17,7 @@ from clutter_gym.robots.safety import SafetyConfig, SafetyFilter
 from clutter_gym.robots.wheeled import WheeledBase
 from clutter_gym.sensors import ImuConfig, LidarConfig, build_sensors, camera_config
 from clutter_gym.tasks import NavigateTask, NavRewardWeights
+from clutter_gym.urdf.kinematics import UrdfKinematics
 from clutter_gym.worlds import ClutterArena, ClutterSpec
 
 #: Hz, the lowest physics rate: below it the wheels' contact with the floor does not settle, and a stopped robot creeps

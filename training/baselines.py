@@ -172,8 +172,8 @@ class ProximityFieldReacher:
 
     def __init__(self, max_joint_speed: float, attraction: float = 2.0, top_speed: float = 0.3,
                  influence: float = 0.08, repulsion: float = 10.0, damping: float = 0.05) -> None:
-        from clutter_gym.collision.kinematics import UrdfKinematics
         from clutter_gym.robots.panda import SPEED_LIMIT, PandaArm
+        from clutter_gym.urdf.kinematics import UrdfKinematics
 
         if not attraction > 0.0:
             raise ValueError(f"attraction must be > 0 (1/s), got {attraction!r}")

@@ -26,7 +26,7 @@ import clutter_gym  # noqa: F401  (registers the envs)
 from benchmarks.harness import table_header
 from clutter_gym.collision import CollisionChecker, RobotCollisionModel, build_link_shapes, generate_acm
 from clutter_gym.collision.fidelity import COARSE_LEVELS
-from clutter_gym.collision.urdf_geometry import load_collision_elements
+from clutter_gym.urdf.geometry import load_collision_elements
 
 
 def before_checker(env: gym.Env, level: str) -> CollisionChecker:

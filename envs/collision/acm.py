@@ -37,8 +37,8 @@ import numpy as np
 
 from clutter_gym.assets import ASSET_DIR
 from clutter_gym.collision.fidelity import COARSE_LEVELS, CONFIRM_LEVEL, build_link_shapes, check_fidelity
-from clutter_gym.collision.kinematics import UrdfKinematics
-from clutter_gym.collision.urdf_geometry import load_collision_elements, urdf_digest
+from clutter_gym.urdf.geometry import load_collision_elements, urdf_digest
+from clutter_gym.urdf.kinematics import UrdfKinematics
 from clutter_gym.util.atomic import write_text_atomically
 from clutter_gym.util.cache_dir import user_cache_dir
 

@@ -29,7 +29,7 @@ import trimesh
 from scipy.spatial import QhullError
 
 from clutter_gym.collision.sphere_fit import fit_spheres
-from clutter_gym.collision.urdf_geometry import CollisionElement
+from clutter_gym.urdf.geometry import CollisionElement
 from clutter_gym.util.transforms import quat_to_matrix
 
 FIDELITY_LEVELS = ("sphere", "spheres", "primitive", "convex", "mesh", "auto")

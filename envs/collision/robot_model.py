@@ -13,7 +13,7 @@ from clutter_gym.collision.acm import AllowedCollisionMatrix, load_acm
 from clutter_gym.collision.confirm import PairConfirmer
 from clutter_gym.collision.distance import signed_distance
 from clutter_gym.collision.fidelity import COARSE_LEVELS, CONFIRM_LEVEL, LinkShape, build_link_shapes
-from clutter_gym.collision.urdf_geometry import load_collision_elements
+from clutter_gym.urdf.geometry import load_collision_elements
 
 #: Spheres from which a model's spheres are a sphere set: answered from their balls in numpy, placed in FCL only
 #: when asked. A few spheres among other shapes (a base's casters) cost less answered one by one by FCL.

@@ -17,13 +17,13 @@ import numpy as np
 
 from clutter_gym.collision import CollisionChecker
 from clutter_gym.collision.distance import signed_distance
-from clutter_gym.collision.kinematics import UrdfKinematics
 from clutter_gym.core import collision_checker
 from clutter_gym.datatypes import LinkStates, Obstacle, RobotState
 from clutter_gym.robots import DiffDriveRobot
 from clutter_gym.robots.diffdrive import TRACKED_LINKS, DiffDriveConfig
 from clutter_gym.sensors.lidar import Lidar
 from clutter_gym.sim import CYLINDER_SIDES, Sim, pb
+from clutter_gym.urdf.kinematics import UrdfKinematics
 from clutter_gym.util.transforms import quat_to_matrix, yaw_quat
 from clutter_gym.worlds.floor.arena import arena_walls
 from clutter_gym.worlds.pool import ObstaclePool

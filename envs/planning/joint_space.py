@@ -18,11 +18,11 @@ from collections.abc import Sequence
 import numpy as np
 
 from clutter_gym.collision import CollisionChecker, RobotCollisionModel
-from clutter_gym.collision.kinematics import UrdfKinematics
 from clutter_gym.datatypes import Obstacle
 from clutter_gym.planning.path import RESOLUTION
 from clutter_gym.robots.arm_model import ArmModel
 from clutter_gym.robots.panda import panda_model
+from clutter_gym.urdf.kinematics import UrdfKinematics
 from clutter_gym.worlds.table.spec import TABLE
 
 #: Goal configurations put the end effector anywhere in this ball around the target (metres): well inside the

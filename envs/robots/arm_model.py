@@ -17,8 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
-from clutter_gym.collision.kinematics import Joint
 from clutter_gym.robots.spec_reading import check_keys, joint_names, load_spec_urdf, mount, number, numbers
+from clutter_gym.urdf.kinematics import Joint
 
 #: The keys of an ``arm`` spec (besides ``kind``); the first four are required.
 SPEC_KEYS = ("urdf", "arm_joints", "ee_link", "ready", "name", "ee_mount", "speed_limits", "effort_limits",

@@ -12,8 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-from clutter_gym.collision.urdf_geometry import parse_floats, parse_urdf
 from clutter_gym.datatypes import LinkStates
+from clutter_gym.urdf.geometry import parse_floats, parse_urdf
 from clutter_gym.util.transforms import quat_to_matrix, rpy_quat
 
 _INERTIA_KEYS = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")

@@ -12,10 +12,10 @@ from pathlib import Path
 
 import numpy as np
 
-from clutter_gym.collision.kinematics import UrdfKinematics
-from clutter_gym.collision.urdf_geometry import CollisionElement, load_collision_elements, parse_urdf
 from clutter_gym.robots.spec_paths import SHARED_KEYS, spec_name, spec_package_roots
 from clutter_gym.robots.urdf_prep import Mount, prepared_urdf
+from clutter_gym.urdf.geometry import CollisionElement, load_collision_elements, parse_urdf
+from clutter_gym.urdf.kinematics import UrdfKinematics
 from clutter_gym.util.checks import is_number, short_repr
 from clutter_gym.util.safe_yaml import read_yaml
 
@@ -76,7 +76,7 @@ def spec_source(spec: Mapping[str, object], where: str, folder: Path | None) -> 
 
 def load_spec_urdf(spec: Mapping[str, object], where: str, folder: Path | None,
                    mounts: tuple[Mount, ...]) -> SpecUrdf:
-    """The spec's URDF prepared with ``mounts`` and parsed; a URDF the parser refuses (``collision/urdf_checks.py``
+    """The spec's URDF prepared with ``mounts`` and parsed; a URDF the parser refuses (``urdf/checks.py``
     says what it refuses) is reported as such, and so is one whose links weigh nothing in all: pybullet would fly or
     drive the prepared copy's token grams."""
     source = spec_source(spec, where, folder)

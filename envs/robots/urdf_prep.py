@@ -28,7 +28,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
-from clutter_gym.collision.urdf_geometry import parse_urdf
+from clutter_gym.urdf.geometry import parse_urdf
 from clutter_gym.util.atomic import atomic_path
 from clutter_gym.util.cache_dir import user_cache_dir
 from clutter_gym.util.checks import check_file_name

@@ -19,8 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-from clutter_gym.collision.kinematics import UrdfKinematics
-from clutter_gym.collision.urdf_geometry import CollisionElement, parse_urdf
+from clutter_gym.urdf.geometry import CollisionElement, parse_urdf
+from clutter_gym.urdf.kinematics import UrdfKinematics
 from clutter_gym.util.transforms import quat_to_matrix
 
 #: The largest angle between a wheel's axle and the base's +y (a wheel turned further scrubs sideways as it rolls).

@@ -20,9 +20,9 @@ from pathlib import Path
 import numpy as np
 
 from clutter_gym.assets import asset_path
-from clutter_gym.collision.urdf_geometry import CollisionElement
 from clutter_gym.robots.spec_reading import check_keys, joint_names, load_spec_urdf, number, spec_mounts
 from clutter_gym.robots.wheel_checks import check_wheel_geometry, check_wheel_joints, check_wheel_links
+from clutter_gym.urdf.geometry import CollisionElement
 from clutter_gym.util.transforms import quat_to_matrix
 
 #: The links the sensors sit on.

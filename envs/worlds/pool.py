@@ -18,11 +18,13 @@ from __future__ import annotations
 from collections import OrderedDict, defaultdict
 from collections.abc import Iterable, Sequence
 from itertools import islice
-from typing import cast
+from typing import TYPE_CHECKING, cast
 
 from clutter_gym.datatypes import Obstacle
-from clutter_gym.sim import Sim
 from clutter_gym.util.transforms import yaw_quat
+
+if TYPE_CHECKING:  # the arena hands the pool its Sim; the pool loads no engine
+    from clutter_gym.sim import Sim
 
 PARK_DEPTH = -10.0  # parked bodies wait this far below the floor (metres)
 PARK_SPACING = 2.0  # metres between parked bodies: piled at one point, moving each one costs more the more there are

@@ -9,9 +9,9 @@ import trimesh
 
 from clutter_gym.collision import CollisionChecker, RobotCollisionModel, UrdfKinematics, build_link_shapes
 from clutter_gym.collision.fidelity import AUTO_HULL_TOLERANCE, hull_gap
-from clutter_gym.collision.urdf_geometry import CollisionElement
 from clutter_gym.datatypes import Obstacle
 from clutter_gym.robots import PandaArm
+from clutter_gym.urdf.geometry import CollisionElement
 
 URDF = PandaArm().urdf_path
 KIN = UrdfKinematics(URDF)

@@ -12,8 +12,8 @@ import trimesh
 from scipy.spatial import cKDTree
 
 from clutter_gym.collision.sphere_fit import enclosure_gap, fit_spheres
-from clutter_gym.collision.urdf_geometry import load_collision_elements
 from clutter_gym.robots import PandaArm
+from clutter_gym.urdf.geometry import load_collision_elements
 
 ROUNDING = 1e-9  # metres
 PANDA = {e.link: e.mesh for e in load_collision_elements(PandaArm().urdf_path) if e.kind == "mesh"}

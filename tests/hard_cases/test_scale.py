@@ -51,7 +51,6 @@ import numpy as np
 import pytest
 from helpers import CHASSIS_RADIUS, empty_scene
 
-from clutter_gym.collision.kinematics import UrdfKinematics
 from clutter_gym.hard_cases.scale import (
     CASTER_RADIUS,
     CONTACT_ULPS,
@@ -80,6 +79,7 @@ from clutter_gym.hard_cases.scale import (
 from clutter_gym.robots.diffdrive import TRACKED_LINKS
 from clutter_gym.sensors.lidar import Lidar, LidarConfig
 from clutter_gym.sim import Sim, pb
+from clutter_gym.urdf.kinematics import UrdfKinematics
 
 
 @pytest.fixture(scope="module")

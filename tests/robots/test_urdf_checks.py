@@ -1,4 +1,4 @@
-"""What the URDF reader refuses (``collision/urdf_checks.py``): URDFs that are not trees, numbers that are not
+"""What the URDF reader refuses (``urdf/checks.py``): URDFs that are not trees, numbers that are not
 finite, negative masses, xacro left unexpanded, meshes too large to make; and what a spec's URDF must weigh.
 
 The cases that crashed the interpreter before the checks (a link with two parents segfaulted pybullet's loadURDF, a
@@ -20,11 +20,11 @@ import pytest
 import trimesh
 
 from clutter_gym.assets import asset_path
-from clutter_gym.collision import urdf_geometry
-from clutter_gym.collision.kinematics import UrdfKinematics
-from clutter_gym.collision.urdf_geometry import load_collision_elements, parse_urdf
 from clutter_gym.robots.multirotor_model import multirotor_from_spec
 from clutter_gym.robots.wheeled import wheeled_base_from_spec
+from clutter_gym.urdf import geometry as urdf_geometry
+from clutter_gym.urdf.geometry import load_collision_elements, parse_urdf
+from clutter_gym.urdf.kinematics import UrdfKinematics
 
 DIFFBOT = asset_path("robots/diffbot.urdf")
 HEXAROTOR = Path(__file__).parent / "data" / "hexarotor.urdf"
@@ -94,7 +94,7 @@ def test_a_kinematic_cycle_is_refused_not_walked_forever(tmp_path):
                    '<joint name="a_b" type="fixed"><parent link="a"/><child link="b"/></joint>'
                    '<joint name="b_a" type="fixed"><parent link="b"/><child link="a"/></joint></robot>')
     out = in_a_child(f"""
-        from clutter_gym.collision.kinematics import UrdfKinematics
+        from clutter_gym.urdf.kinematics import UrdfKinematics
         UrdfKinematics({str(urdf)!r})
     """, timeout=60.0)
     assert re.fullmatch(r".*v.urdf: link 'a' is the child of two joints, 'to_a' and 'b_a'.*", out["refused"])

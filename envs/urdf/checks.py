@@ -5,7 +5,7 @@ pybullet's ``loadURDF`` trusts what it is given: a link that is the child of two
 a NaN mass reaches the physics and FCL, which crash at the first step. This package's own readers assumed a tree as
 well (a kinematic cycle made the kinematics' breadth-first walk run until memory ran out). Every reader of a URDF in
 the package (the kinematics, the collision elements, the mass properties, the prepared copy a spec's robot loads)
-parses it through :func:`~clutter_gym.collision.urdf_geometry.parse_urdf`, which runs :func:`check_urdf`; so no URDF
+parses it through :func:`~clutter_gym.urdf.geometry.parse_urdf`, which runs :func:`check_urdf`; so no URDF
 a user passes reaches pybullet unless it passes these checks. Each refusal is one line naming the file, the link or
 joint and the element. What a robot of a given kind needs beyond this (wheels, arm joints, rotors) its spec reader
 checks (``robots/``).

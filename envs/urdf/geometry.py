@@ -16,12 +16,15 @@ import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import trimesh
 
-from clutter_gym.collision.urdf_checks import check_urdf, resolve_optenv
+from clutter_gym.urdf.checks import check_urdf, resolve_optenv
 from clutter_gym.util.transforms import rpy_quat
+
+if TYPE_CHECKING:  # loaded by _load_mesh, when a URDF has a mesh: trimesh imports FCL if it finds it
+    import trimesh
 
 KINDS = ("box", "cylinder", "sphere", "capsule", "mesh")
 #: relative to the mesh's size: a triangle's area (over the diagonal squared) and a mesh's thinnest spread of vertices
@@ -120,6 +123,8 @@ def _load_mesh(path: Path) -> trimesh.Trimesh:
         raise ValueError(f"mesh {path} has {faces:,} triangles, more than the {MAX_FACES:,} a collision mesh may "
                          "have: simplify it (e.g. trimesh's simplify_quadric_decimation, or MeshLab) or model the "
                          "link with primitives")
+    import trimesh
+
     loaded = trimesh.load(path, force="mesh", process=True)
     if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
         raise ValueError(f"mesh {path} holds no triangles")
@@ -141,6 +146,8 @@ def _face_count(path: Path) -> int:
         head = file.read(84)
     if len(head) == 84 and size == 84 + 50 * int.from_bytes(head[80:], "little"):
         return int.from_bytes(head[80:], "little")
+    import trimesh
+
     return len(getattr(trimesh.load(path, force="mesh", process=False), "faces", ()))
 
 
@@ -220,7 +227,7 @@ def load_collision_elements(urdf: str | Path) -> list[CollisionElement]:
 
 def parse_urdf(urdf: Path) -> ET.Element:
     """The URDF's elements, its xacro ``optenv`` defaults taken, once it has passed every check of
-    :mod:`.urdf_checks` (a tree, finite numbers, no xacro left): what every reader of a URDF in the package reads.
+    :mod:`.checks` (a tree, finite numbers, no xacro left): what every reader of a URDF in the package reads.
 
     Raises:
         ValueError: the file is missing, is not XML, or fails a check (the message names the file and the element).
