@@ -16,5 +16,6 @@ its ``bench`` extra installed::
 At the top: ``speed_vs_error``, the report ``python3 tasks.py bench`` runs, which gathers the speed-against-error
 sections of the others into docs/speed-vs-error.md; ``harness``, what the timing scripts share (random-walk actions,
 step timers, alternating rounds, table headers); ``choice``, the report's rows, Pareto fronts and plots. The scenes
-and runs that tests/hard_cases/ holds the hard cases to are in the installed package, ``clutter_gym.hard_cases``.
+and runs that tests/hard_cases/ holds the hard cases to are ``benchmarks.hard_cases.scenes``, beside the benchmarks
+that print them (not in the installed package: no user of the envs needs them).
 """

@@ -143,7 +143,7 @@ def test_random_scenes_get_the_pair_by_pair_answer():
 def test_five_thousand_movable_bodies_cost_well_under_a_second():
     """It compared every pair: 5.2 s for 4,000 bodies, 23 s for 5,000 on this machine (49 s a reset). The layouts
     of benchmarks.hard_cases.auto_physics_cost, where it takes 0.1 s."""
-    from clutter_gym.hard_cases.large_scenes import grid_scene
+    from benchmarks.hard_cases.scenes.large_scenes import grid_scene
 
     floor = grid_scene(5000)["obstacles"]
     grid = [Obstacle("box", (0.1, 0.2, 0.3), tuple(o["position"]), mass=2.0) for o in floor]

@@ -2,7 +2,8 @@
 
 ``clutter_gym.auto_physics.loads`` runs at every reset of ClutterNav-v1 and ClutterReach-v1. Timed here on two
 layouts of N movable bodies in the largest arena: ``floor``, the large-scene benchmark's grid of small boxes and
-cylinders (``clutter_gym.hard_cases.large_scenes.grid_scene``) with every obstacle given 2 kg, none on another, and
+cylinders (``benchmarks.hard_cases.scenes.large_scenes.grid_scene``) with every obstacle given 2 kg, none on
+another, and
 ``columns``, the same grid of 0.3 x 0.3 x 0.2 m boxes in columns of five. Figures are medians over rounds; with
 ``--commit`` the commit's ``loads`` (its package copied as ``benchmarks.speed.versus_commit`` copies it) alternates
 with this tree's on the same scenes, and the two must give the same answers on those scenes, on the stacking
@@ -25,12 +26,12 @@ import gymnasium as gym
 import numpy as np
 
 import clutter_gym  # noqa: F401  (registers the envs)
+from benchmarks.hard_cases.scenes.large_scenes import ARENA, grid_scene
+from benchmarks.hard_cases.scenes.movable_clutter import BOX, stack_scene
 from benchmarks.harness import alternating_rounds, table_header
 from benchmarks.speed.versus_commit import build_base, import_base
 from clutter_gym.auto_physics import loads
 from clutter_gym.datatypes import Obstacle
-from clutter_gym.hard_cases.large_scenes import ARENA, grid_scene
-from clutter_gym.hard_cases.movable_clutter import BOX, stack_scene
 from clutter_gym.worlds.floor.scene import parse_scene
 
 COLUMN = 5  # boxes per column of the ``columns`` layout

@@ -2,7 +2,8 @@
 to, and the steps/s while it was measured.
 
 Each case is a short version of the run its test or benchmark makes (fewer seconds, offsets or poses; ``--quick``
-shorter still), through the same functions: the scenes and runs of :mod:`clutter_gym.hard_cases`, the ``stacking``,
+shorter still), through the same functions: the scenes and runs of :mod:`benchmarks.hard_cases.scenes`, the
+``stacking``,
 ``tunneling`` and ``large_scenes`` benchmarks next to this one, and ``benchmarks.speed.physics_rate``. The rate
 column says what it counts: env steps/s, physics ticks/s, or checker queries/s where a case places the robot instead
 of stepping; it was measured on whatever else the machine was doing, so compare it within one run only. A bound of
@@ -24,14 +25,14 @@ import gymnasium as gym
 import numpy as np
 
 from benchmarks.hard_cases import large_scenes, stacking
+from benchmarks.hard_cases.scenes import movable_clutter, scale, sensor_edges, tunneling
+from benchmarks.hard_cases.scenes.penetration_depth import panda_depth_errors
+from benchmarks.hard_cases.scenes.standstill import standstill_drift
+from benchmarks.hard_cases.scenes.stepping import CONTROL_HZ
+from benchmarks.hard_cases.scenes.wedging import wedge
 from benchmarks.hard_cases.tunneling import OFFSETS, summary
 from benchmarks.harness import table_header
 from benchmarks.speed import physics_rate
-from clutter_gym.hard_cases import movable_clutter, scale, sensor_edges, tunneling
-from clutter_gym.hard_cases.penetration_depth import panda_depth_errors
-from clutter_gym.hard_cases.standstill import standstill_drift
-from clutter_gym.hard_cases.stepping import CONTROL_HZ
-from clutter_gym.hard_cases.wedging import wedge
 from clutter_gym.sensors.lidar import Lidar, LidarConfig
 
 ENV_STEPS, TICKS, QUERIES = "env steps/s", "physics ticks/s", "checker queries/s"
@@ -113,7 +114,7 @@ def standstill(quick: bool) -> Row:
 
 # ------------------------------------------------------------------------------------------------ wedging
 def wedging(name: str, quick: bool) -> Row:
-    """Deepest penetration of full command into a trap (:data:`clutter_gym.hard_cases.wedging.WEDGES`); mm."""
+    """Deepest penetration of full command into a trap (:data:`benchmarks.hard_cases.scenes.wedging.WEDGES`); mm."""
     seconds = 20.0 if quick else 60.0
     run = wedge(name, seconds)
     return Row(f"wedging-{name}", 1e3 * run.penetration, "mm", 1.0, "test_wedging.py", run.steps_per_s, ENV_STEPS,

@@ -24,7 +24,7 @@ import time
 import gymnasium as gym
 import numpy as np
 
-from clutter_gym.hard_cases.large_scenes import ARENA, grid_scene
+from benchmarks.hard_cases.scenes.large_scenes import ARENA, grid_scene
 from clutter_gym.sim import pb
 
 STEPS = 300

@@ -9,7 +9,7 @@
     python -m benchmarks.hard_cases.long_runs    # 10^6 steps, 100,000 resets, 1,000 cycles per env
     python -m benchmarks.hard_cases.long_runs --steps 20000 --resets 2000 --cycles 50 --parts steps resets
 
-Each part runs :mod:`clutter_gym.hard_cases.long_runs` (whose short versions tests/hard_cases/test_long_runs.py
+Each part runs :mod:`benchmarks.hard_cases.scenes.long_runs` (whose short versions tests/hard_cases/test_long_runs.py
 checks) in processes of its own. Growth is taken over the second half of each run, after warm-up allocations.
 Steps/s are measured while the machine may be shared: compare them within one run only.
 """
@@ -21,9 +21,9 @@ import multiprocessing
 import queue as queues
 import time
 
+from benchmarks.hard_cases.scenes.long_runs import BLOCKS, Cell, cycles_run, growth_per, resets_run, steps_run
 from clutter_gym import ENV_IDS
 from clutter_gym.collision import FIDELITY_LEVELS
-from clutter_gym.hard_cases.long_runs import BLOCKS, Cell, cycles_run, growth_per, resets_run, steps_run
 from clutter_gym.noise.profiles import PROFILE_NAMES
 
 PARTS = ("steps", "resets", "cycles")

@@ -17,7 +17,7 @@ import time
 import gymnasium as gym
 import numpy as np
 
-from clutter_gym.hard_cases.memory import new_sizes_scene, resident_mib
+from benchmarks.hard_cases.scenes.memory import new_sizes_scene, resident_mib
 
 RUNS = {
     "ClutterReach-v1, generated layouts": ("ClutterReach-v1", False),

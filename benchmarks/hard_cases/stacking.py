@@ -2,7 +2,7 @@
 in ClutterNav-v1 at several physics rates and solver iteration counts, with the robot at rest, against the time
 it costs.
 
-A stack of ``n`` boxes (0.3 x 0.3 x 0.2 m, 2 kg each: ``clutter_gym.hard_cases.movable_clutter.stack_scene``) is
+A stack of ``n`` boxes (0.3 x 0.3 x 0.2 m, 2 kg each: ``benchmarks.hard_cases.scenes.movable_clutter.stack_scene``) is
 placed exactly touching, as a user scene puts it. Bullet's sequential-impulse solver needs more iterations the
 taller the stack (an impulse crosses one contact per iteration), so short stacks hold at settings where tall ones
 creep or fall. Printed per setting: the largest
@@ -23,8 +23,8 @@ import time
 import gymnasium as gym
 import numpy as np
 
+from benchmarks.hard_cases.scenes.movable_clutter import stack_scene, tilt_degrees
 from benchmarks.harness import table_header
-from clutter_gym.hard_cases.movable_clutter import stack_scene, tilt_degrees
 
 #: (physics_hz, solver iterations)
 SETTINGS = ((120.0, 10), (120.0, 50), (240.0, 50), (240.0, 100), (480.0, 100), (480.0, 200), (960.0, 100))

@@ -1,7 +1,7 @@
 """Tunneling: fast bodies against thin walls, with pybullet alone, with pybullet's CCD on the fast body, and under
 the project's FCL audit; which of them catch a body that goes through or into the wall.
 
-The runs are :mod:`clutter_gym.hard_cases.tunneling`'s, which says how a run ends and what CCD and the audit are.
+The runs are :mod:`benchmarks.hard_cases.scenes.tunneling`'s, which says how a run ends and what CCD and the audit are.
 The table launches a free cube (a multibody and a rigid body) and a free ball at each of ``SPEEDS`` against walls
 ``WALLS`` thick at ClutterNav-v1's physics rate and checker settings, the ClutterNav-v1 robot at each of ``SPEEDS``
 into the same walls, and the ClutterReach-v1 Panda's hand down onto a shelf board and sideways into a shelf side,
@@ -17,7 +17,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from clutter_gym.hard_cases.tunneling import (
+from benchmarks.hard_cases.scenes.tunneling import (
     EMBEDDED,
     GAP,
     HAND_CASES,

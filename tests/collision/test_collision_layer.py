@@ -8,6 +8,7 @@ import json
 import numpy as np
 import pytest
 
+from benchmarks.hard_cases.scenes.penetration_depth import panda_depth_errors
 from clutter_gym.collision import (
     FIDELITY_LEVELS,
     CollisionChecker,
@@ -21,7 +22,6 @@ from clutter_gym.collision import (
 from clutter_gym.collision import acm as acm_module
 from clutter_gym.collision.fidelity import fitted_primitive
 from clutter_gym.datatypes import LinkStates, Obstacle, RobotState
-from clutter_gym.hard_cases.penetration_depth import panda_depth_errors
 from clutter_gym.robots import DiffDriveRobot, PandaArm
 from clutter_gym.robots.panda import READY
 

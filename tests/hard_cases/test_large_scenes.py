@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import clutter_gym.collision.nearest
-from clutter_gym.hard_cases.large_scenes import grid_scene
+from benchmarks.hard_cases.scenes.large_scenes import grid_scene
 from clutter_gym.sim import pb
 from clutter_gym.worlds.pool import PARK_DEPTH
 

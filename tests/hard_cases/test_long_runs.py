@@ -15,9 +15,7 @@ import sys
 import numpy as np
 import pytest
 
-from clutter_gym import ENV_IDS
-from clutter_gym.collision import FIDELITY_LEVELS
-from clutter_gym.hard_cases.long_runs import (
+from benchmarks.hard_cases.scenes.long_runs import (
     count_nonfinite,
     cycles_run,
     growth_per,
@@ -25,6 +23,8 @@ from clutter_gym.hard_cases.long_runs import (
     resets_run,
     steps_run,
 )
+from clutter_gym import ENV_IDS
+from clutter_gym.collision import FIDELITY_LEVELS
 from clutter_gym.noise.profiles import PROFILE_NAMES
 
 linux_only = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc/self/statm")

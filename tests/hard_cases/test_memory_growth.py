@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 
 import clutter_gym.sim.core
+from benchmarks.hard_cases.scenes.memory import new_sizes_scene, resident_mib
 from clutter_gym.collision.obstacles import ObstacleObjects, obstacle_object
-from clutter_gym.hard_cases.memory import new_sizes_scene, resident_mib
 from clutter_gym.worlds import ClutterSpec, sample_scene
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc/self/statm")

@@ -14,10 +14,7 @@ import numpy as np
 import pytest
 from helpers import empty_scene
 
-from clutter_gym.collision.distance import signed_distance
-from clutter_gym.collision.obstacles import obstacle_object
-from clutter_gym.datatypes import Obstacle
-from clutter_gym.hard_cases.movable_clutter import (
+from benchmarks.hard_cases.scenes.movable_clutter import (
     PUSH_BOX_HALF,
     PUSH_WALL_FACE,
     movable_poses,
@@ -26,6 +23,9 @@ from clutter_gym.hard_cases.movable_clutter import (
     tabletop_creep,
     tilt_degrees,
 )
+from clutter_gym.collision.distance import signed_distance
+from clutter_gym.collision.obstacles import obstacle_object
+from clutter_gym.datatypes import Obstacle
 from clutter_gym.worlds.parsing import parse_obstacle
 from clutter_gym.worlds.pool import inertia
 

@@ -12,7 +12,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from clutter_gym.hard_cases.large_scenes import ARENA, grid_scene
+from benchmarks.hard_cases.scenes.large_scenes import ARENA, grid_scene
 from clutter_gym.sim import Sim
 from clutter_gym.sim.primitives import BACKDROP_ID
 from clutter_gym.worlds.near_field import NEAR_FIELD_FROM

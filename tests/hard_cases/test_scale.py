@@ -2,7 +2,7 @@
 from the env's own parts (Sim, obstacle pool, FCL checker, LIDAR); millimetre obstacles; the largest arena.
 
 The envs have no world-offset option, so the translated scenes are built by construction
-(:mod:`clutter_gym.hard_cases.scale`, which ``benchmarks.hard_cases.catalogue`` shares): every obstacle, the arena
+(:mod:`benchmarks.hard_cases.scenes.scale`, which ``benchmarks.hard_cases.catalogue`` shares): every obstacle, the arena
 walls and the robot pose move by the offset (the floor is an infinite plane). Measured on 200 seeded robot poses in
 a 6 m arena (plus three hand-placed ones: 5 mm into a box, touching a box face, clear), translated minus
 untranslated, metres (np.spacing: 1.1e-13 at 1e3, 1.8e-12 at 1e4):
@@ -51,7 +51,7 @@ import numpy as np
 import pytest
 from helpers import CHASSIS_RADIUS, empty_scene
 
-from clutter_gym.hard_cases.scale import (
+from benchmarks.hard_cases.scenes.scale import (
     CASTER_RADIUS,
     CONTACT_ULPS,
     EPA_TOL,

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from clutter_gym.hard_cases.sensor_edges import OBSTACLE, WALL_DEPTH, imu_impact, wall_view
+from benchmarks.hard_cases.scenes.sensor_edges import OBSTACLE, WALL_DEPTH, imu_impact, wall_view
 from clutter_gym.sim import Sim
 
 

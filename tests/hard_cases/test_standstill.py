@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from helpers import empty_scene
 
-from clutter_gym.hard_cases.standstill import base_pose, standstill_drift
-from clutter_gym.hard_cases.stepping import STILL
+from benchmarks.hard_cases.scenes.standstill import base_pose, standstill_drift
+from benchmarks.hard_cases.scenes.stepping import STILL
 
 
 @pytest.fixture(scope="module")

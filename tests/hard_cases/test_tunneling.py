@@ -2,8 +2,8 @@
 FCL audit's swept check flags every such pass, and nothing else would. pybullet's CCD stops the ball only when it
 is a rigid body, not a multibody. The nav robot launched into a thin wall ends inside it, and the audit reports it.
 
-Rates and the audit's settings are ClutterNav-v1's defaults; the runs are :mod:`clutter_gym.hard_cases.tunneling`'s,
-which ``python -m benchmarks.hard_cases.tunneling`` tabulates.
+Rates and the audit's settings are ClutterNav-v1's defaults; the runs are
+:mod:`benchmarks.hard_cases.scenes.tunneling`'s, which ``python -m benchmarks.hard_cases.tunneling`` tabulates.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ import math
 
 import pytest
 
-from clutter_gym.hard_cases.tunneling import GAP, Settings, free_body_run, make_nav_env, nav_run
+from benchmarks.hard_cases.scenes.tunneling import GAP, Settings, free_body_run, make_nav_env, nav_run
 
 FAST, THIN = 20.0, 0.01  # m/s, metres
 OFFSETS = 8

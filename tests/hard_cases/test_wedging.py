@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import pytest
 
-from clutter_gym.hard_cases.wedging import WEDGES, wedge
+from benchmarks.hard_cases.scenes.wedging import WEDGES, wedge
 
 
 @pytest.mark.parametrize("name", WEDGES)

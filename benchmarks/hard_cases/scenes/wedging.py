@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import gymnasium as gym
 import numpy as np
 
-from clutter_gym.hard_cases.stepping import CONTROL_HZ, FULL_AHEAD, nav_scene, timed_steps
+from benchmarks.hard_cases.scenes.stepping import CONTROL_HZ, FULL_AHEAD, nav_scene, timed_steps
 
 WEDGES = {
     "corner": nav_scene(start=(2.0, 2.0, 0.785), goal=(-2.5, -2.5)),

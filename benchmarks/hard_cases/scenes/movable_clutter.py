@@ -7,7 +7,7 @@ import time
 import gymnasium as gym
 import numpy as np
 
-from clutter_gym.hard_cases.stepping import CONTROL_HZ, FULL_AHEAD, nav_scene, timed_steps
+from benchmarks.hard_cases.scenes.stepping import CONTROL_HZ, FULL_AHEAD, nav_scene, timed_steps
 
 #: the robot drives a 1 kg box 0.5 m ahead of it into a static wall 1.2 m ahead (its near face)
 PUSH_SCENE = nav_scene(start=(0.0, 0.0, 0.0), goal=(-2.0, 0.0), obstacles=[

@@ -16,8 +16,8 @@ from dataclasses import dataclass
 import gymnasium as gym
 import numpy as np
 
+from benchmarks.hard_cases.scenes.memory import resident_mib
 from clutter_gym.collision import FIDELITY_LEVELS
-from clutter_gym.hard_cases.memory import resident_mib
 from clutter_gym.noise.profiles import PROFILE_NAMES
 
 BLOCKS = 10  # checkpoints of the reset and cycle runs

@@ -5,7 +5,7 @@ from __future__ import annotations
 import gymnasium as gym
 import numpy as np
 
-from clutter_gym.hard_cases.stepping import CONTROL_HZ, STILL, nav_scene, timed_steps
+from benchmarks.hard_cases.scenes.stepping import CONTROL_HZ, STILL, nav_scene, timed_steps
 
 
 def base_pose(env: gym.Env) -> tuple[np.ndarray, float]:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import gymnasium as gym
 import numpy as np
 
-from clutter_gym.hard_cases.stepping import FULL_AHEAD, STILL, nav_scene, timed_steps
+from benchmarks.hard_cases.scenes.stepping import FULL_AHEAD, STILL, nav_scene, timed_steps
 from clutter_gym.sensors import SEGMENTATION_CLASSES
 
 #: the arena wall's inner face seen from the camera at the origin (metres): the wall at 3 m less the camera
