@@ -32,7 +32,8 @@ SOURCES = ("pyproject.toml", "constraints.txt", "envs", "training", "assets")
 TYPED_MODULES = ("clutter_gym.datatypes", "clutter_gym.interfaces", "clutter_gym.core", "clutter_gym.sensors.suite",
                  "clutter_gym.clutter_nav", "clutter_gym.clutter_reach", "clutter_gym.clutter_fly",
                  "clutter_gym.collision.checker", "clutter_gym.collision.nearest", "clutter_gym.collision.swept_audit",
-                 "clutter_gym.worlds.near_field", "clutter_gym.worlds.pool", "clutter_gym.sim.primitives")
+                 "clutter_gym.worlds.near_field", "clutter_gym.worlds.pool", "clutter_gym.sim.primitives",
+                 "clutter_gym.urdf.checks", "clutter_gym.urdf.geometry", "clutter_gym.urdf.kinematics")
 #: The Pythons pybullet 3.2.7 has wheels for, newest first.
 WHEEL_PYTHONS = ((3, 11), (3, 10))
 

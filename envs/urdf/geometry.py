@@ -182,10 +182,10 @@ def _element(col: ET.Element, link: str, urdf: Path, where: str) -> CollisionEle
         raise ValueError(f"{where}: missing or empty <geometry>")
     tag, a = child.tag, child.attrib
     if tag == "box":
-        size = parse_floats(a.get("size"), 3, 0.0, f"{where} box size")
-        if np.any(size <= 0):
+        extents = parse_floats(a.get("size"), 3, 0.0, f"{where} box size")
+        if np.any(extents <= 0):
             raise ValueError(f"{where}: box size must be > 0 metres on every axis, got {a.get('size')!r}")
-        return CollisionElement(link, "box", tuple(size.tolist()), position, quaternion)
+        return CollisionElement(link, "box", tuple(extents.tolist()), position, quaternion)
     if tag in ("cylinder", "capsule"):
         size = (_positive(a, "radius", where), _positive(a, "length", where))
         return CollisionElement(link, tag, size, position, quaternion)
