@@ -213,3 +213,14 @@ def test_the_realisability_benchmark_drives_each_env_through_its_students_interf
                          "--teachers", "planner", "--levels", "0.05")
     assert done.returncode == 0, done.stderr[-2000:]
     assert re.search(r"^\| planner \| \d+% \[\d+%, \d+%\] / \d+% \|$", done.stdout, re.M), done.stdout
+
+
+def test_the_waypoint_diagnosis_compares_a_students_waypoint_with_its_teachers_episode_by_episode():
+    from helpers import run_benchmark
+
+    done = run_benchmark("benchmarks.learning.waypoint_diagnosis", "--run", "pretrained/ClutterNav-v1-student",
+                         "--episodes", "2")
+    assert done.returncode == 0, done.stderr[-2000:]
+    rows = re.findall(r"^\| 100000\d \| (success|timeout|collision) \| \d+ \| [\d.]+ \| \d+% \| \d+ deg, \d+ deg \|$",
+                      done.stdout, re.M)
+    assert len(rows) == 2, done.stdout

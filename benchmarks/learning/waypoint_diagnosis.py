@@ -1,0 +1,103 @@
+"""How a waypoint student's episodes end, and how far its waypoint is from its teacher's along the way.
+
+A student with ``residual_space: waypoint`` (ClutterNav-v1's bearing, ClutterFly-v1's azimuth and elevation) is
+rolled out on held-out layouts (seeds 1,000,000..) in an env made with the planner's subgoal as well, which the
+student never reads: at every step the planner teacher's waypoint is the subgoal's azimuth. Each episode reports
+how it ended, the distance to the goal at its end, the share of its steps spent nearly still, and the median angle
+between the student's azimuth and the teacher's, over the episode and over its last 50 steps. A failed episode
+whose student keeps far from the teacher's direction while it stands still is imitation error in front of an
+obstacle, not a crash or a slow arrival.
+
+    python -m benchmarks.learning.waypoint_diagnosis --run RUN --episodes 20
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+import gymnasium as gym
+import numpy as np
+
+from clutter_gym.training import load
+from clutter_gym.training.config import EVAL_SEED
+
+#: m/s: a speed under this is "nearly still"
+STILL = 0.1
+#: m ahead on the planned path that the teacher's waypoint points at (the teachers' own lookahead)
+LOOKAHEAD = 0.5
+
+
+def teacher_azimuth(env_id: str, subgoal: np.ndarray) -> float:
+    """The planner's waypoint azimuth, radians: ClutterNav's subgoal is (distance, sin, cos), ClutterFly's (x, y, z)."""
+    if env_id == "ClutterNav-v1":
+        return math.atan2(float(subgoal[1]), float(subgoal[2]))
+    return math.atan2(float(subgoal[1]), float(subgoal[0]))
+
+
+def speed(env_id: str, velocity: np.ndarray) -> float:
+    """m/s: ClutterNav's velocity entry is (forward speed, yaw rate), ClutterFly's starts with the linear velocity."""
+    return abs(float(velocity[0])) if env_id == "ClutterNav-v1" else float(np.linalg.norm(velocity[:3]))
+
+
+def episode(agent, env: gym.Env, seed: int) -> dict:
+    """One episode's row (see the module docstring)."""
+    chosen: list[float] = []
+    residual = agent._residual  # the student's waypoint is the action its residual interface receives
+
+    def spy(raw, action):
+        chosen.append(float(np.asarray(action)[0]) * math.pi)
+        return residual(raw, action)
+
+    agent._residual = spy
+    try:
+        obs, _ = env.reset(seed=seed)
+        state, gaps, still, steps, collided = None, [], 0, 0, False
+        while True:
+            target = teacher_azimuth(agent.config.env_id, obs["subgoal"])
+            action, state = agent.predict({k: v for k, v in obs.items() if k != "subgoal"}, state)
+            gaps.append(abs((chosen[-1] - target + math.pi) % (2 * math.pi) - math.pi))
+            obs, _, terminated, truncated, info = env.step(action)
+            steps += 1
+            still += speed(agent.config.env_id, obs["velocity"]) < STILL
+            collided |= info["cost"] > 0
+            if terminated or truncated:
+                break
+    finally:
+        agent._residual = residual
+    goal_distance = float(obs["goal"][0] if agent.config.env_id == "ClutterNav-v1" else obs["goal"][3])
+    return {"seed": seed, "success": bool(info["is_success"]), "collision": bool(collided), "steps": steps,
+            "end_distance": goal_distance, "still": still / steps, "gap": math.degrees(float(np.median(gaps))),
+            "gap_last50": math.degrees(float(np.median(gaps[-50:])))}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--run", required=True, help="a waypoint student's run folder")
+    parser.add_argument("--episodes", type=int, default=20)
+    args = parser.parse_args()
+    agent = load(args.run)
+    if agent.config.residual_space != "waypoint":
+        raise SystemExit(f"{args.run} is not a waypoint student (residual_space {agent.config.residual_space!r})")
+    env = gym.make(agent.config.env_id, **{**agent.config.make_kwargs(), "subgoal_lookahead": LOOKAHEAD})
+    rows = [episode(agent, env, EVAL_SEED + i) for i in range(args.episodes)]
+    env.close()
+    print("| seed | ends | steps | goal distance at the end (m) | nearly still | waypoint gap to the teacher "
+          "(median, last 50 steps) |\n|---|---|---|---|---|---|")
+    for r in rows:
+        ends = "success" if r["success"] else "collision" if r["collision"] else "timeout"
+        print(f"| {r['seed']} | {ends} | {r['steps']} | {r['end_distance']:.2f} | {r['still']:.0%} | "
+              f"{r['gap']:.0f} deg, {r['gap_last50']:.0f} deg |")
+    for name, group in (("finished", [r for r in rows if r["success"]]),
+                        ("failed", [r for r in rows if not r["success"]])):
+        if group:
+            print(f"\n{name}: {len(group)} of {len(rows)}; median goal distance at the end "
+                  f"{np.median([r['end_distance'] for r in group]):.2f} m, nearly still "
+                  f"{np.median([r['still'] for r in group]):.0%} of steps, waypoint gap "
+                  f"{np.median([r['gap'] for r in group]):.0f} deg (last 50 steps "
+                  f"{np.median([r['gap_last50'] for r in group]):.0f} deg)", end="")
+    print()
+
+
+if __name__ == "__main__":
+    main()
