@@ -8,7 +8,7 @@ between the student's azimuth and the teacher's, over the episode and over its l
 whose student keeps far from the teacher's direction while it stands still is imitation error in front of an
 obstacle, not a crash or a slow arrival.
 
-    python -m benchmarks.learning.waypoint_diagnosis --run RUN --episodes 20
+    python -m benchmarks.learning.waypoint_diagnosis --run RUN --episodes 20 [--obstacle-density 0.05]
 """
 
 from __future__ import annotations
@@ -75,11 +75,14 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--run", required=True, help="a waypoint student's run folder")
     parser.add_argument("--episodes", type=int, default=20)
+    parser.add_argument("--obstacle-density", type=float, default=None,
+                        help="the layouts' clutter (default: the run's)")
     args = parser.parse_args()
     agent = load(args.run)
     if agent.config.residual_space != "waypoint":
         raise SystemExit(f"{args.run} is not a waypoint student (residual_space {agent.config.residual_space!r})")
-    env = gym.make(agent.config.env_id, **{**agent.config.make_kwargs(), "subgoal_lookahead": LOOKAHEAD})
+    density = {} if args.obstacle_density is None else {"obstacle_density": args.obstacle_density}
+    env = gym.make(agent.config.env_id, **{**agent.config.make_kwargs(), "subgoal_lookahead": LOOKAHEAD, **density})
     rows = [episode(agent, env, EVAL_SEED + i) for i in range(args.episodes)]
     env.close()
     print("| seed | ends | steps | goal distance at the end (m) | nearly still | waypoint gap to the teacher "
