@@ -7,8 +7,10 @@ round the envs run ``round_steps`` steps: the student's deterministic policy dri
 the episodes, all of the first round's by default), the teacher's action at every visited state is its label
 (:class:`~clutter_gym.training.teachers.TeacherLabels`), the round's samples join the aggregated data set, and the
 actor is fitted to the whole set (regression of its mean action on the labels, or for binned actions the
-cross-entropy of its bins: :mod:`clutter_gym.training.binned_actions`). After each round the student is
-validated on held-out layouts (the best kept in ``best/``), checkpointed, and the round is a row of
+cross-entropy of its bins: :mod:`clutter_gym.training.binned_actions`). A sample where the student's own action was
+further than ``disagreement_threshold`` from its label may weigh more in the fit (``disagreement_weight``): the
+states where the student goes wrong are few among the many where it already follows. After each round the student
+is validated on held-out layouts (the best kept in ``best/``), checkpointed, and the round is a row of
 ``distill.csv``. A resumed run continues from its newest round's student with an empty data set, which the
 remaining rounds fill from its own rollouts.
 """
@@ -24,6 +26,7 @@ import torch as th
 from stable_baselines3 import PPO
 from stable_baselines3.common.vec_env import VecEnv, VecNormalize
 
+from clutter_gym.training.binned_actions import decode
 from clutter_gym.training.callbacks import BestPolicyKeeper, RunMonitor
 from clutter_gym.training.config import TrainConfig
 from clutter_gym.training.distill_config import DistillSettings
@@ -32,28 +35,41 @@ from clutter_gym.training.run_dir import RunDir
 
 
 class Dataset:
-    """The aggregated samples, observations as the policy sees them and the teacher's actions; keeps the newest
-    ``max_samples``."""
+    """The aggregated samples, observations as the policy sees them, the teacher's actions and each sample's weight
+    in the fit; keeps the newest ``max_samples``."""
 
     def __init__(self, max_samples: int) -> None:
         self.max_samples = max_samples
         self._obs: list[dict[str, np.ndarray]] = []
         self._labels: list[np.ndarray] = []
+        self._weights: list[np.ndarray] = []
         self.size = 0
 
-    def add(self, obs: dict[str, np.ndarray], labels: np.ndarray) -> None:
+    def add(self, obs: dict[str, np.ndarray], labels: np.ndarray, weights: np.ndarray | None = None) -> None:
         self._obs.append({key: np.array(value, dtype=np.float32) for key, value in obs.items()})
         self._labels.append(np.asarray(labels, dtype=np.float32))
+        self._weights.append(np.ones(len(labels)) if weights is None else np.asarray(weights, dtype=np.float64))
         self.size += len(labels)
         while self.size - len(self._labels[0]) >= self.max_samples:
             self.size -= len(self._labels.pop(0))
             self._obs.pop(0)
+            self._weights.pop(0)
 
     def arrays(self) -> tuple[dict[str, np.ndarray], np.ndarray]:
         """Every kept sample: observations by entry, labels (newest ``max_samples``)."""
         labels = np.concatenate(self._labels)[-self.max_samples:]
         obs = {key: np.concatenate([chunk[key] for chunk in self._obs])[-self.max_samples:] for key in self._obs[0]}
         return obs, labels
+
+    def weights(self) -> np.ndarray:
+        """Each kept sample's weight, in the order of :meth:`arrays`."""
+        return np.concatenate(self._weights)[-self.max_samples:]
+
+
+def disagreement(student: np.ndarray, labels: np.ndarray, threshold: float) -> np.ndarray:
+    """Whether the student's action at each state is further than ``threshold`` from the teacher's in some entry
+    (normalised units, so 2 / (bins - 1) is one bin)."""
+    return np.abs(np.asarray(student, dtype=float) - labels).max(axis=1) > threshold
 
 
 def error(model: PPO, obs: dict[str, np.ndarray], labels: np.ndarray, bins: int) -> float:
@@ -64,15 +80,19 @@ def error(model: PPO, obs: dict[str, np.ndarray], labels: np.ndarray, bins: int)
 
 def fit(model: PPO, dataset: Dataset, settings: DistillSettings, optimizer: th.optim.Optimizer, bins: int) -> float:
     """``settings.epochs`` passes of the actor over the data set, lowering its :func:`imitation_loss`; the last
-    pass's mean loss."""
+    pass's mean loss. Samples of unequal weight are drawn with replacement in proportion to their weights, as many
+    a pass as the set holds."""
     obs, labels = dataset.arrays()
+    weights = dataset.weights()
+    draw = th.as_tensor(weights) if weights.min() != weights.max() else None
     policy = model.policy
     policy.set_training_mode(True)
     target = th.as_tensor(labels)
     inputs = {key: th.as_tensor(value) for key, value in obs.items()}
     total = 0.0
     for _ in range(settings.epochs):
-        order = th.randperm(len(target))  # torch's generator, which the model's seed sets
+        # torch's generator, which the model's seed sets
+        order = th.randperm(len(target)) if draw is None else th.multinomial(draw, len(target), replacement=True)
         total = 0.0
         for start in range(0, len(target), settings.batch_size):
             rows = order[start:start + settings.batch_size]
@@ -109,6 +129,7 @@ class Distiller:
         self.keeper = BestPolicyKeeper(run, config) if config.validate_episodes else None
         self.dataset = Dataset(self.settings.max_samples)
         self.optimizer = th.optim.Adam(model.policy.parameters(), lr=self.settings.learning_rate)
+        self._disagreed = self._visited = 0  # the last collection's states where the student disagreed, of all
 
     def run_rounds(self) -> None:
         """The rounds not done yet (a resumed run's newest student continues)."""
@@ -149,7 +170,8 @@ class Distiller:
         loss = fit(self.model, self.dataset, self.settings, self.optimizer, bins)
         row: dict[str, float] = {"round": float(index), "step": float(self.model.num_timesteps),
                                  "samples": float(self.dataset.size), "teacher_share": share,
-                                 "unseen_loss": unseen, "loss": loss, **_rates(episodes)}
+                                 "unseen_loss": unseen, "disagreement": self._disagreed / max(self._visited, 1),
+                                 "loss": loss, **_rates(episodes)}
         if self.keeper is not None:
             self.keeper.num_timesteps = self.model.num_timesteps
             validation = self.keeper.validate()
@@ -164,12 +186,19 @@ class Distiller:
         """Runs the envs ``steps`` env steps (rounded up to whole vector steps), the student acting; stores each
         state's observation with the teacher's label when ``store``; returns the finished episodes' statistics."""
         n = self.venv.num_envs
+        bins = self.config.action_bins
         episodes: list[dict[str, float]] = []
+        self._disagreed = self._visited = 0
         for _ in range(-(-steps // n)):
             actions, _ = self.model.predict(self.obs, deterministic=True)
             obs, _, _, infos = self.venv.step(actions)
             if store:
-                self.dataset.add(self.obs, np.stack([info["teacher_action"] for info in infos]))
+                labels = np.stack([info["teacher_action"] for info in infos])
+                disagreed = disagreement(decode(actions, bins) if bins else actions, labels,
+                                         self.settings.disagreement_threshold)
+                self._disagreed += int(disagreed.sum())
+                self._visited += n
+                self.dataset.add(self.obs, labels, np.where(disagreed, self.settings.disagreement_weight, 1.0))
             self.model.num_timesteps += n
             self.monitor.record(infos, self.model.num_timesteps)
             episodes += [info["episode_stats"] for info in infos if "episode_stats" in info]

@@ -64,6 +64,10 @@ class DistillSettings:
         bc_weight: weight, at the start of the PPO fine-tuning, of the squared distance between the policy's mean
             action and the teacher's in its loss; it decays linearly to 0 over ``bc_steps``.
         bc_steps: env steps over which ``bc_weight`` decays.
+        disagreement_weight: weight in the fit of a state where the student's deterministic action was further than
+            ``disagreement_threshold`` from the teacher's, against 1 for the others (1: every state alike).
+        disagreement_threshold: that distance, the largest over the action's entries, in normalised units in (0, 2]
+            (one bin of ``action_bins`` bins is 2 / (bins - 1)).
     """
 
     rounds: int = 10
@@ -77,6 +81,8 @@ class DistillSettings:
     max_samples: int = 1_000_000
     bc_weight: float = 0.0
     bc_steps: int = 200_000
+    disagreement_weight: float = 1.0
+    disagreement_threshold: float = 0.25
 
     def __post_init__(self) -> None:
         _check("distill.rounds", self.rounds, 1, 1000)
@@ -90,6 +96,8 @@ class DistillSettings:
         _check("distill.max_samples", self.max_samples, 1, 10**9)
         _check("distill.bc_weight", self.bc_weight, 0.0, 1e4)
         _check("distill.bc_steps", self.bc_steps, 1, 10**10)
+        _check("distill.disagreement_weight", self.disagreement_weight, 1.0, 1e3)
+        _check("distill.disagreement_threshold", self.disagreement_threshold, 1e-6, 2.0)
 
     def share(self, round_index: int) -> float:
         """The share of the episodes the teacher drives in round ``round_index`` (0-based)."""

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import re
 
+import gymnasium as gym
 import numpy as np
 import pytest
 import torch as th
@@ -12,7 +13,8 @@ import torch as th
 from clutter_gym.training import load
 from clutter_gym.training.baselines import PotentialFieldNavigator
 from clutter_gym.training.config import config_for
-from clutter_gym.training.distill import Dataset
+from clutter_gym.training.distill import Dataset, disagreement, fit
+from clutter_gym.training.distill_config import DistillSettings
 from clutter_gym.training.privileged import PrivilegedCriticPolicy
 from clutter_gym.training.teachers import Teacher, TeacherLabels, make_teacher
 from clutter_gym.training.train import start, train
@@ -68,6 +70,45 @@ def test_the_data_set_aggregates_rounds_and_keeps_the_newest_samples():
     obs, labels = data.arrays()
     np.testing.assert_array_equal(obs["x"][:, 0], [4, 5, 6, 7, 8])
     np.testing.assert_array_equal(labels[:, 0], [40, 50, 60, 70, 80])
+
+
+def test_the_data_set_keeps_each_samples_weight_with_it():
+    data = Dataset(max_samples=4)
+    data.add({"x": np.zeros((3, 1))}, np.zeros((3, 1)), np.array([1.0, 2.0, 3.0]))
+    data.add({"x": np.zeros((2, 1))}, np.zeros((2, 1)))  # unweighted: 1 each
+    np.testing.assert_array_equal(data.weights(), [2.0, 3.0, 1.0, 1.0])
+
+
+def test_disagreement_is_any_entry_further_than_the_threshold():
+    labels = np.array([[0.0, 0.0], [0.0, 0.0], [0.5, -0.5]])
+    student = np.array([[0.2, -0.2], [0.0, 0.3], [0.5, -0.5]])
+    np.testing.assert_array_equal(disagreement(student, labels, 0.25), [False, True, False])
+
+
+def test_the_fit_draws_samples_in_proportion_to_their_weights():
+    """One observation labelled -1 as often as +1: unweighted, the student's likeliest bin is a coin toss between
+    them; with the +1 samples weighing 9 times as much it must pick +1 (over three bins: -1, 0, +1)."""
+    from gymnasium import spaces
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.env_util import make_vec_env
+
+    from clutter_gym.training.privileged import acted
+
+    class OneState(gym.Env):
+        observation_space = spaces.Dict({"x": spaces.Box(-1, 1, (1,))})
+        action_space = spaces.MultiDiscrete([3])
+
+    model = PPO("MultiInputPolicy", make_vec_env(OneState, 1), seed=0, policy_kwargs={"net_arch": [8]})
+    data = Dataset(max_samples=1000)
+    labels = np.repeat([[-1.0], [1.0]], 100, axis=0)
+    data.add({"x": np.zeros((200, 1))}, labels, np.where(labels[:, 0] > 0, 9.0, 1.0))
+    settings = DistillSettings(epochs=20, batch_size=50, learning_rate=1e-2)
+    fit(model, data, settings, th.optim.Adam(model.policy.parameters(), lr=settings.learning_rate), bins=3)
+    x = {"x": th.zeros((1, 1))}
+    assert acted(model.policy, x, bins=3).item() == 1.0
+    with th.no_grad():
+        probs = model.policy.get_distribution(x).distribution[0].probs[0]
+    assert 0.8 < probs[2] < 0.99  # the weighted share, 0.9, not the certainty a weight-free pick of +1 would give
 
 
 def test_the_critic_reads_the_privileged_entries_and_the_actor_does_not(make_env):
