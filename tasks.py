@@ -33,7 +33,10 @@ TYPED_MODULES = ("clutter_gym.datatypes", "clutter_gym.interfaces", "clutter_gym
                  "clutter_gym.clutter_nav", "clutter_gym.clutter_reach", "clutter_gym.clutter_fly",
                  "clutter_gym.collision.checker", "clutter_gym.collision.nearest", "clutter_gym.collision.swept_audit",
                  "clutter_gym.worlds.near_field", "clutter_gym.worlds.pool", "clutter_gym.sim.primitives",
-                 "clutter_gym.urdf.checks", "clutter_gym.urdf.geometry", "clutter_gym.urdf.kinematics")
+                 "clutter_gym.urdf.checks", "clutter_gym.urdf.geometry", "clutter_gym.urdf.kinematics",
+                 "clutter_gym.collision.build", "clutter_gym.sensors")
+#: and these packages, every module in them: the step stages
+TYPED_PACKAGES = ("clutter_gym.stages",)
 #: The Pythons pybullet 3.2.7 has wheels for, newest first.
 WHEEL_PYTHONS = ((3, 11), (3, 10))
 
@@ -104,13 +107,13 @@ def ensure_installed() -> None:
 
 
 def static_checks() -> bool:
-    """ruff over the repository, then mypy over :data:`TYPED_MODULES` (imports followed, their errors not shown)."""
+    """ruff over the repository, then mypy over :data:`TYPED_MODULES` and :data:`TYPED_PACKAGES` (imports followed, their errors not shown)."""
     if subprocess.run([str(PY), "-m", "ruff", "check", "."], cwd=ROOT).returncode != 0:
         print("ruff: style errors above (ruff check --fix . fixes import order)", file=sys.stderr)
         return False
     # pybullet and python-fcl ship no type information: their calls are unchecked, not errors
     mypy = [str(PY), "-m", "mypy", "--follow-imports=silent", "--ignore-missing-imports",
-            *(arg for m in TYPED_MODULES for arg in ("-m", m))]
+            *(arg for m in TYPED_MODULES for arg in ("-m", m)), *(arg for p in TYPED_PACKAGES for arg in ("-p", p))]
     if subprocess.run(mypy, cwd=ROOT).returncode != 0:
         print("mypy: a part no longer has what its protocol in clutter_gym/interfaces.py declares (above)",
               file=sys.stderr)

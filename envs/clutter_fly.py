@@ -9,8 +9,8 @@ from typing import Any
 
 import numpy as np
 
-from clutter_gym.collision import RobotCollisionModel
-from clutter_gym.core import ClutterEnv, collision_checker
+from clutter_gym.collision import RobotCollisionModel, collision_checker
+from clutter_gym.core import ClutterEnv
 from clutter_gym.make_checks import check_env_settings, check_flags, check_numbers
 from clutter_gym.noise.profiles import NoiseProfile, resolve_noise
 from clutter_gym.robots import Multirotor, MultirotorConfig
@@ -224,7 +224,8 @@ class ClutterFlyEnv(ClutterEnv):
                             vertical_fov=lidar_vertical_fov, link=SENSOR_LINK, caster=lidar_caster)
         camera = camera_config(camera_size, camera_modes, camera_fov, camera_far, camera_renderer, link=SENSOR_LINK)
         profile = resolve_noise(noise)
-        sensor_objects = build_sensors(sensors, profile, lidar, ImuConfig(dt=1.0 / control_hz, link=IMU_LINK), camera)
+        configs = {"lidar": lidar, "imu": ImuConfig(dt=1.0 / control_hz, link=IMU_LINK), "camera": camera}
+        sensor_objects = build_sensors(sensors, profile, configs)
         task = FlyTask(
             FlyRewardWeights(progress=progress_weight, success=success_weight, crash=crash_weight,
                              contact=contact_weight, clearance=clearance_weight, control=control_weight,

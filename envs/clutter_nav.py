@@ -8,7 +8,8 @@ from typing import Any
 
 import numpy as np
 
-from clutter_gym.core import ClutterEnv, collision_checker
+from clutter_gym.collision import collision_checker
+from clutter_gym.core import ClutterEnv
 from clutter_gym.make_checks import check_env_settings, check_flags, check_numbers, check_physics_mode
 from clutter_gym.noise.profiles import NoiseProfile, resolve_noise
 from clutter_gym.robots import DiffDriveConfig, DiffDriveRobot
@@ -16,6 +17,7 @@ from clutter_gym.robots.registry import resolve_robot
 from clutter_gym.robots.safety import SafetyConfig, SafetyFilter
 from clutter_gym.robots.wheeled import WheeledBase
 from clutter_gym.sensors import ImuConfig, LidarConfig, build_sensors, camera_config
+from clutter_gym.stages import ForwardOnly, SafetyMonitor
 from clutter_gym.tasks import NavigateTask, NavRewardWeights
 from clutter_gym.urdf.kinematics import UrdfKinematics
 from clutter_gym.worlds import ClutterArena, ClutterSpec
@@ -217,7 +219,7 @@ class ClutterNavEnv(ClutterEnv):
                            env_id="ClutterNav-v1", min_physics_hz=MIN_PHYSICS_HZ)
         check_physics_mode(physics)
         check_flags(terminate_on_collision=terminate_on_collision, reverse=reverse, observe_bearing=observe_bearing)
-        self.forward_only = not reverse  # the linear action maps onto stand..full speed (see _command)
+        self.forward_only = not reverse  # the linear action maps onto stand..full speed (stages.ForwardOnly)
         base = resolve_robot(robot, "diff_drive", "ClutterNav-v1")
         drive = DiffDriveRobot(DiffDriveConfig(max_linear_speed=max_linear_speed, max_angular_speed=max_angular_speed),
                                base)
@@ -227,7 +229,8 @@ class ClutterNavEnv(ClutterEnv):
                             n_channels=lidar_channels, vertical_fov=lidar_vertical_fov, caster=lidar_caster)
         camera = camera_config(camera_size, camera_modes, camera_fov, camera_far, camera_renderer)
         profile = resolve_noise(noise)
-        sensor_objects = build_sensors(sensors, profile, lidar, ImuConfig(dt=1.0 / control_hz), camera)
+        configs = {"lidar": lidar, "imu": ImuConfig(dt=1.0 / control_hz), "camera": camera}
+        sensor_objects = build_sensors(sensors, profile, configs)
         _check_sensor_links(sensors, base)
         task = NavigateTask(
             NavRewardWeights(progress=progress_weight, success=success_weight, contact=contact_weight,
@@ -258,15 +261,9 @@ class ClutterNavEnv(ClutterEnv):
             control_hz=control_hz,
             noise=profile,
             render_mode=render_mode,
-            safety=safety,
+            stages=[*([ForwardOnly()] if self.forward_only else []), *([SafetyMonitor(safety)] if safety else [])],
             physics=physics,
         )
-
-
-    def _command(self, action: np.ndarray) -> np.ndarray:
-        if not self.forward_only:
-            return action
-        return np.array([0.5 * (action[0] + 1.0), action[1]])
 
 
 def _check_sensor_links(sensors: Sequence[str], base: WheeledBase) -> None:

@@ -6,7 +6,8 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
-from clutter_gym.core import ClutterEnv, collision_checker
+from clutter_gym.collision import collision_checker
+from clutter_gym.core import ClutterEnv
 from clutter_gym.make_checks import check_env_settings, check_flags, check_numbers, check_physics_mode
 from clutter_gym.noise.profiles import NoiseProfile, resolve_noise
 from clutter_gym.planning.joint_space import ArmPlanner

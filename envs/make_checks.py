@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from clutter_gym.auto_physics import PHYSICS_MODES
+from clutter_gym.datatypes import CollisionReport
 from clutter_gym.util.checks import check_integer, is_number
 
 RENDER_MODES = ("human", "rgb_array")
@@ -110,3 +111,56 @@ def check_rates(physics_hz: float, control_hz: float, solver_iterations: int, *,
             f"physics_hz must be an integer multiple of control_hz; {physics_hz} / {control_hz} = {ratio:.6g}"
         )
     check_integer("solver_iterations", solver_iterations, 1, 1000)
+
+
+def checked_action(action: Any, low: np.ndarray, high: np.ndarray) -> np.ndarray:
+    """``action`` as float64 within ``low``..``high``: any real dtype and container of the right shape, clipped, and
+    an object array whose every element is a real number (Python's, numpy's, a Fraction); anything else (strings,
+    None, bools, complex numbers, NaN, Inf) is a ``ValueError`` naming the action."""
+    shape = low.shape
+    try:
+        a = np.asarray(action)
+    except ValueError:  # ragged nesting
+        a = np.empty(0, dtype=object)
+    if a.dtype.kind == "O" and a.size and all(is_number(v) for v in a.flat):
+        try:
+            a = a.astype(np.float64)
+        except OverflowError:  # an integer beyond the float range
+            raise ValueError(f"action must be finite (no NaN/Inf), got {repr(action)[:200]}") from None
+    if a.dtype.kind not in "fiu":
+        raise ValueError(f"action must be {shape[0]} real numbers (floats or integers), got {repr(action)[:200]}")
+    a = a.astype(np.float64, copy=False)
+    if a.shape != shape:
+        raise ValueError(f"action must have shape {shape}, got {a.shape}")
+    if not np.isfinite(a).all():
+        raise ValueError(f"action must be finite (no NaN/Inf), got {a.tolist()}")
+    return np.minimum(np.maximum(a, low), high)
+
+
+def check_start(report: CollisionReport) -> None:
+    """Refuse a user scene that starts in collision: a contact, or self-collision of a pair the ACM checks (at a
+    coarse level confirmed with the convex shapes, so the robot's own, not its coarse shapes').
+
+    A generated scene is not checked: its sampler keeps the clutter clear of the start pose, and it starts clear at
+    every fidelity level, so it is accepted back as a user scene (tests/test_reach.py checks every level and a padded
+    arm: padding is a margin against the world, and self-collision is judged unpadded)."""
+    if report.in_contact or report.self_collision is not None:
+        what = report.contacts[0] if report.contacts else f"self-collision {report.self_collision}"
+        raise ValueError(f"scene starts in collision: {what}")
+
+
+def check_finite(obs: Mapping[str, np.ndarray]) -> None:
+    """Raise ``FloatingPointError`` naming the entries of ``obs`` that hold NaN or Inf."""
+    floats = [v for v in obs.values() if v.dtype.kind == "f"]  # integer images cannot hold NaN/Inf
+    if not math.isfinite(sum(float(v.sum()) for v in floats)):  # NaN/Inf anywhere poisons the sum
+        bad = [key for key, value in obs.items() if not np.all(np.isfinite(value))]
+        raise FloatingPointError(f"non-finite observation {bad}: {[obs[k] for k in bad]}")
+
+
+def not_picklable(env_id: str | None, class_name: str) -> str:
+    """Why an env (of id ``env_id``, None when made without gym.make) cannot be pickled or copied, and what to do
+    instead."""
+    name = f"{env_id} ({class_name})" if env_id else class_name
+    return (f"{name} cannot be pickled or copied: it owns a pybullet physics client and FCL collision objects. Make "
+            f"a new env instead, with gym.make and the same id and kwargs, and reset it with the same seed; for a "
+            f"vector env pass a factory (e.g. lambda: gym.make(...)) rather than an env")

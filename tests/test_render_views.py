@@ -86,9 +86,9 @@ def test_the_trail_is_kept_while_rendering_and_starts_again_each_episode(make_en
         env.reset(seed=0)
         for _ in range(5):
             env.step(np.array([1.0, 0.0]))
-    assert len(rendered.unwrapped._trail) == 6 and len(plain.unwrapped._trail) == 0
+    assert len(rendered.unwrapped.render_trail.trail) == 6 and len(plain.unwrapped.render_trail.trail) == 0
     rendered.reset(seed=1)
-    assert len(rendered.unwrapped._trail) == 1
+    assert len(rendered.unwrapped.render_trail.trail) == 1
 
 
 def test_human_mode_points_the_gui_camera_as_the_rgb_array_view(make_env, monkeypatch):

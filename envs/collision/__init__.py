@@ -7,6 +7,7 @@ against a scene.
 """
 
 from clutter_gym.collision.acm import AllowedCollisionMatrix, generate_acm, load_acm
+from clutter_gym.collision.build import collision_checker
 from clutter_gym.collision.checker import CollisionChecker
 from clutter_gym.collision.fidelity import FIDELITY_LEVELS, LinkShape, build_link_shapes, check_fidelity
 from clutter_gym.collision.obstacles import obstacle_object
@@ -28,6 +29,7 @@ __all__ = [
     "UrdfKinematics",
     "build_link_shapes",
     "check_fidelity",
+    "collision_checker",
     "generate_acm",
     "load_acm",
     "load_collision_elements",

@@ -1,13 +1,22 @@
-"""Sensors: clean reads of the world (LIDAR, IMU, camera), each followed by its noise chain."""
+"""Sensors: clean reads of the world (LIDAR, IMU, camera), each followed by its noise chain, registered by name
+(:mod:`clutter_gym.sensors.suite`)."""
 
 from clutter_gym.interfaces import Sensor
 from clutter_gym.sensors.camera import SEGMENTATION_CLASSES, Camera, CameraConfig, camera_config
 from clutter_gym.sensors.imu import Imu, ImuConfig
 from clutter_gym.sensors.lidar import Lidar, LidarConfig
-from clutter_gym.sensors.suite import SENSOR_NAMES, build_sensors, check_sensor_names
+from clutter_gym.sensors.suite import SENSORS, build_sensors, check_sensor_names, register_sensor
+
+register_sensor("lidar", lambda config, noise: Lidar(config, noise.lidar), LidarConfig)
+register_sensor("imu", lambda config, noise: Imu(config, noise.imu), None)  # its config needs the control period
+register_sensor("camera", lambda config, noise: Camera(config, noise.camera_rgb, noise.camera_depth), CameraConfig)
+
+#: The registered sensors' names, in registration order.
+SENSOR_NAMES = tuple(SENSORS)
 
 __all__ = [
     "SEGMENTATION_CLASSES",
+    "SENSORS",
     "SENSOR_NAMES",
     "Camera",
     "CameraConfig",
@@ -19,4 +28,5 @@ __all__ = [
     "build_sensors",
     "camera_config",
     "check_sensor_names",
+    "register_sensor",
 ]

@@ -1,37 +1,84 @@
-"""The sensor set of an env, built from its ``sensors=(...)`` names, geometry kwargs and noise profile."""
+"""The sensors by name: a registry of what each sensor is built from, and an env's set built from its
+``sensors=(...)`` names, each sensor's config (by name) and the noise profile.
+
+A sensor registers once (:func:`register_sensor`, in ``sensors/__init__.py``) with the function that builds it
+from its config and the profile, and the config it takes when an env gives none. Callers pass configs by sensor
+name, so a new sensor adds an entry here and changes no caller's signature.
+"""
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
 
 from clutter_gym.interfaces import Sensor
 from clutter_gym.noise.profiles import NoiseProfile
-from clutter_gym.sensors.camera import Camera, CameraConfig
-from clutter_gym.sensors.imu import Imu, ImuConfig
-from clutter_gym.sensors.lidar import Lidar, LidarConfig
 
-SENSOR_NAMES = ("lidar", "imu", "camera")
+
+@dataclass(frozen=True)
+class SensorEntry:
+    """One registered sensor.
+
+    Attributes:
+        name: its name in ``sensors=(...)`` and in the noise profile's timing.
+        build: the sensor from its config and the env's noise profile (which holds its noise section).
+        default_config: the config used when an env passes none for it; None: an env must pass one (the IMU's
+            depends on the env's control period).
+    """
+
+    name: str
+    build: Callable[[Any, NoiseProfile], Sensor]
+    default_config: Callable[[], Any] | None
+
+
+#: The registered sensors, by name, in registration order.
+SENSORS: dict[str, SensorEntry] = {}
+
+
+def register_sensor(name: str, build: Callable[[Any, NoiseProfile], Sensor],
+                    default_config: Callable[[], Any] | None) -> None:
+    """Make ``name`` a sensor an env can be given.
+
+    Raises:
+        ValueError: the name is taken.
+    """
+    if name in SENSORS:
+        raise ValueError(f"sensor {name!r} is already registered")
+    SENSORS[name] = SensorEntry(name, build, default_config)
 
 
 def check_sensor_names(sensors: Sequence[str]) -> tuple[str, ...]:
     """The ``sensors`` kwarg as a tuple, or a ValueError naming the allowed sensors."""
+    allowed = tuple(SENSORS)
     if isinstance(sensors, str) or not isinstance(sensors, Sequence):
-        raise ValueError(f"sensors must be a tuple of names from {SENSOR_NAMES}, got {sensors!r}")
-    unknown = [s for s in sensors if s not in SENSOR_NAMES]
+        raise ValueError(f"sensors must be a tuple of names from {allowed}, got {sensors!r}")
+    unknown = [s for s in sensors if s not in SENSORS]
     if unknown:
-        raise ValueError(f"unknown sensors {unknown}; allowed: {SENSOR_NAMES}")
+        raise ValueError(f"unknown sensors {unknown}; allowed: {allowed}")
     if len(set(sensors)) != len(sensors):
         raise ValueError(f"sensors must not repeat a name, got {tuple(sensors)}")
     return tuple(sensors)
 
 
-def build_sensors(
-    names: Sequence[str], noise: NoiseProfile, lidar: LidarConfig, imu: ImuConfig, camera: CameraConfig
-) -> list[Sensor]:
-    """One sensor per name, in order, each with its noise from the profile."""
-    factories: dict[str, Callable[[], Sensor]] = {  # typed: mypy holds each sensor to the Sensor protocol
-        "lidar": lambda: Lidar(lidar, noise.lidar),
-        "imu": lambda: Imu(imu, noise.imu),
-        "camera": lambda: Camera(camera, noise.camera_rgb, noise.camera_depth),
-    }
-    return [factories[name]() for name in check_sensor_names(names)]
+def build_sensors(names: Sequence[str], noise: NoiseProfile, configs: Mapping[str, Any]) -> list[Sensor]:
+    """One sensor per name, in order, from its config in ``configs`` (its registered default when absent), each
+    with its noise from the profile.
+
+    Raises:
+        ValueError: an unknown or repeated name, a config for a sensor that is not registered, or none for a named
+            sensor that has no default.
+    """
+    unknown = sorted(set(configs) - set(SENSORS))
+    if unknown:
+        raise ValueError(f"configs for unknown sensors {unknown}; registered: {tuple(SENSORS)}")
+    sensors = []
+    for entry in (SENSORS[name] for name in check_sensor_names(names)):
+        if entry.name in configs:
+            config = configs[entry.name]
+        elif entry.default_config is not None:
+            config = entry.default_config()
+        else:
+            raise ValueError(f"sensor {entry.name!r} has no default config: pass one under configs[{entry.name!r}]")
+        sensors.append(entry.build(config, noise))
+    return sensors

@@ -7,6 +7,7 @@ state that runs them, one clock per sensor, ticking once per control step.
 from __future__ import annotations
 
 from collections import deque
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -77,3 +78,36 @@ def timed_reading(sensor: Sensor, clock: SampleHoldDelay, sim: Sim, state: Robot
         obs, info, reading = delivered
         delivered = ({k: np.copy(v) for k, v in obs.items()}, {k: np.copy(v) for k, v in info.items()}, reading)
     return delivered
+
+
+class TimedSensors:
+    """An env's sensors, each behind its clock, and the reading each delivered last (:attr:`readings`, in the
+    sensors' order: what a filter downstream of a sensor, such as the collision monitor, acts on).
+
+    Args:
+        sensors: read in order.
+        timing: each sensor's timing, by name (a noise profile's ``timing``); a sensor it does not name reads every
+            control step, without latency.
+        control_dt: control period, seconds.
+    """
+
+    def __init__(self, sensors: Sequence[Sensor], timing: Mapping[str, SensorTiming], control_dt: float) -> None:
+        self.sensors = tuple(sensors)
+        self.clocks = tuple(SampleHoldDelay(timing.get(s.name) or SensorTiming(), control_dt) for s in self.sensors)
+        self.readings: list[Any] = [None] * len(self.sensors)
+
+    def reset(self, sim: Sim, state: RobotState, rng: np.random.Generator) -> None:
+        for sensor, clock in zip(self.sensors, self.clocks):
+            sensor.reset(sim, state, rng)
+            clock.reset(rng)
+
+    def read(self, sim: Sim, state: RobotState, rng: np.random.Generator) -> tuple[dict[str, np.ndarray],
+                                                                                     dict[str, Any]]:
+        """One control step of every sensor: the observation and info entries that arrive now."""
+        obs: dict[str, np.ndarray] = {}
+        info: dict[str, Any] = {}
+        for i, (sensor, clock) in enumerate(zip(self.sensors, self.clocks)):
+            sensor_obs, sensor_info, self.readings[i] = timed_reading(sensor, clock, sim, state, rng)
+            obs.update(sensor_obs)
+            info.update(sensor_info)
+        return obs, info

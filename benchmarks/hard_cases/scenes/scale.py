@@ -15,9 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from clutter_gym.collision import CollisionChecker
+from clutter_gym.collision import CollisionChecker, collision_checker
 from clutter_gym.collision.distance import signed_distance
-from clutter_gym.core import collision_checker
 from clutter_gym.datatypes import LinkStates, Obstacle, RobotState
 from clutter_gym.robots import DiffDriveRobot
 from clutter_gym.robots.diffdrive import TRACKED_LINKS, DiffDriveConfig

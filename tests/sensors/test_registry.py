@@ -1,0 +1,66 @@
+"""Sensors by name (clutter_gym.sensors.suite): a sensor is one module plus one registration, an env built with
+its name reads it, and configs are passed by name with each sensor's registered default when absent."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from gymnasium import spaces
+
+from clutter_gym.noise.profiles import resolve_noise
+from clutter_gym.sensors import SENSORS, ImuConfig, LidarConfig, build_sensors, register_sensor
+
+
+class Altimeter:
+    """A toy sensor that touches nothing shared: the base's height above the floor, with Gaussian noise."""
+
+    name = "altimeter"
+    spaces = {"altitude": spaces.Box(-np.inf, np.inf, (1,), np.float32)}
+    read_every_step = renders = needs_bodies = False
+
+    def __init__(self, sigma: float) -> None:
+        self.sigma = sigma
+
+    def reset(self, sim, state, rng):
+        pass
+
+    def read(self, sim, state, rng):
+        return float(state.position[2]) + rng.normal(0.0, self.sigma) if self.sigma else float(state.position[2])
+
+    def observe(self, reading):
+        return {"altitude": np.array([reading], dtype=np.float32)}
+
+    def info(self, reading):
+        return {}
+
+
+@pytest.fixture
+def altimeter():
+    register_sensor("altimeter", lambda config, noise: Altimeter(config), lambda: 0.0)
+    yield
+    del SENSORS["altimeter"]
+
+
+def test_a_registered_sensor_is_read_by_an_env_that_names_it(make_env, altimeter):
+    env = make_env("ClutterFly-v1", sensors=["imu", "altimeter"])
+    obs, _ = env.reset(seed=0)
+    for _ in range(5):
+        obs, *_ = env.step(np.zeros(env.action_space.shape))
+    assert obs["altitude"][0] == pytest.approx(env.unwrapped.robot.state().position[2], abs=1e-6)
+
+
+def test_configs_are_taken_by_name_and_a_missing_one_is_the_registered_default(altimeter):
+    imu = ImuConfig(dt=0.05)
+    sensors = build_sensors(["lidar", "altimeter", "imu"], resolve_noise("none"),
+                            {"lidar": LidarConfig(n_rays=8), "imu": imu})
+    assert [s.name for s in sensors] == ["lidar", "altimeter", "imu"]
+    assert sensors[0].config.n_rays == 8 and sensors[1].sigma == 0.0 and sensors[2].config is imu
+    with pytest.raises(ValueError, match=r"sensor 'imu' has no default config: pass one under configs\['imu'\]"):
+        build_sensors(["imu"], resolve_noise("none"), {})
+    with pytest.raises(ValueError, match=r"configs for unknown sensors \['sonar'\]"):
+        build_sensors(["lidar"], resolve_noise("none"), {"sonar": None})
+    with pytest.raises(ValueError, match="unknown sensors \\['sonar'\\]; allowed: \\('lidar', 'imu', 'camera', "
+                                         "'altimeter'\\)"):
+        build_sensors(["sonar"], resolve_noise("none"), {})
+    with pytest.raises(ValueError, match="already registered"):
+        register_sensor("lidar", lambda config, noise: None, LidarConfig)
