@@ -225,7 +225,7 @@ class ClutterFlyEnv(ClutterEnv):
         camera = camera_config(camera_size, camera_modes, camera_fov, camera_far, camera_renderer, link=SENSOR_LINK)
         profile = resolve_noise(noise)
         configs = {"lidar": lidar, "imu": ImuConfig(dt=1.0 / control_hz, link=IMU_LINK), "camera": camera}
-        sensor_objects = build_sensors(sensors, profile, configs)
+        sensor_objects = build_sensors(sensors, profile, configs, flyer)
         task = FlyTask(
             FlyRewardWeights(progress=progress_weight, success=success_weight, crash=crash_weight,
                              contact=contact_weight, clearance=clearance_weight, control=control_weight,

@@ -16,7 +16,7 @@ from clutter_gym.robots import DiffDriveConfig, DiffDriveRobot
 from clutter_gym.robots.registry import resolve_robot
 from clutter_gym.robots.safety import SafetyConfig, SafetyFilter
 from clutter_gym.robots.wheeled import WheeledBase
-from clutter_gym.sensors import ImuConfig, LidarConfig, build_sensors, camera_config
+from clutter_gym.sensors import ImuConfig, LidarConfig, build_sensors, camera_config, sensor_links
 from clutter_gym.stages import ForwardOnly, SafetyMonitor
 from clutter_gym.tasks import NavigateTask, NavRewardWeights
 from clutter_gym.urdf.kinematics import UrdfKinematics
@@ -230,7 +230,7 @@ class ClutterNavEnv(ClutterEnv):
         camera = camera_config(camera_size, camera_modes, camera_fov, camera_far, camera_renderer)
         profile = resolve_noise(noise)
         configs = {"lidar": lidar, "imu": ImuConfig(dt=1.0 / control_hz), "camera": camera}
-        sensor_objects = build_sensors(sensors, profile, configs)
+        sensor_objects = build_sensors(sensors, profile, configs, drive)
         _check_sensor_links(sensors, base)
         task = NavigateTask(
             NavRewardWeights(progress=progress_weight, success=success_weight, contact=contact_weight,
@@ -269,7 +269,7 @@ class ClutterNavEnv(ClutterEnv):
 def _check_sensor_links(sensors: Sequence[str], base: WheeledBase) -> None:
     """Refuse sensors whose link the robot's URDF lacks, naming them and the links it has."""
     links = UrdfKinematics(base.urdf).links
-    missing = [f"{name}_link" for name in sensors if f"{name}_link" not in links]
+    missing = [link for link in sensor_links(sensors) if link not in links]
     if missing:
         raise ValueError(f"robot {base.name!r} has no {missing} for sensors {list(sensors)}; mount them in its spec "
                          f"(mounts) or drop those sensors (its links: {links})")

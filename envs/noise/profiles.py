@@ -6,14 +6,22 @@ from a profile and overrides parameters per section, or a :class:`NoiseProfile`:
     gym.make("ClutterNav-v1", noise={"profile": "nominal", "lidar": {"range_sigma": 0.02, "latency_steps": 1}})
 
 Sections: ``lidar``, ``imu``, ``camera_rgb``, ``camera_depth``, ``camera`` (timing only), ``action`` and
-``dynamics``. The sensor sections ``lidar``, ``imu`` and ``camera`` also take the timing keys ``rate_hz`` and
+``dynamics``, and each section a sensor's noise module declares (:class:`SensorNoiseSection`: ``odometry``). The
+sensor sections ``lidar``, ``imu``, ``camera`` and the declared timed ones also take the timing keys ``rate_hz`` and
 ``latency_steps`` (:class:`~clutter_gym.noise.timing.SensorTiming`).
+
+A new sensor's noise needs no edit here: its module in this package declares ``SENSOR_NOISE``, a
+:class:`SensorNoiseSection` with its parameters and its values in each named profile, each with its source, and
+:func:`sensor_sections` finds it. Its parameters are then ``noise.section(name)``, overridable and listed like the
+others.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import functools
+import importlib
+import pkgutil
 from collections.abc import Mapping
 from importlib import resources
 from typing import Any
@@ -42,6 +50,41 @@ TIMED_SENSORS = ("lidar", "imu", "camera")
 _TIMING_KEYS = tuple(f.name for f in dataclasses.fields(SensorTiming))
 
 
+@dataclasses.dataclass(frozen=True)
+class SensorNoiseSection:
+    """A sensor's noise section, declared in its noise module as ``SENSOR_NOISE``.
+
+    Attributes:
+        name: the section's name in profiles and overrides (the sensor's name).
+        params: its parameters (clean by default).
+        timed: it also takes the timing keys (``rate_hz``, ``latency_steps``).
+        profiles: ``{profile: {parameter: (value, source)}}`` for the named profiles that set any (timing keys
+            included); a source is a row of docs/sensor-noise-reference.md or says UNSOURCED and why.
+    """
+
+    name: str
+    params: type[NoiseParams]
+    timed: bool
+    profiles: Mapping[str, Mapping[str, tuple[float, str]]]
+
+
+@functools.cache
+def sensor_sections() -> dict[str, SensorNoiseSection]:
+    """The sections the modules of this package declare (``SENSOR_NOISE``), by name."""
+    package = importlib.import_module("clutter_gym.noise")
+    found: dict[str, SensorNoiseSection] = {}
+    for info in pkgutil.iter_modules(package.__path__):
+        declared = getattr(importlib.import_module(f"clutter_gym.noise.{info.name}"), "SENSOR_NOISE", None)
+        if isinstance(declared, SensorNoiseSection):
+            found[declared.name] = declared
+    return found
+
+
+def _timed() -> tuple[str, ...]:
+    """Every section with timing: the built-in sensors' and the declared timed ones."""
+    return (*TIMED_SENSORS, *(name for name, section in sensor_sections().items() if section.timed))
+
+
 @functools.cache
 def _timing_class(sensor: str) -> type[SensorTiming]:
     """SensorTiming whose error messages name the sensor (``lidar.rate_hz``)."""
@@ -60,15 +103,22 @@ class NoiseProfile:
     action: ActionNoise = ActionNoise()
     dynamics: DynamicsNoise = DynamicsNoise()
     timing: Mapping[str, SensorTiming] = dataclasses.field(
-        default_factory=lambda: {sensor: _timing_class(sensor)() for sensor in TIMED_SENSORS}
+        default_factory=lambda: {sensor: _timing_class(sensor)() for sensor in _timed()}
     )
+    sensors: Mapping[str, NoiseParams] = dataclasses.field(
+        default_factory=lambda: {name: section.params() for name, section in sensor_sections().items()}
+    )
+
+    def section(self, name: str) -> Any:
+        """The noise parameters of section ``name``, a built-in one or a declared sensor's."""
+        return getattr(self, name) if name in NOISE_SECTIONS else self.sensors[name]
 
     def to_dict(self) -> dict[str, Any]:
         """Plain values, in the override format (every parameter, clean ones included)."""
         out: dict[str, Any] = {"profile": self.name}
-        for section in NOISE_SECTIONS:
-            out[section] = dataclasses.asdict(getattr(self, section))
-        for sensor in TIMED_SENSORS:
+        for section in (*NOISE_SECTIONS, *self.sensors):
+            out[section] = dataclasses.asdict(self.section(section))
+        for sensor in self.timing:
             out.setdefault(sensor, {}).update(dataclasses.asdict(self.timing[sensor]))
         return out
 
@@ -86,11 +136,15 @@ def profile_sources(name: str) -> dict[str, dict[str, tuple[float, str]]]:
     """``{section: {parameter: (value, source)}}`` of a named profile as written in profiles.yaml."""
     if name not in PROFILE_NAMES:
         raise ValueError(f"noise profile must be one of {PROFILE_NAMES}, got {name!r}")
-    return {
+    sources = {
         section: {key: (entry[0], entry[1]) for key, entry in values.items()}
         for section, values in _profile_file()[name].items()
         if section != "description"
     }
+    for section_name, section in sensor_sections().items():
+        if name in section.profiles:
+            sources[section_name] = dict(section.profiles[name])
+    return sources
 
 
 def profile_description(name: str) -> str:
@@ -119,7 +173,7 @@ def resolve_noise(spec: str | Mapping[str, Any] | NoiseProfile | None) -> NoiseP
     name = spec.get("profile", "none")
     base = {section: {k: v for k, (v, _) in values.items()} for section, values in profile_sources(name).items()}
     overrides = {key: value for key, value in spec.items() if key != "profile"}
-    allowed = sorted({*NOISE_SECTIONS, *TIMED_SENSORS})
+    allowed = sorted({*NOISE_SECTIONS, *_timed(), *sensor_sections()})
     unknown = sorted(set(overrides) - set(allowed))
     if unknown:
         raise ValueError(f"unknown noise sections {unknown}; allowed: {['profile', *allowed]}")
@@ -132,16 +186,21 @@ def resolve_noise(spec: str | Mapping[str, Any] | NoiseProfile | None) -> NoiseP
 
 def _build(name: str, values: Mapping[str, Mapping[str, Any]]) -> NoiseProfile:
     sections: dict[str, Any] = {}
+    sensors: dict[str, NoiseParams] = {}
     timing: dict[str, SensorTiming] = {}
-    for section in sorted({*NOISE_SECTIONS, *TIMED_SENSORS}):
+    declared = sensor_sections()
+    timed = _timed()
+    for section in sorted({*NOISE_SECTIONS, *timed, *declared}):
         given = dict(values.get(section, {}))
-        if section in TIMED_SENSORS:
+        if section in timed:
             timing[section] = _timing_class(section).from_dict({k: given.pop(k) for k in _TIMING_KEYS if k in given})
         if section in NOISE_SECTIONS:
             sections[section] = NOISE_SECTIONS[section].from_dict(given)
+        elif section in declared:
+            sensors[section] = declared[section].params.from_dict(given)
         elif given:
             raise ValueError(f"noise section {section!r} takes only {list(_TIMING_KEYS)}, got {sorted(given)}")
-    return NoiseProfile(name=name, timing=timing, **sections)
+    return NoiseProfile(name=name, timing=timing, sensors=sensors, **sections)
 
 
 def profile_table_markdown() -> str:

@@ -2,8 +2,9 @@
 ``sensors=(...)`` names, each sensor's config (by name) and the noise profile.
 
 A sensor registers once (:func:`register_sensor`, in ``sensors/__init__.py``) with the function that builds it
-from its config and the profile, and the config it takes when an env gives none. Callers pass configs by sensor
-name, so a new sensor adds an entry here and changes no caller's signature.
+from its config, the profile and the robot it is mounted on, the config it takes when an env gives none, and the
+URDF link it is mounted on. Callers pass configs by sensor name, so a new sensor changes no caller. A sensor's
+noise section lives in its noise module (:mod:`clutter_gym.noise.profiles` finds it there).
 """
 
 from __future__ import annotations
@@ -22,30 +23,33 @@ class SensorEntry:
 
     Attributes:
         name: its name in ``sensors=(...)`` and in the noise profile's timing.
-        build: the sensor from its config and the env's noise profile (which holds its noise section).
+        build: the sensor from its config, the env's noise profile (which holds its noise section) and the robot
+            (a sensor that reads the robot's own parts, such as its wheels, takes them from it).
         default_config: the config used when an env passes none for it; None: an env must pass one (the IMU's
             depends on the env's control period).
+        link: the URDF link it is mounted on (an env checks the robot has it); None: it is not mounted on a link.
     """
 
     name: str
-    build: Callable[[Any, NoiseProfile], Sensor]
+    build: Callable[[Any, NoiseProfile, Any], Sensor]
     default_config: Callable[[], Any] | None
+    link: str | None
 
 
 #: The registered sensors, by name, in registration order.
 SENSORS: dict[str, SensorEntry] = {}
 
 
-def register_sensor(name: str, build: Callable[[Any, NoiseProfile], Sensor],
-                    default_config: Callable[[], Any] | None) -> None:
-    """Make ``name`` a sensor an env can be given.
+def register_sensor(name: str, build: Callable[[Any, NoiseProfile, Any], Sensor],
+                    default_config: Callable[[], Any] | None, link: str | None = "") -> None:
+    """Make ``name`` a sensor an env can be given, mounted on ``link`` ("": the link called ``<name>_link``).
 
     Raises:
         ValueError: the name is taken.
     """
     if name in SENSORS:
         raise ValueError(f"sensor {name!r} is already registered")
-    SENSORS[name] = SensorEntry(name, build, default_config)
+    SENSORS[name] = SensorEntry(name, build, default_config, f"{name}_link" if link == "" else link)
 
 
 def check_sensor_names(sensors: Sequence[str]) -> tuple[str, ...]:
@@ -61,9 +65,9 @@ def check_sensor_names(sensors: Sequence[str]) -> tuple[str, ...]:
     return tuple(sensors)
 
 
-def build_sensors(names: Sequence[str], noise: NoiseProfile, configs: Mapping[str, Any]) -> list[Sensor]:
-    """One sensor per name, in order, from its config in ``configs`` (its registered default when absent), each
-    with its noise from the profile.
+def build_sensors(names: Sequence[str], noise: NoiseProfile, configs: Mapping[str, Any], robot: Any) -> list[Sensor]:
+    """One sensor per name, in order, on ``robot``, from its config in ``configs`` (its registered default when
+    absent), each with its noise from the profile.
 
     Raises:
         ValueError: an unknown or repeated name, a config for a sensor that is not registered, or none for a named
@@ -80,5 +84,10 @@ def build_sensors(names: Sequence[str], noise: NoiseProfile, configs: Mapping[st
             config = entry.default_config()
         else:
             raise ValueError(f"sensor {entry.name!r} has no default config: pass one under configs[{entry.name!r}]")
-        sensors.append(entry.build(config, noise))
+        sensors.append(entry.build(config, noise, robot))
     return sensors
+
+
+def sensor_links(names: Sequence[str]) -> list[str]:
+    """The URDF links the sensors ``names`` are mounted on (those mounted on one)."""
+    return [link for link in (SENSORS[name].link for name in check_sensor_names(names)) if link is not None]

@@ -36,7 +36,7 @@ class Altimeter:
 
 @pytest.fixture
 def altimeter():
-    register_sensor("altimeter", lambda config, noise: Altimeter(config), lambda: 0.0)
+    register_sensor("altimeter", lambda config, noise, robot: Altimeter(config), lambda: 0.0, link=None)
     yield
     del SENSORS["altimeter"]
 
@@ -52,15 +52,15 @@ def test_a_registered_sensor_is_read_by_an_env_that_names_it(make_env, altimeter
 def test_configs_are_taken_by_name_and_a_missing_one_is_the_registered_default(altimeter):
     imu = ImuConfig(dt=0.05)
     sensors = build_sensors(["lidar", "altimeter", "imu"], resolve_noise("none"),
-                            {"lidar": LidarConfig(n_rays=8), "imu": imu})
+                            {"lidar": LidarConfig(n_rays=8), "imu": imu}, robot=None)
     assert [s.name for s in sensors] == ["lidar", "altimeter", "imu"]
     assert sensors[0].config.n_rays == 8 and sensors[1].sigma == 0.0 and sensors[2].config is imu
     with pytest.raises(ValueError, match=r"sensor 'imu' has no default config: pass one under configs\['imu'\]"):
-        build_sensors(["imu"], resolve_noise("none"), {})
+        build_sensors(["imu"], resolve_noise("none"), {}, None)
     with pytest.raises(ValueError, match=r"configs for unknown sensors \['sonar'\]"):
-        build_sensors(["lidar"], resolve_noise("none"), {"sonar": None})
-    with pytest.raises(ValueError, match="unknown sensors \\['sonar'\\]; allowed: \\('lidar', 'imu', 'camera', "
-                                         "'altimeter'\\)"):
-        build_sensors(["sonar"], resolve_noise("none"), {})
+        build_sensors(["lidar"], resolve_noise("none"), {"sonar": None}, None)
+    with pytest.raises(ValueError, match=r"unknown sensors \['sonar'\]; allowed: \('lidar', 'imu', 'camera', "
+                                         r".*'altimeter'\)"):
+        build_sensors(["sonar"], resolve_noise("none"), {}, None)
     with pytest.raises(ValueError, match="already registered"):
-        register_sensor("lidar", lambda config, noise: None, LidarConfig)
+        register_sensor("lidar", lambda config, noise, robot: None, LidarConfig)
