@@ -63,6 +63,7 @@ class ClutterNavEnv(ClutterEnv):
     | ``camera_rgb`` | (h, w, 3) uint8 | colour image | -, the robot's camera link (diffbot's: on its front edge) looking along its +x | [0, 255] |
     | ``camera_depth`` | (h, w) | depth along the optical axis, 0 = no data | m | [0, camera_far] |
     | ``camera_segmentation`` | (h, w) uint8 | class per pixel: nothing, ground, obstacle, robot, goal | - | [0, 4] |
+    | ``odometry`` | (6,) | wheel odometry: x, y, sin(yaw), cos(yaw) since the episode's start, the last step's travel and turn | m, -, -, m, rad; start frame | unbounded |
     | ``goal`` | (3,) or (4,) | distance, sin(bearing), cos(bearing) (and bearing / pi with ``observe_bearing``) | m, -, -, -; robot frame | [0, arena diagonal], [-1, 1] |
     | ``subgoal`` | (3,) | distance, sin(bearing), cos(bearing) of the waypoint ``subgoal_lookahead`` ahead on the planned path | m, -, -; robot frame | [0, subgoal_lookahead], [-1, 1] |
     | ``velocity`` | (2,) | forward speed, yaw rate | m/s, rad/s; base frame | +-2x the commanded maxima |
@@ -114,7 +115,7 @@ class ClutterNavEnv(ClutterEnv):
 
     ## Arguments
 
-    ``render_mode`` (None, "rgb_array", "human"); ``sensors`` (subset of ("lidar", "imu", "camera"));
+    ``render_mode`` (None, "rgb_array", "human"); ``sensors`` (subset of ("lidar", "imu", "camera", "odometry"));
     ``noise`` (profile name, override mapping or NoiseProfile); ``arena_size`` m [2, 30]; ``obstacle_density``
     floor fraction [0, 0.3]; ``movable_obstacles`` fraction [0, 1] of the generated obstacles that the robot can
     push (see "Movable obstacles"); ``n_rays`` [1, 4096]; ``lidar_fov`` rad (0, 2 pi]; ``lidar_range`` m;
