@@ -34,7 +34,7 @@ TYPED_MODULES = ("clutter_gym.datatypes", "clutter_gym.interfaces", "clutter_gym
                  "clutter_gym.collision.checker", "clutter_gym.collision.nearest", "clutter_gym.collision.swept_audit",
                  "clutter_gym.worlds.near_field", "clutter_gym.worlds.pool", "clutter_gym.sim.primitives",
                  "clutter_gym.urdf.checks", "clutter_gym.urdf.geometry", "clutter_gym.urdf.kinematics",
-                 "clutter_gym.collision.build", "clutter_gym.sensors", "clutter_gym.sensors.suite",
+                 "clutter_gym.collision.build", "clutter_gym.sensors",
                  "clutter_gym.sensors.odometry", "clutter_gym.noise.profiles", "clutter_gym.noise.odometry")
 #: and these packages, every module in them: the step stages
 TYPED_PACKAGES = ("clutter_gym.stages",)
