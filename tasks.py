@@ -35,7 +35,8 @@ TYPED_MODULES = ("clutter_gym.datatypes", "clutter_gym.interfaces", "clutter_gym
                  "clutter_gym.worlds.near_field", "clutter_gym.worlds.pool", "clutter_gym.sim.primitives",
                  "clutter_gym.urdf.checks", "clutter_gym.urdf.geometry", "clutter_gym.urdf.kinematics",
                  "clutter_gym.collision.build", "clutter_gym.sensors",
-                 "clutter_gym.sensors.odometry", "clutter_gym.noise.profiles", "clutter_gym.noise.odometry")
+                 "clutter_gym.sensors.odometry", "clutter_gym.noise.profiles", "clutter_gym.noise.odometry",
+                 "clutter_gym.robots.omni", "clutter_gym.robots.registry")
 #: and these packages, every module in them: the step stages
 TYPED_PACKAGES = ("clutter_gym.stages",)
 #: The Pythons pybullet 3.2.7 has wheels for, newest first.
@@ -108,7 +109,8 @@ def ensure_installed() -> None:
 
 
 def static_checks() -> bool:
-    """ruff over the repository, then mypy over :data:`TYPED_MODULES` and :data:`TYPED_PACKAGES` (imports followed, their errors not shown)."""
+    """ruff over the repository, then mypy over :data:`TYPED_MODULES` and :data:`TYPED_PACKAGES` (imports followed,
+    their errors not shown)."""
     if subprocess.run([str(PY), "-m", "ruff", "check", "."], cwd=ROOT).returncode != 0:
         print("ruff: style errors above (ruff check --fix . fixes import order)", file=sys.stderr)
         return False

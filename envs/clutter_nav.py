@@ -1,4 +1,4 @@
-"""ClutterNav: a differential-drive robot crosses a cluttered walled arena to a goal without touching anything."""
+"""ClutterNav: a ground robot crosses a cluttered walled arena to a goal without touching anything."""
 
 from __future__ import annotations
 
@@ -12,10 +12,9 @@ from clutter_gym.collision import collision_checker
 from clutter_gym.core import ClutterEnv
 from clutter_gym.make_checks import check_env_settings, check_flags, check_numbers, check_physics_mode
 from clutter_gym.noise.profiles import NoiseProfile, resolve_noise
-from clutter_gym.robots import DiffDriveConfig, DiffDriveRobot
-from clutter_gym.robots.registry import resolve_robot
+from clutter_gym.robots import DiffDriveRobot
+from clutter_gym.robots.registry import ground_robot
 from clutter_gym.robots.safety import SafetyConfig, SafetyFilter
-from clutter_gym.robots.wheeled import WheeledBase
 from clutter_gym.sensors import ImuConfig, LidarConfig, build_sensors, camera_config, sensor_links
 from clutter_gym.stages import ForwardOnly, SafetyMonitor
 from clutter_gym.tasks import NavigateTask, NavRewardWeights
@@ -41,6 +40,9 @@ class ClutterNavEnv(ClutterEnv):
     ``Box(-1, 1, (2,), float32)``: (linear, angular) velocity command, normalised by ``max_linear_speed`` (m/s)
     and ``max_angular_speed`` (rad/s, counter-clockwise positive). Finite values outside [-1, 1] are clipped;
     NaN/Inf or a wrong shape raise ``ValueError``. Wheel motors track the command under a 1.5 N m torque limit.
+    An omnidirectional base (``robot="omnibot"``, or a spec of kind ``omni``) takes ``Box(-1, 1, (3,))``: (forward,
+    leftward, angular) in the base frame, the planar speed capped at ``max_linear_speed``
+    (:mod:`clutter_gym.robots.omni`).
     With ``reverse=False`` the base drives forwards only: the linear action maps onto [0, max_linear_speed]
     (-1: stand, 0: half speed, 1: full speed), as in mapless-navigation work that gives the policy no way back;
     the base still turns in place. Rewards and the monitor then see that command.
@@ -66,7 +68,7 @@ class ClutterNavEnv(ClutterEnv):
     | ``odometry`` | (6,) | wheel odometry: x, y, sin(yaw), cos(yaw) since the episode's start, the last step's travel and turn | m, -, -, m, rad; start frame | unbounded |
     | ``goal`` | (3,) or (4,) | distance, sin(bearing), cos(bearing) (and bearing / pi with ``observe_bearing``) | m, -, -, -; robot frame | [0, arena diagonal], [-1, 1] |
     | ``subgoal`` | (3,) | distance, sin(bearing), cos(bearing) of the waypoint ``subgoal_lookahead`` ahead on the planned path | m, -, -; robot frame | [0, subgoal_lookahead], [-1, 1] |
-    | ``velocity`` | (2,) | forward speed, yaw rate | m/s, rad/s; base frame | +-2x the commanded maxima |
+    | ``velocity`` | (2,), an omnidirectional base's (3,) | forward speed (and leftward speed), yaw rate | m/s, rad/s; base frame | +-2x the commanded maxima |
 
     Sensor entries are present only when listed in ``sensors`` (camera entries only for its ``camera_modes``;
     ``(w, h) = camera_size``); ``subgoal`` only when ``subgoal_lookahead > 0``. The IMU reads +9.81 m/s^2 on z
@@ -131,7 +133,7 @@ class ClutterNavEnv(ClutterEnv):
     ``*_weight`` reward weights; ``subgoal_lookahead`` m (0: off); ``safety_horizon`` s [0, 2] (0: off),
     ``safety_margin`` m [0, 0.5] and ``safety_recovery`` s [0, 10] (0: never) (need a 2D ``lidar`` in
     ``sensors``); ``reverse`` (False: forward driving only, see "Action space"); ``robot`` (a registered wheeled
-    base, a spec mapping or a YAML spec file: docs/robots.md); ``observe_bearing``
+    or omnidirectional base, a spec mapping or a YAML spec file: docs/robots.md; the monitor needs a wheeled one); ``observe_bearing``
     (the goal entry ends with the bearing angle / pi, which jumps where the goal is straight behind: from sin and cos
     alone, a continuous policy's turn passes through zero there, and a deterministic one can stop for good);
     ``physics`` ("auto": a user scene that stacks movable obstacles ticks faster with more solver iterations, as
@@ -221,9 +223,8 @@ class ClutterNavEnv(ClutterEnv):
         check_physics_mode(physics)
         check_flags(terminate_on_collision=terminate_on_collision, reverse=reverse, observe_bearing=observe_bearing)
         self.forward_only = not reverse  # the linear action maps onto stand..full speed (stages.ForwardOnly)
-        base = resolve_robot(robot, "diff_drive", "ClutterNav-v1")
-        drive = DiffDriveRobot(DiffDriveConfig(max_linear_speed=max_linear_speed, max_angular_speed=max_angular_speed),
-                               base)
+        drive = ground_robot(robot, "ClutterNav-v1", max_linear_speed, max_angular_speed)
+        base = drive.base
         spec = ClutterSpec(arena_size=arena_size, obstacle_density=obstacle_density,
                            movable_fraction=movable_obstacles)
         lidar = LidarConfig(n_rays=n_rays, fov=lidar_fov, max_range=lidar_range, mount_height=lidar_mount_height,
@@ -242,7 +243,7 @@ class ClutterNavEnv(ClutterEnv):
             terminate_on_collision=terminate_on_collision,
             max_goal_distance=math.sqrt(2.0) * arena_size,
             spec=spec,
-            robot_radius=drive.config.footprint_radius,
+            robot_radius=base.footprint_radius,
             subgoal_lookahead=subgoal_lookahead,
             observe_bearing=observe_bearing,
         )
@@ -255,7 +256,7 @@ class ClutterNavEnv(ClutterEnv):
             physics_hz=physics_hz,
             solver_iterations=solver_iterations,
             robot=drive,
-            arena=ClutterArena(spec, drive.config.footprint_radius),
+            arena=ClutterArena(spec, base.footprint_radius),
             sensors=sensor_objects,
             checker=checker,
             task=task,
@@ -267,7 +268,7 @@ class ClutterNavEnv(ClutterEnv):
         )
 
 
-def _check_sensor_links(sensors: Sequence[str], base: WheeledBase) -> None:
+def _check_sensor_links(sensors: Sequence[str], base: Any) -> None:
     """Refuse sensors whose link the robot's URDF lacks, naming them and the links it has."""
     links = UrdfKinematics(base.urdf).links
     missing = [link for link in sensor_links(sensors) if link not in links]
@@ -277,10 +278,13 @@ def _check_sensor_links(sensors: Sequence[str], base: WheeledBase) -> None:
 
 
 def _safety_filter(config: SafetyConfig, sensors: Sequence[str], lidar: LidarConfig,
-                   robot: DiffDriveRobot, control_hz: float) -> SafetyFilter | None:
+                   robot: Any, control_hz: float) -> SafetyFilter | None:
     """The collision monitor over the LIDAR's returns, in the base frame (None when its horizon is 0)."""
     if config.horizon == 0.0:
         return None
+    if not isinstance(robot, DiffDriveRobot):
+        raise ValueError(f"safety_horizon > 0 needs a differential drive (the monitor drives its arcs); robot "
+                         f"{robot.name!r} is not one")
     if "lidar" not in sensors or lidar.n_channels != 1:
         raise ValueError(f"safety_horizon > 0 needs a 2D LIDAR: 'lidar' in sensors and lidar_channels 1, got "
                          f"sensors {list(sensors)} and lidar_channels {lidar.n_channels}")

@@ -26,6 +26,7 @@ STEPS = 25
 CASES = {
     "nav-diffbot": ("ClutterNav-v1", {}),
     "nav-husky": ("ClutterNav-v1", {"robot": "husky"}),
+    "nav-omnibot": ("ClutterNav-v1", {"robot": "omnibot"}),
     "nav-diffbot-nominal": ("ClutterNav-v1", {"noise": "nominal", "safety_horizon": 0.5}),
     "reach-panda": ("ClutterReach-v1", {}),
     "reach-kuka_iiwa": ("ClutterReach-v1", {"robot": "kuka_iiwa"}),
@@ -61,12 +62,13 @@ def test_the_seeded_trajectory_is_the_recorded_one(name):
 
 
 def test_every_registered_robot_is_recorded():
-    from clutter_gym.robots.registry import registered
+    from clutter_gym.robots.registry import GROUND_KINDS, registered
 
-    kinds = {"ClutterNav-v1": ("diff_drive", "diffbot"), "ClutterReach-v1": ("arm", "panda"),
-             "ClutterFly-v1": ("multirotor", "quadrotor")}
+    kinds = {"ClutterNav-v1": (GROUND_KINDS, "diffbot"), "ClutterReach-v1": (("arm",), "panda"),
+             "ClutterFly-v1": (("multirotor",), "quadrotor")}
     recorded = {(env, kwargs.get("robot", kinds[env][1])) for env, kwargs in CASES.values()}
-    assert {(env, robot) for env, (kind, _) in kinds.items() for robot in registered(kind)} <= recorded
+    assert {(env, robot) for env, (kinds_, _) in kinds.items() for kind in kinds_ for robot in registered(kind)} <= (
+        recorded)
 
 
 if __name__ == "__main__":

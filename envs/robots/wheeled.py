@@ -107,7 +107,7 @@ def wheeled_base_from_spec(spec: Mapping[str, object], where: str, folder: Path 
                    derived=f"the wheel joints' positions in {source} (the left wheels' mean y less the right's)")
     axle = float(np.mean([frames[link][0, 2, 3] for link in wheel_links]))
     geometric = sorted({e.link for e in elements} - {kinematics.root}, key=kinematics.links.index)
-    footprint = number(spec, "footprint_radius", where, _footprint(elements, frames), 0.01, 5.0,
+    footprint = number(spec, "footprint_radius", where, footprint_radius(elements, frames), 0.01, 5.0,
                        derived=f"the collision shapes of {source} seen from above")
     return WheeledBase(
         name=urdf.name, urdf=urdf.urdf, base_link=kinematics.root, left_wheels=sides["left_wheels"],
@@ -123,7 +123,7 @@ def _wheel_radius(elements: list[CollisionElement], wheel_links: list[str]) -> f
     return max(cylinders) if cylinders else math.nan  # nan: number() then asks for wheel_radius in the spec
 
 
-def _footprint(elements: list[CollisionElement], frames: dict[str, np.ndarray], samples: int = 256) -> float:
+def footprint_radius(elements: list[CollisionElement], frames: dict[str, np.ndarray], samples: int = 256) -> float:
     """The radius about the base origin, seen from above, that encloses every collision element (boxes by their
     corners, cylinders by ``samples`` points on each rim scaled out to the circle they are inscribed in, spheres and
     capsules by their balls, meshes by their vertices)."""

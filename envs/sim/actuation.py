@@ -110,6 +110,14 @@ class Actuation:
         for link in links:
             pb.changeDynamics(body, link, frictionAnchor=int(on), physicsClientId=self._cid)
         self.forget_contacts(body)  # a contact keeps the kind it began with: begin them again
+    def centre_of_mass(self, body: int) -> np.ndarray:
+        """The whole body's centre of mass (its links' included), world frame, metres."""
+        links = range(pb.getNumJoints(body, physicsClientId=self._cid))
+        masses = [pb.getDynamicsInfo(body, link, physicsClientId=self._cid)[0] for link in (-1, *links)]
+        centres = [pb.getBasePositionAndOrientation(body, physicsClientId=self._cid)[0]]
+        centres += [pb.getLinkState(body, link, physicsClientId=self._cid)[0] for link in links]
+        return np.average(np.array(centres), axis=0, weights=masses)
+
     def set_damping(self, body: int, linear: float, angular: float) -> None:
         """Set a body's velocity damping (pybullet's default is 0.04 for both, which slows every free body:
         a flying body gets its drag from its own model instead)."""

@@ -8,7 +8,10 @@ from clutter_gym.stages.base import Stage
 
 
 class ForwardOnly(Stage):
-    """A base that drives forwards only: the linear action (entry 0) -1..1 means stand..full speed."""
+    """A base that drives forwards only: the forward action (entry 0) -1..1 means stand..full speed; the other
+    entries pass unchanged."""
 
     def command(self, action: np.ndarray) -> np.ndarray:
-        return np.array([0.5 * (action[0] + 1.0), action[1]])
+        out = action.copy()
+        out[0] = 0.5 * (action[0] + 1.0)
+        return out

@@ -402,8 +402,8 @@ def test_link_states_from_the_base_match_pybullets_link_reads_while_tumbling(sim
 
 # -------------------------------------------------------------------------------------------- the env's hook
 def test_env_calls_before_tick_once_per_physics_tick(make_env, monkeypatch):
-    import clutter_gym.clutter_nav as nav
-    from clutter_gym.robots import DiffDriveRobot
+    from clutter_gym.robots import DiffDriveConfig, DiffDriveRobot
+    from clutter_gym.robots.registry import GROUND_ROBOTS
 
     class Ticked(DiffDriveRobot):
         ticked = True
@@ -412,7 +412,7 @@ def test_env_calls_before_tick_once_per_physics_tick(make_env, monkeypatch):
         def before_tick(self) -> None:
             Ticked.ticks += 1
 
-    monkeypatch.setattr(nav, "DiffDriveRobot", Ticked)
+    monkeypatch.setitem(GROUND_ROBOTS, "diff_drive", lambda model, v, w: Ticked(DiffDriveConfig(v, w), model))
     env = make_env("ClutterNav-v1", sensors=())
     env.reset(seed=0)
     env.step(np.zeros(2))

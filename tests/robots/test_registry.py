@@ -36,8 +36,10 @@ def _cache(tmp_path, monkeypatch):
 def test_each_env_takes_its_kind_and_names_the_robots_it_takes():
     assert registered("diff_drive") == ["diffbot", "husky"]
     assert registered("arm") == ["panda", "kuka_iiwa", "xarm6"] and registered("multirotor") == ["quadrotor"]
-    with pytest.raises(ValueError, match=r"'panda' is a fixed-base arm; ClutterNav-v1 takes a wheeled base: robot= "
-                                         r"one of \['diffbot', 'husky'\], or a spec with kind 'diff_drive'"):
+    assert registered("omni") == ["omnibot"]
+    with pytest.raises(ValueError, match=r"'panda' is a fixed-base arm; ClutterNav-v1 takes a wheeled base or "
+                                         r"omnidirectional base: robot= one of \['diffbot', 'husky', 'omnibot'\], "
+                                         r"or a spec with kind 'diff_drive' or 'omni'"):
         gym.make("ClutterNav-v1", robot="panda")
     with pytest.raises(ValueError, match=r"unknown robot 'nope'; ClutterFly-v1 takes a multirotor: robot= one of "
                                          r"\['quadrotor'\], or a spec with kind 'multirotor'$"):
@@ -57,7 +59,7 @@ def test_a_registered_spec_is_read_when_an_env_first_asks_for_it(monkeypatch):
         gym.make("ClutterNav-v1", robot="my_bot")
     with pytest.raises(ValueError, match="a robot named 'husky' is already registered"):
         register_robot("husky", "diff_drive", DIFFBOT_SPEC)
-    with pytest.raises(ValueError, match=r"robot kind must be one of \['diff_drive', 'arm', 'multirotor'\]"):
+    with pytest.raises(ValueError, match=r"robot kind must be one of \['diff_drive', 'omni', 'arm', 'multirotor'\]"):
         register_robot("boat", "boat", DIFFBOT_SPEC)
     assert "my_bot" in registered("diff_drive")
 
