@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 from clutter_gym.collision import collision_checker
@@ -13,6 +13,7 @@ from clutter_gym.noise.profiles import NoiseProfile, resolve_noise
 from clutter_gym.planning.joint_space import ArmPlanner
 from clutter_gym.robots.arm import Arm, ArmConfig
 from clutter_gym.robots.registry import resolve_robot
+from clutter_gym.sensors import build_sensors, camera_config
 from clutter_gym.tasks import ReachRewardWeights, ReachTask
 from clutter_gym.worlds import TableSpec, TabletopArena
 
@@ -22,6 +23,9 @@ from clutter_gym.worlds import TableSpec, TabletopArena
 MIN_PHYSICS_HZ = 60.0
 #: Clearance the subgoal's planner keeps from the layout, metres (on top of ``collision_padding``).
 SUBGOAL_MARGIN = 0.02
+#: The wrist camera's frame in the end effector's (roll, pitch, yaw): it looks along the hand's z axis (its approach
+#: axis), its image's up along the hand's x axis.
+WRIST_CAMERA_RPY = (math.pi, -math.pi / 2, 0.0)
 
 
 class ClutterReachEnv(ClutterEnv):
@@ -57,6 +61,7 @@ class ClutterReachEnv(ClutterEnv):
     | ``clearance`` | (10,) | signed FCL distance of each moving link (panda_link1..7, hand, fingers) to the nearest obstacle | m | +-clearance_range |
     | ``clearance_direction`` | (10, 3) | unit vector from each link's witness point to its obstacle's (only with ``observe_directions=True``; zero beyond range or in contact) | world | [-1, 1] |
     | ``target_offset`` | (3,) | target minus end effector (only with ``observe_target_offset=True``) | m, world | +-3 |
+    | ``camera_depth`` | (h, w) | the wrist camera's depth along its optical axis, 0 = no data (only with ``sensors=("camera",)``; ``camera_modes`` may add ``camera_segmentation``) | m; the camera on the end effector, looking along the hand's approach axis | [0, camera_far] |
     | ``subgoal`` | (7,) | the point ``subgoal_lookahead`` ahead on the joint-space path planned on the known layout, minus the joint positions (zero if no path was found; only with ``subgoal_lookahead > 0``) | rad | +-6 |
 
     ## Rewards
@@ -102,7 +107,11 @@ class ClutterReachEnv(ClutterEnv):
     scene gives any obstacle a ``mass``; the shelf stays put; movable clutter starts 5 mm above the table, as
     static clutter stands, and settles onto it in its first ticks; the planner behind ``subgoal`` plans on the layout
     as placed); ``shelf``; ``noise`` (profile name
-    or overrides; only action noise, timing and dynamics apply: the arm has no exteroceptive sensors);
+    or overrides; action noise, timing and dynamics, and the camera's depth noise); ``sensors`` (() or
+    ("camera",): a wrist depth camera at the end effector, looking along the hand's approach axis, its image's up
+    along the hand's x axis, ray cast against the world's exact shapes (robots are not drawn, so the fingers do not
+    fill its view)); ``camera_size`` (width, height) px; ``camera_modes`` (subset of ("depth", "segmentation"));
+    ``camera_fov`` vertical, rad; ``camera_far`` m;
     ``physics_hz`` (a multiple of ``control_hz``, at least :data:`MIN_PHYSICS_HZ`); ``control_hz`` (at least
     ``physics_hz`` / 1000); ``solver_iterations``; ``success_radius`` m; ``clearance_margin`` m; ``clearance_range`` m;
     ``observe_directions``; ``observe_target_offset``; ``terminate_on_collision``;
@@ -157,6 +166,11 @@ class ClutterReachEnv(ClutterEnv):
         subgoal_lookahead: float = 0.0,
         robot: str = "panda",
         physics: str = "auto",
+        sensors: Sequence[str] = (),
+        camera_size: tuple[int, int] = (32, 32),
+        camera_modes: Sequence[str] = ("depth",),
+        camera_fov: float = math.radians(58.0),
+        camera_far: float = 2.0,
     ) -> None:
         check_numbers(ClutterReachEnv.__init__, locals())
         check_env_settings(render_mode, physics_hz, control_hz, solver_iterations, contact_tolerance,
@@ -168,9 +182,14 @@ class ClutterReachEnv(ClutterEnv):
             raise ValueError(f"clearance_range must be in [0.01, 2] metres, got {clearance_range!r}")
         if not (swept_speed > 0.0):  # inf allowed: no swept checks
             raise ValueError(f"swept_speed must be > 0 m/s (inf disables swept checks), got {swept_speed!r}")
+        if tuple(sensors) not in ((), ("camera",)):
+            raise ValueError(f"sensors must be () or ('camera',) (a wrist camera), got {sensors!r}")
         make_arm = resolve_robot(robot, "arm", "ClutterReach-v1")
         arm: Arm = make_arm(ArmConfig(control, max_joint_speed, max_ee_step), control_dt=1.0 / control_hz)
         model = arm.model
+        profile = resolve_noise(noise)
+        camera = camera_config(camera_size, camera_modes, camera_fov, camera_far, "rays", model.ee_link,
+                               mount_rpy=WRIST_CAMERA_RPY)
         checker = collision_checker(arm, model.tracked_links, collision_fidelity, collision_padding,
                                     contact_tolerance, clearance_range, control_hz, self_collision=self_collision,
                                     swept_speed=swept_speed, fixed_links=(arm.base_link, *model.fixed_links))
@@ -195,11 +214,11 @@ class ClutterReachEnv(ClutterEnv):
             robot=arm,
             arena=TabletopArena(TableSpec(n_obstacles=n_obstacles, shelf=bool(shelf), movable_fraction=movable_obstacles),
                                 model.ready, model.lower, model.upper, model.shoulder, model.reach),
-            sensors=(),
+            sensors=build_sensors(sensors, profile, {"camera": camera}, arm),
             checker=checker,
             task=task,
             control_hz=control_hz,
-            noise=resolve_noise(noise),
+            noise=profile,
             render_mode=render_mode,
             physics=physics,
         )

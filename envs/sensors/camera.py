@@ -31,6 +31,7 @@ from clutter_gym.noise.camera import (
 from clutter_gym.noise.distortion import Intrinsics
 from clutter_gym.sim import Sim
 from clutter_gym.sim.primitives import BACKDROP_ID
+from clutter_gym.util.transforms import quat_to_matrix, rpy_quat
 
 CAMERA_MODES = ("rgb", "depth", "segmentation")
 RENDERERS = ("tiny", "egl", "rays")
@@ -54,6 +55,8 @@ class CameraConfig:
         world, see :meth:`clutter_gym.sim.Sim.ray_cast_image`; robots are not drawn, so it suits a camera that
         sees no part of its own robot).
     link: URDF link the camera is mounted on; it looks along the link's +x axis with +z up.
+    mount_xyz, mount_rpy: the camera's frame in the link's (metres; roll, pitch, yaw in radians, URDF order): a
+        camera placed and turned on a link whose axes do not point where it looks (a wrist camera on a hand).
     """
 
     width: int = 84
@@ -64,6 +67,8 @@ class CameraConfig:
     far: float = 10.0
     renderer: str = "tiny"
     link: str = "camera_link"
+    mount_xyz: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    mount_rpy: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     def __post_init__(self) -> None:
         for name, value in (("camera_size[0] (width)", self.width), ("camera_size[1] (height)", self.height)):
@@ -99,7 +104,8 @@ class CameraConfig:
 
 
 def camera_config(size: Any, modes: Any, fov: float, far: float, renderer: str | None,
-                  link: str = CameraConfig.link) -> CameraConfig:
+                  link: str = CameraConfig.link, mount_xyz: tuple[float, float, float] = (0.0, 0.0, 0.0),
+                  mount_rpy: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> CameraConfig:
     """The camera of an env's ``camera_size``, ``camera_modes``, ``camera_fov``, ``camera_far`` and
     ``camera_renderer`` keyword arguments, mounted on ``link``; errors name the argument. Renderer None: "rays"
     when the modes are ones it draws, else "tiny"."""
@@ -110,7 +116,7 @@ def camera_config(size: Any, modes: Any, fov: float, far: float, renderer: str |
     if renderer is None:
         renderer = "rays" if modes and all(m in RAY_MODES for m in modes) else "tiny"
     return CameraConfig(width=size[0], height=size[1], modes=tuple(modes), vertical_fov=fov, far=far, renderer=renderer,
-                        link=link)
+                        link=link, mount_xyz=mount_xyz, mount_rpy=mount_rpy)
 
 
 class Camera:
@@ -145,6 +151,8 @@ class Camera:
         self._rgb_episode, self._depth_episode = RgbEpisode(), DepthEpisode()
         self._classes = np.zeros(1, dtype=np.uint8)
         self._egl_loaded = False
+        mounted = c.mount_xyz != (0.0, 0.0, 0.0) or c.mount_rpy != (0.0, 0.0, 0.0)
+        self._mount = (np.array(c.mount_xyz, dtype=float), quat_to_matrix(rpy_quat(*c.mount_rpy))) if mounted else None
         self.renders = c.renderer != "rays"  # the ray caster needs no visual shapes in the world
         self.needs_bodies = self.renders  # and sees obstacles without bodies (Sim.ray_cast_image)
 
@@ -165,6 +173,8 @@ class Camera:
             eye, rotation = state.links.position[row], state.links.rotation[row]
         else:
             eye, rotation = sim.link_frame(state.body, state.link_index[c.link])
+        if self._mount is not None:
+            eye, rotation = eye + rotation @ self._mount[0], rotation @ self._mount[1]
         images: dict[str, np.ndarray] = {}
         if c.renderer == "rays":
             i = self.intrinsics
