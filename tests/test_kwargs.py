@@ -20,7 +20,7 @@ import pytest
         ({"physics_hz": 120.0, "control_hz": 240.0}, r"physics_hz must be in \[control_hz=240.0, 10000\]"),
         ({"control_hz": 0.0}, r"control_hz must be in \(0, 1000\]"),
         ({"solver_iterations": 0}, r"solver_iterations must be an integer in \[1, 1000\]"),
-        ({"sensors": ("lidar", "sonar")}, r"unknown sensors \['sonar'\]; allowed: \('lidar', 'imu', 'camera'\)"),
+        ({"sensors": ("lidar", "sonar")}, r"unknown sensors \['sonar'\]; allowed: \('lidar', 'imu', 'camera', 'odometry'\)"),
         ({"sensors": "lidar"}, r"sensors must be a tuple of names"),
         ({"sensors": ("imu", "imu")}, r"must not repeat"),
         ({"obstacle_density": 0.5}, r"obstacle_density must be in \[0, 0.3\]"),
