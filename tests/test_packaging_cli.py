@@ -45,6 +45,8 @@ def test_wheel_carries_the_assets(tmp_path):
     (wheel,) = tmp_path.glob("clutter_gym-*.whl")
     names = zipfile.ZipFile(wheel).namelist()
     assert "clutter_gym/assets/robots/diffbot.urdf" in names
+    assert "clutter_gym/assets/robots/omnibot.urdf" in names
+    assert "clutter_gym/stages/base.py" in names  # every subpackage is listed in pyproject's packages
     assert "clutter_gym/training/baselines.py" in names
     assert "clutter_gym/collision/checker.py" in names
     assert "clutter_gym/noise/profiles.yaml" in names
