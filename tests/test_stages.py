@@ -91,3 +91,23 @@ def test_the_monitor_stage_reads_the_scan_its_sensor_delivered_last(make_env):
         delivered = env.timed_sensors.readings[0]
         *_, info = env.step(np.array([1.0, 0.0]))
         assert seen[-1] is delivered and "safety_scale" in info
+
+
+def test_stages_hold_no_reference_cycle_through_the_env():
+    """A stage that reads the env keeps a weak proxy of it: an env dropped without close() is freed by its reference
+    count at once, its physics server with it, not whenever the cyclic collector next runs."""
+    import gc
+    import weakref
+
+    import gymnasium as gym
+
+    for kwargs in ({}, {"render_mode": "rgb_array", "safety_horizon": 0.3, "noise": "nominal", "reverse": False}):
+        env = gym.make("ClutterNav-v1", **SMALL, **kwargs)
+        env.reset(seed=0)
+        unwrapped = weakref.ref(env.unwrapped)
+        gc.disable()  # only reference counting may free it
+        try:
+            del env
+            assert unwrapped() is None, kwargs
+        finally:
+            gc.enable()

@@ -30,15 +30,17 @@ import numpy as np
 
 from clutter_gym.collision.bounds import ObstacleBounds
 from clutter_gym.collision.distance import signed_distance
-from clutter_gym.collision.nearest import BOUND_SLACK, NO_OBSTACLE_CLEARANCE
+from clutter_gym.collision.nearest import NO_OBSTACLE_CLEARANCE, NearestSearch
 from clutter_gym.collision.obstacles import ObstacleObjects
 from clutter_gym.collision.robot_model import RobotCollisionModel
 from clutter_gym.collision.swept_audit import SweptAudit
 from clutter_gym.datatypes import CollisionReport, Contact, Obstacle, RobotState
 
 
-class CollisionChecker(SweptAudit):
-    """FCL model of one robot and the current scene.
+class CollisionChecker:
+    """FCL model of one robot and the current scene. It owns the scene's obstacle objects and pybullet bodies, and is
+    composed of a :class:`NearestSearch` (:attr:`search`: each shape's nearest obstacle) and a :class:`SweptAudit`
+    (:attr:`audit`: the swept check between two checks).
 
     Args:
         model: the robot's FCL objects (fidelity, padding and ACM chosen there).
@@ -68,44 +70,30 @@ class CollisionChecker(SweptAudit):
         self.model = model
         self.per_link = bool(per_link)
         self.links = tuple(link for link in model.links if link not in fixed_links)
-        moving = [i for i, s in enumerate(model.shapes) if s.link not in fixed_links]
+        moving = np.array([i for i, s in enumerate(model.shapes) if s.link not in fixed_links], dtype=int)
         #: the moving shapes of every link in ``self.links``
-        self._link_shapes = [[i for i, s in enumerate(model.shapes) if s.link == link] for link in self.links]
-        single = all(len(s) == 1 for s in self._link_shapes)
-        self._link_shape = np.array([s[0] for s in self._link_shapes]) if single else None
+        link_shapes = [[i for i, s in enumerate(model.shapes) if s.link == link] for link in self.links]
+        single = all(len(s) == 1 for s in link_shapes)
+        self._link_shape = np.array([s[0] for s in link_shapes]) if single else None
         self._base_link = base_link
         self.contact_tolerance = contact_tolerance
         self.clearance_range = clearance_range
         self.swept_speed = swept_speed
         self.dt = dt
-        self._moving = np.array(moving, dtype=int)
-        self._limits_array = clearance_range + model.padding[self._moving]  # unpadded range per moving shape
-        self._moving_padding = model.padding[self._moving][:, None]
-        self._radii = np.array([s.radius for s in model.shapes])  # about each shape's origin
-        self._ball_offsets = np.array([s.bounding_ball[0] for s in model.shapes], dtype=float).reshape(-1, 3)
-        #: (moving shapes, 1) radii of their enclosing balls, widened by the slack (:meth:`_lower_bounds`)
-        self._slack_radii = (model.ball_radius[self._moving] + BOUND_SLACK)[:, None]
-        lazy = model.lazy[self._moving]  # spheres of a sphere set: their lower bounds are their exact distances
-        #: rows (of the moving shapes) answered from their bounds in one numpy pass, and those answered by FCL
-        self._sphere_rows, self._other_rows = np.flatnonzero(lazy), np.flatnonzero(~lazy)
-        self._other_limits = self._limits_array[self._other_rows].tolist()
-        self._sweepers = [fcl.CollisionObject(s.hull or s.geometry, fcl.Transform()) for s in model.shapes]
-        self._obstacles: list[fcl.CollisionObject] = []
+        self.search = NearestSearch(model, moving, link_shapes, clearance_range, contact_tolerance)
+        self.audit = SweptAudit(self.search, swept_speed, dt)
         self._obstacle_objects = ObstacleObjects()
-        self._bounds = ObstacleBounds(())
         self._obstacle_bodies: frozenset[int] = frozenset()
         self._contact_request = fcl.CollisionRequest(num_max_contacts=4, enable_contact=True)
         self._rows: np.ndarray | None = None
-        self._previous: tuple[np.ndarray, np.ndarray] | None = None
         self._touching: set[tuple[int, int]] = set()  # (shape, obstacle) pairs within the tolerance at the last check
 
     # ------------------------------------------------------------------------------------------- scene
     def set_scene(self, obstacles: Sequence[Obstacle], bodies: Sequence[int]) -> None:
         """Rebuild the obstacle broad phase (call on reset). ``bodies`` are the matching pybullet body ids."""
-        self._obstacles = self._obstacle_objects.place(obstacles)
-        self._bounds = ObstacleBounds(obstacles)
+        self.search.set_scene(self._obstacle_objects.place(obstacles), ObstacleBounds(obstacles))
         self._obstacle_bodies = frozenset(bodies)
-        self._previous = None  # a reset teleports the robot: nothing to sweep from
+        self.audit.previous = None  # a reset teleports the robot: nothing to sweep from
         self._touching = set()
 
     def set_obstacle_bodies(self, bodies: Sequence[int]) -> None:
@@ -116,9 +104,10 @@ class CollisionChecker(SweptAudit):
     def move_obstacles(self, obstacles: np.ndarray, positions: np.ndarray, rotations: np.ndarray) -> None:
         """Put movable ``obstacles`` (indices into the scene's) where the physics moved them: centres (k, 3) and
         rotation matrices (k, 3, 3), world frame."""
-        self._bounds.move(obstacles, positions, rotations)
+        self.search.bounds.move(obstacles, positions, rotations)
+        fcl_objects = self.search.obstacles
         for j, position, rotation in zip(obstacles, positions, rotations):
-            self._obstacles[j].setTransform(fcl.Transform(rotation, position))
+            fcl_objects[j].setTransform(fcl.Transform(rotation, position))
 
     # ------------------------------------------------------------------------------------------- queries
     def sync(self, state: RobotState) -> None:
@@ -142,7 +131,7 @@ class CollisionChecker(SweptAudit):
         call for it; their witness points are filled only where they are reported: the nearest shape of each link,
         and shapes within the contact tolerance (zeros elsewhere).
         """
-        return self._measure()[:3]
+        return self.search.measure()[:3]
 
     def check(self, state: RobotState, pybullet_contacts: Sequence[tuple[int, float]] = ()) -> CollisionReport:
         """Clearance, contacts, self-collision and tunneling of the robot in ``state``.
@@ -152,34 +141,35 @@ class CollisionChecker(SweptAudit):
             pybullet_contacts: (other body id, contact distance) of the robot's pybullet contact points.
         """
         self.sync(state)
+        search = self.search
         link_clearance = directions = None
         if self.per_link:
-            distance, other, points, candidates, bound, within = self._measure()
+            distance, other, points, candidates, bound, within = search.measure()
             link_clearance, directions = self._links(distance, other, points)
             k = int(np.argmin(distance))
             nearest = (float(distance[k]), k, int(other[k]), points[k].copy() if other[k] >= 0 else None)
-            lower = distance[self._moving]
-        elif self._obstacles:
-            radii = self._search_radii()
+            lower = distance[search.moving]
+        elif search.obstacles:
+            radii = search.search_radii()
             for within in radii:  # narrow first: the first search that proves the nearest pair exact gives it
-                candidates, bound = self._lower_bounds(within=within)
-                pair = self._nearest_pair(candidates, bound, within if within < radii[-1] else None)
+                candidates, bound = search.lower_bounds(within=within)
+                pair = search.nearest_pair(candidates, bound, within if within < radii[-1] else None)
                 if pair is not None:
                     break
             assert pair is not None  # the last search is the whole range, whose answer is always exact
             nearest = pair
-            lower = (bound - self._moving_padding).min(axis=1, initial=np.inf)
+            lower = (bound - search.moving_padding).min(axis=1, initial=np.inf)
         else:
-            candidates, bound, within = np.zeros(0, int), np.zeros((len(self._moving), 0)), np.inf
-            nearest, lower = (NO_OBSTACLE_CLEARANCE, -1, -1, None), np.full(len(self._moving), np.inf)
+            candidates, bound, within = np.zeros(0, int), np.zeros((len(search.moving), 0)), np.inf
+            nearest, lower = (NO_OBSTACLE_CLEARANCE, -1, -1, None), np.full(len(search.moving), np.inf)
         clearance, k, obstacle, witness = nearest
         touching_before = self._touching
         contacts = self._contacts(lower, candidates, bound)
-        tunneling = self._swept(candidates, bound, within, touching_before)
+        tunneling = self.audit.count(candidates, bound, within, touching_before, self._touching)
         tol = self.contact_tolerance
         n_pb = sum(1 for body, d in pybullet_contacts if d <= tol and body in self._obstacle_bodies)
         return CollisionReport(
-            min_clearance=clearance if self._obstacles else NO_OBSTACLE_CLEARANCE,
+            min_clearance=clearance if search.obstacles else NO_OBSTACLE_CLEARANCE,
             link_clearance=link_clearance,
             directions=directions,
             closest=(self.model.shapes[k].link, obstacle) if obstacle >= 0 else None,
@@ -196,7 +186,7 @@ class CollisionChecker(SweptAudit):
         witness point to its obstacle's (zero where out of range or penetrating)."""
         nearest = self._link_shape  # each link reports its nearest shape
         if nearest is None:
-            nearest = np.array([s[int(np.argmin(distance[s]))] for s in self._link_shapes])
+            nearest = np.array([s[int(np.argmin(distance[s]))] for s in self.search.link_shapes])
         link_clearance = np.minimum(distance[nearest], min(self.clearance_range, NO_OBSTACLE_CLEARANCE))
         witnesses = points[nearest]
         gap = witnesses[:, 1] - witnesses[:, 0]
@@ -215,18 +205,19 @@ class CollisionChecker(SweptAudit):
         where the shapes touch without overlapping, the midpoint of the pair's witness points is the position.
         """
         model, out, tol = self.model, [], self.contact_tolerance
+        moving, obstacles = self.search.moving, self.search.obstacles
         self._touching = touching = set()
         for row in np.flatnonzero(lower <= tol).tolist():
-            i = int(self._moving[row])
+            i = int(moving[row])
             obj = model.solid_object(i)  # a BVH's contacts are not meaningful; its hull's are
             for j in np.sort(candidates[bound[row] - model.padding[i] <= tol]).tolist():
-                d, found = signed_distance(obj, self._obstacles[j])
+                d, found = signed_distance(obj, obstacles[j])
                 d -= model.padding[i]
                 if d > tol:
                     continue
                 result = fcl.CollisionResult()
                 where = np.mean(found.nearest_points, axis=0)
-                if fcl.collide(obj, self._obstacles[j], self._contact_request, result):
+                if fcl.collide(obj, obstacles[j], self._contact_request, result):
                     deepest = max(result.contacts, key=lambda c: c.penetration_depth)
                     where = np.asarray(deepest.pos, dtype=float)
                 out.append(Contact(model.shapes[i].link, j, max(0.0, -d), where))
@@ -235,5 +226,5 @@ class CollisionChecker(SweptAudit):
 
     def pair_distance(self, shape: int, obstacle: int) -> float:
         """Padded signed distance from a robot shape (its solid: a mesh's hull) to an obstacle, metres."""
-        d, _ = signed_distance(self.model.solid_object(shape), self._obstacles[obstacle])
+        d, _ = signed_distance(self.model.solid_object(shape), self.search.obstacles[obstacle])
         return d - self.model.padding[shape]

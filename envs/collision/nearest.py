@@ -1,6 +1,6 @@
-"""The collision checker's search for each robot shape's nearest obstacle (part of
-:class:`~clutter_gym.collision.checker.CollisionChecker`, a mixin: it reads the checker's robot model, moving shapes
-and obstacles).
+"""The collision checker's search for each robot shape's nearest obstacle (a part of
+:class:`~clutter_gym.collision.checker.CollisionChecker`: it owns the moving shapes' limits and the scene's FCL
+obstacles and bounds, and reads the robot model the checker syncs).
 
 Every (shape, obstacle) pair is bounded from below in one compiled pass (:mod:`.bounds`), and FCL is asked about pairs
 in order of their bounds until no bound can beat the best exact distance, so every answer is the one measuring every
@@ -28,53 +28,65 @@ BOUND_SLACK = 1e-9
 #: in a scene larger than ``SMALL_SCENE``, a shape's candidates are sorted this many at a time (nearest first)
 NEAREST_FIRST = 16
 #: in a scene larger than ``SMALL_SCENE``, obstacles are first searched this far (metres) beyond the robot's reach
-#: (:meth:`CollisionChecker._search_radii`), so that a step's cost follows the obstacles near the robot
+#: (:meth:`NearestSearch.search_radii`), so that a step's cost follows the obstacles near the robot
 FIRST_SEARCH = 0.5
 #: factor by which a search that cannot prove some shape's answer exact widens, up to the clearance range
 WIDEN = 4.0
 
 
 class NearestSearch:
-    """Nearest obstacles of the moving shapes: per shape (:meth:`_measure`) or the robot's nearest pair
-    (:meth:`_nearest_pair`), from the candidates and lower bounds of :meth:`_lower_bounds`."""
+    """Nearest obstacles of the moving shapes: per shape (:meth:`measure`) or the robot's nearest pair
+    (:meth:`nearest_pair`), from the candidates and lower bounds of :meth:`lower_bounds`.
 
-    # the checker's state these methods read (set in CollisionChecker.__init__ and set_scene)
-    model: RobotCollisionModel
-    clearance_range: float
-    contact_tolerance: float
-    _moving: np.ndarray
-    _moving_padding: np.ndarray
-    _limits_array: np.ndarray
-    _other_limits: list[float]
-    _sphere_rows: np.ndarray
-    _other_rows: np.ndarray
-    _slack_radii: np.ndarray
-    _link_shapes: list[list[int]]
-    _obstacles: list[fcl.CollisionObject]
-    _bounds: ObstacleBounds
+    Args:
+        model: the robot's FCL objects, synced by the checker before every query.
+        moving: indices of the shapes measured against the scene (those of links that move).
+        link_shapes: the moving shapes of each link the checker reports.
+        clearance_range: distances are resolved up to this range, metres.
+        contact_tolerance: distance at or below which a pair is in contact, metres.
+    """
 
-    def _measure(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]:
+    def __init__(self, model: RobotCollisionModel, moving: np.ndarray, link_shapes: list[list[int]],
+                 clearance_range: float, contact_tolerance: float) -> None:
+        self.model, self.moving, self.link_shapes = model, moving, link_shapes
+        self.clearance_range, self.contact_tolerance = clearance_range, contact_tolerance
+        self._limits_array = clearance_range + model.padding[moving]  # unpadded range per moving shape
+        self.moving_padding = model.padding[moving][:, None]
+        #: (moving shapes, 1) radii of their enclosing balls, widened by the slack (:meth:`lower_bounds`)
+        self.slack_radii = (model.ball_radius[moving] + BOUND_SLACK)[:, None]
+        lazy = model.lazy[moving]  # spheres of a sphere set: their lower bounds are their exact distances
+        #: rows (of the moving shapes) answered from their bounds in one numpy pass, and those answered by FCL
+        self._sphere_rows, self._other_rows = np.flatnonzero(lazy), np.flatnonzero(~lazy)
+        self._other_limits = self._limits_array[self._other_rows].tolist()
+        self.obstacles: list[fcl.CollisionObject] = []
+        self.bounds = ObstacleBounds(())
+
+    def set_scene(self, obstacles: list[fcl.CollisionObject], bounds: ObstacleBounds) -> None:
+        """The scene's FCL obstacles and their bounds (the checker places both on reset)."""
+        self.obstacles, self.bounds = obstacles, bounds
+
+    def measure(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]:
         """:meth:`clearance`, and the candidate obstacles and lower bounds it used (rows: moving shapes) with the
-        ``within`` they were searched to (:meth:`_lower_bounds`).
+        ``within`` they were searched to (:meth:`lower_bounds`).
 
-        A large scene is searched narrow first (:meth:`_search_radii`); a shape's answer is kept from the first
+        A large scene is searched narrow first (:meth:`search_radii`); a shape's answer is kept from the first
         search that proves it exact (:meth:`_nearest_spheres`, :meth:`_nearest_obstacles`), so every answer is the
         one a search of the whole range gives.
         """
-        model, moving = self.model, self._moving
+        model, moving = self.model, self.moving
         n = len(model.objects)
         best = np.full(n, self.clearance_range)
         other = np.full(n, -1)
         points = np.zeros((n, 2, 3))
-        radii = self._search_radii()
-        if not self._obstacles:
+        radii = self.search_radii()
+        if not self.obstacles:
             return (np.full(n, NO_OBSTACLE_CLEARANCE), other, points, np.zeros(0, int), np.zeros((len(moving), 0)),
                     radii[-1])
         spheres, others = self._sphere_rows, self._other_rows  # rows not answered yet
         answered: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []  # spheres in range: rows, raw, obstacles
         found: list[tuple[int, float, int, np.ndarray | None]] = []
         for within in radii:
-            candidates, bound = self._lower_bounds(within=within)
+            candidates, bound = self.lower_bounds(within=within)
             narrow = within if within < radii[-1] else None
             if len(spheres):
                 spheres = self._nearest_spheres(spheres, candidates, bound, narrow, answered)
@@ -100,7 +112,7 @@ class NearestSearch:
 
         A sphere's bound is its distance, so its nearest obstacle is its lowest bound (the first of equals). After a
         search to a narrower ``within`` than the range, every obstacle left out bounds the sphere above ``within``
-        plus its padding (:meth:`_lower_bounds`), so a lowest bound at or below that is the lowest of all; the other
+        plus its padding (:meth:`lower_bounds`), so a lowest bound at or below that is the lowest of all; the other
         rows need a wider search.
         """
         if not bound.shape[1]:
@@ -109,7 +121,7 @@ class NearestSearch:
         lowest = bound[rows, nearest]
         left = rows[:0]
         if within is not None:
-            exact = lowest <= within + self.model.padding[self._moving[rows]]
+            exact = lowest <= within + self.model.padding[self.moving[rows]]
             if not exact.all():
                 rows, nearest, lowest, left = rows[exact], nearest[exact], lowest[exact], rows[~exact]
         raw = lowest + BOUND_SLACK
@@ -124,11 +136,11 @@ class NearestSearch:
         answered to ``found``, and return the rows left unanswered.
 
         After a search to a narrower ``within`` than the range, every obstacle left out bounds a shape above
-        ``within`` plus its padding (:meth:`_lower_bounds`). Those obstacles come after every candidate bounded at
+        ``within`` plus its padding (:meth:`lower_bounds`). Those obstacles come after every candidate bounded at
         or below that, so a shape whose best distance over those candidates is at or below it would stop before
         them: that answer is exact. A shape with nothing that near needs a wider search.
         """
-        moving = self._moving
+        moving = self.moving
         if within is None:
             shapes, lower_bounds, limits = moving, bound, self._other_limits
             if len(rows) < len(moving):
@@ -199,16 +211,16 @@ class NearestSearch:
         and a link whose nearest shape is not a sphere gets a witness it does not report."""
         model = self.model
         reported = set(spheres[best[spheres] <= self.contact_tolerance].tolist())
-        for shapes in self._link_shapes:
+        for shapes in self.link_shapes:
             i = shapes[int(np.argmin(best[shapes]))]
             if model.lazy[i] and other[i] >= 0:
                 reported.add(i)
         for i in reported:
-            _, result = signed_distance(model.object(i), self._obstacles[other[i]])
+            _, result = signed_distance(model.object(i), self.obstacles[other[i]])
             points[i] = result.nearest_points
 
-    def _search_radii(self) -> list[float]:
-        """The ``within`` of each search for obstacles (:meth:`_lower_bounds`), narrowest first, the last the whole
+    def search_radii(self) -> list[float]:
+        """The ``within`` of each search for obstacles (:meth:`lower_bounds`), narrowest first, the last the whole
         range (the clearance range or the contact tolerance, whichever is larger).
 
         A small scene bounds every obstacle at once. A larger one starts at ``FIRST_SEARCH`` (never below the
@@ -218,13 +230,13 @@ class NearestSearch:
         tol = self.contact_tolerance
         full = max(self.clearance_range, tol)
         radii = [full]
-        if len(self._bounds) > SMALL_SCENE:
+        if len(self.bounds) > SMALL_SCENE:
             radii = [max(min(FIRST_SEARCH, self.clearance_range), tol)]
             while radii[-1] < full:
                 radii.append(min(WIDEN * radii[-1], full))
         return radii
 
-    def _lower_bounds(self, grow: np.ndarray | None = None, within: float | None = None
+    def lower_bounds(self, grow: np.ndarray | None = None, within: float | None = None
                       ) -> tuple[np.ndarray, np.ndarray]:
         """Candidate obstacles (indices) and lower bounds (moving shapes, candidates) on their unpadded distances.
 
@@ -236,9 +248,9 @@ class NearestSearch:
         there. A narrower ``within`` is searched ``BOUND_SLACK`` wider, so that rounding in the bounds cannot take
         that away; the whole range is searched exactly as far, whichever obstacles it keeps are bounded beyond it.
         """
-        bounds, model, moving = self._bounds, self.model, self._moving
+        bounds, model, moving = self.bounds, self.model, self.moving
         centres = model.ball_centres()[moving]
-        radii = self._slack_radii if grow is None else (model.ball_radius[moving] + grow + BOUND_SLACK)[:, None]
+        radii = self.slack_radii if grow is None else (model.ball_radius[moving] + grow + BOUND_SLACK)[:, None]
         if len(bounds) <= SMALL_SCENE:
             return bounds.index, bounds.signed_distance(centres) - radii
         middle = 0.5 * (centres.min(axis=0) + centres.max(axis=0))
@@ -260,27 +272,27 @@ class NearestSearch:
             if bound >= best:
                 break
             # the robot shape goes first: as the first argument a BVH reports world-frame witness points in order
-            d, result = signed_distance(shape, self._obstacles[j], solid)
+            d, result = signed_distance(shape, self.obstacles[j], solid)
             if d < best:
                 best, nearest, witness = d, j, result.nearest_points
         return best, nearest, witness
 
-    def _nearest_pair(self, candidates: np.ndarray, bound: np.ndarray, within: float | None = None
+    def nearest_pair(self, candidates: np.ndarray, bound: np.ndarray, within: float | None = None
                       ) -> tuple[float, int, int, np.ndarray | None] | None:
         """(padded signed distance, shape, obstacle index, witness points) of the robot's nearest pair within the
         clearance range; (the range, -1, -1, None) when no pair is in it.
 
         Pairs are measured in ascending order of their padded lower bounds until a bound exceeds the best distance,
         so no unmeasured pair can be nearer. Among equal distances the lowest shape index wins, and for one shape the
-        pair met first, as :meth:`_measure` and :meth:`check` pick them.
+        pair met first, as :meth:`measure` and :meth:`check` pick them.
 
         After a search to a narrower ``within`` than the range, every pair left out has a padded bound above
-        ``within`` (:meth:`_lower_bounds`) and comes after every pair bounded at or below it: those pairs are
+        ``within`` (:meth:`lower_bounds`) and comes after every pair bounded at or below it: those pairs are
         measured, and a best distance at or below ``within`` stops the measuring before the pairs left out, so it
         is the answer; otherwise the answer is None (search wider).
         """
-        model, moving = self.model, self._moving
-        padded = bound - self._moving_padding  # lower bounds on the padded distances
+        model, moving = self.model, self.moving
+        padded = bound - self.moving_padding  # lower bounds on the padded distances
         rows, columns = np.nonzero(padded < self.clearance_range if within is None else padded <= within)
         best, shape, obstacle, result = self.clearance_range, -1, -1, None
         if rows.size == 0:
@@ -294,7 +306,7 @@ class NearestSearch:
             if model.lazy[i]:  # a sphere of a sphere set: its bound is its distance, witness points found below
                 d, found = b + BOUND_SLACK, None
             else:
-                d, found = signed_distance(model.object(i), self._obstacles[j], model.solid_object(i))
+                d, found = signed_distance(model.object(i), self.obstacles[j], model.solid_object(i))
                 d -= model.padding[i]
             if d < best or (d == best and i < shape):
                 best, shape, obstacle, result = d, i, j, found
@@ -303,5 +315,5 @@ class NearestSearch:
         if shape < 0:
             return best, shape, obstacle, None
         if result is None:
-            _, result = signed_distance(model.object(shape), self._obstacles[obstacle])
+            _, result = signed_distance(model.object(shape), self.obstacles[obstacle])
         return best, shape, obstacle, np.asarray(result.nearest_points, dtype=float)

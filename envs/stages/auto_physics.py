@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import weakref
 from typing import TYPE_CHECKING
 
 from clutter_gym.auto_physics import choose_physics
@@ -17,7 +18,7 @@ class AutoPhysics(Stage):
     """Sets the env's Sim, ``physics`` and ``substeps`` from each scene, before it is placed."""
 
     def bind(self, env: ClutterEnv) -> None:
-        self._env = env
+        self._env = weakref.proxy(env)  # no reference cycle: a dropped env is freed at once, its physics server too
         self._base = env.physics
 
     def scene_chosen(self, scene: Layout) -> None:

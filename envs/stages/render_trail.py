@@ -5,6 +5,7 @@ draws nothing into it: it never changes a trajectory."""
 
 from __future__ import annotations
 
+import weakref
 from collections import deque
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
@@ -31,7 +32,7 @@ class RenderTrail(Stage):
         self._human = human
 
     def bind(self, env: ClutterEnv) -> None:
-        self._env = env
+        self._env = weakref.proxy(env)  # no reference cycle: a dropped env is freed at once, its physics server too
 
     def episode_start(self, obstacles: Sequence[Obstacle], bodies: Sequence[int], rng: np.random.Generator) -> bool:
         self.trail.clear()

@@ -102,7 +102,7 @@ def brute_force(checker: CollisionChecker, obstacles: list[Obstacle]) -> tuple[n
     model, objects = checker.model, [obstacle_object(o) for o in obstacles]
     n = len(model.objects)
     best, other, points = np.full(n, checker.clearance_range), np.full(n, -1), np.zeros((n, 2, 3))
-    for i in checker._moving:
+    for i in checker.search.moving:
         for j, obstacle in enumerate(objects):
             d, result = signed_distance(model.object(i), obstacle, model.solid_object(i))
             if d - model.padding[i] < best[i]:
@@ -142,7 +142,7 @@ def test_sphere_distances_come_from_their_bounds_and_equal_fcl(fidelity):
     rng = np.random.default_rng(5)
     model = RobotCollisionModel.from_urdf(URDF, fidelity, KIN.links, padding=0.01)
     checker = CollisionChecker(model, "panda_link0", clearance_range=0.3, fixed_links=("panda_link0",))
-    assert model.lazy[checker._moving].all()  # a sphere set: answered from the bounds
+    assert model.lazy[checker.search.moving].all()  # a sphere set: answered from the bounds
     limits = np.array([[-2.8, 2.8], [-1.7, 1.7], [-2.8, 2.8], [-3.0, -0.1], [-2.8, 2.8], [0.0, 3.7], [-2.8, 2.8]])
     compared = 0
     for _ in range(10):
@@ -155,7 +155,7 @@ def test_sphere_distances_come_from_their_bounds_and_equal_fcl(fidelity):
             separated = expected > 0.0
             np.testing.assert_allclose(got[separated], expected[separated], rtol=0, atol=1e-12)
             np.testing.assert_array_equal(got_other[separated], other[separated])
-            for shapes in checker._link_shapes:  # the shape each link reports carries FCL's witness points
+            for shapes in checker.search.link_shapes:  # the shape each link reports carries FCL's witness points
                 i = shapes[int(np.argmin(got[shapes]))]
                 if got_other[i] >= 0 and separated[i]:
                     np.testing.assert_allclose(got_points[i], points[i], rtol=0, atol=1e-9)

@@ -272,8 +272,8 @@ def test_a_pose_with_nothing_near_widens_and_one_by_a_lone_pillar_stays_narrow(m
     obstacles = clutter(rng, 200, (-10.0, -10.0), (10.0, -4.0)) + [pillar]
     narrow, full = checker_pair("primitive", per_link, obstacles)
     searches = []
-    lower_bounds = narrow._lower_bounds
-    narrow._lower_bounds = lambda grow=None, within=None: (searches.append(within), lower_bounds(grow, within))[1]
+    lower_bounds = narrow.search.lower_bounds
+    narrow.search.lower_bounds = lambda grow=None, within=None: (searches.append(within), lower_bounds(grow, within))[1]
     seen = {"in range": 0, "contacts": 0, "tunneling": 0}
     alone = arm_state(np.zeros(7), np.array([0.0, 3.0, 0.0]))
     compare(monkeypatch, narrow, full, alone, seen)
@@ -291,15 +291,16 @@ def test_obstacles_left_out_of_a_narrow_search_are_bounded_beyond_it():
     rng = np.random.default_rng(2)
     obstacles = clutter(rng, 300, (-4.0, -4.0), (4.0, 4.0))
     narrow, _ = checker_pair("primitive", True, obstacles)
-    padding = narrow.model.padding[narrow._moving][:, None]
+    padding = narrow.model.padding[narrow.search.moving][:, None]
     left_out = 0
     for _ in range(30):
         narrow.sync(arm_state(rng.uniform(LIMITS[:, 0], LIMITS[:, 1]), np.append(rng.uniform(-4.0, 4.0, 2), 0.0)))
-        every = narrow._bounds.signed_distance(narrow.model.ball_centres()[narrow._moving]) - narrow._slack_radii
-        for within in narrow._search_radii()[:-1]:
-            candidates, _ = narrow._lower_bounds(within=within)
+        search = narrow.search
+        every = search.bounds.signed_distance(narrow.model.ball_centres()[search.moving]) - search.slack_radii
+        for within in narrow.search.search_radii()[:-1]:
+            candidates, _ = narrow.search.lower_bounds(within=within)
             out = np.setdiff1d(np.arange(len(obstacles)), candidates)
-            columns = narrow._bounds._column[out]
+            columns = narrow.search.bounds._column[out]
             assert (every[:, columns] - padding > within).all()
             left_out += out.size
     assert left_out > 1000
@@ -340,9 +341,9 @@ def checked_both_ways(checker: CollisionChecker, monkeypatch, seen: dict):
     check = checker.check
 
     def compared(state, pybullet_contacts=()):
-        before = checker._previous, checker._touching
+        before = checker.audit.previous, checker._touching
         expected = every_obstacle(monkeypatch, lambda: check(state, pybullet_contacts))
-        checker._previous, checker._touching = before
+        checker.audit.previous, checker._touching = before
         got = check(state, pybullet_contacts)
         assert_same_report(got, expected)
         seen["in range"] += got.closest is not None
@@ -363,7 +364,7 @@ def test_clutterfly_in_a_large_volume_reports_what_every_obstacle_gives(make_env
     checker.check = checked_both_ways(checker, monkeypatch, seen)
     rng = np.random.default_rng(2)
     env.reset(seed=2)
-    assert len(checker._bounds) > SMALL_SCENE
+    assert len(checker.search.bounds) > SMALL_SCENE
     for _ in range(250):
         _, _, terminated, truncated, _ = env.step(rng.uniform(-1.0, 1.0, 4))
         if terminated or truncated:

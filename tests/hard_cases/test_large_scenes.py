@@ -65,11 +65,11 @@ def test_a_large_scene_is_searched_near_the_robot_and_reports_what_every_obstacl
     seen = {"in range": 0, "contacts": 0}
 
     def compared(state, pybullet_contacts=()):
-        before = checker._previous, checker._touching
+        before = checker.audit.previous, checker._touching
         with monkeypatch.context() as m:
             m.setattr(clutter_gym.collision.nearest, "SMALL_SCENE", 10**9)  # every obstacle bounded
             expected, every = check(state, pybullet_contacts), checker.clearance()
-        checker._previous, checker._touching = before
+        checker.audit.previous, checker._touching = before
         got = check(state, pybullet_contacts)
         for a, b in zip(checker.clearance(), every):
             np.testing.assert_array_equal(a, b)
@@ -94,7 +94,7 @@ def test_a_large_scene_is_searched_near_the_robot_and_reports_what_every_obstacl
         for _ in range(100):
             x, y = rng.uniform(-14.0, 14.0, 2)
             unwrapped.robot.reset_pose(float(x), float(y), float(rng.uniform(-np.pi, np.pi)))
-            checker._previous = None  # a teleport: nothing to sweep
+            checker.audit.previous = None  # a teleport: nothing to sweep
             checker.check(unwrapped.robot.state())
     finally:
         del checker.check

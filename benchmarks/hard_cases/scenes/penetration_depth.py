@@ -23,7 +23,7 @@ def panda_depth_errors(steps: int, seed: int = 0) -> tuple[float, int, int, floa
             _, _, terminated, truncated, _ = env.step(np.sign(rng.uniform(-1, 1, 7)).astype(np.float32))
             stepping += time.perf_counter() - t
             for contact in checker.check(env.unwrapped.robot.state()).contacts:
-                i = next(k for k in checker._moving if checker.model.shapes[k].link == contact.link)
+                i = next(k for k in checker.search.moving if checker.model.shapes[k].link == contact.link)
                 worst = max(worst, abs(contact.depth - max(0.0, -checker.pair_distance(i, contact.obstacle))))
                 contacts += 1
                 deep += contact.depth > 1e-3

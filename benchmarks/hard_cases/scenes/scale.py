@@ -182,7 +182,7 @@ def millimetre_errors(world: World, gap: float) -> tuple[np.ndarray, np.ndarray]
     ``gap`` (empty where the robot is clear), metres."""
     world.place(0.0, 0.0, 0.0)
     world.checker.sync(world.exact_state(0.0, 0.0, 0.0))
-    model, objects = world.checker.model, world.checker._obstacles
+    model, objects = world.checker.model, world.checker.search.obstacles
     pairs = millimetre_pairs(world)
     fcl = np.array([signed_distance(model.objects[i], objects[j])[0] - gap for i, j, _ in pairs])
     if gap > 0:
