@@ -223,10 +223,10 @@ PHASES = (
     ("sim.contact_distances: pybullet contact points", 0),
     ("checker.check: FCL clearance, contacts, swept audit", 0),
     ("sync: move the FCL shapes", 1),
-    ("_lower_bounds: every pair's bound, in numpy", 1),
-    ("_nearest_pair: FCL distances in order of the bounds", 1),
+    ("search.lower_bounds: every pair's bound, in numpy", 1),
+    ("search.nearest_pair: FCL distances in order of the bounds", 1),
     ("_contacts", 1),
-    ("_swept: the swept (tunneling) audit", 1),
+    ("audit.count: the swept (tunneling) audit", 1),
     ("_observe: sensors, goal, proprioception", 0),
     ("sensors (IMU)", 1),
     ("task.observe", 1),
@@ -256,9 +256,11 @@ class StepProfile:
         u.robot.state = t.wrap(names[2], u.robot.state)
         u.sim.contact_distances = t.wrap(names[3], u.sim.contact_distances)
         u.checker.check = t.wrap(names[4], u.checker.check)
-        for attr, name in zip(("sync", "_lower_bounds", "_nearest_pair", "_contacts", "_swept"), names[5:10],
-                              strict=True):
-            setattr(u.checker, attr, t.wrap(name, getattr(u.checker, attr)))
+        c = u.checker
+        for part, attr, name in zip((c, c.search, c.search, c, c.audit),
+                                    ("sync", "lower_bounds", "nearest_pair", "_contacts", "count"), names[5:10],
+                                    strict=True):
+            setattr(part, attr, t.wrap(name, getattr(part, attr)))
         u._observe = t.wrap(names[10], u._observe)
         for sensor in u.sensors:
             for attr in ("read", "observe", "info"):

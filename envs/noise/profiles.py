@@ -133,7 +133,8 @@ PROFILE_NAMES: tuple[str, ...] = tuple(_profile_file())
 
 
 def profile_sources(name: str) -> dict[str, dict[str, tuple[float, str]]]:
-    """``{section: {parameter: (value, source)}}`` of a named profile as written in profiles.yaml."""
+    """``{section: {parameter: (value, source)}}`` of a named profile as written in profiles.yaml and in the sections
+    sensors' noise modules declare (:func:`sensor_sections`)."""
     if name not in PROFILE_NAMES:
         raise ValueError(f"noise profile must be one of {PROFILE_NAMES}, got {name!r}")
     sources = {
