@@ -10,6 +10,7 @@ import numpy as np
 
 from clutter_gym.collision import collision_checker
 from clutter_gym.core import ClutterEnv
+from clutter_gym.dynamics import check_dynamics_mode, ground_dynamics
 from clutter_gym.make_checks import check_env_settings, check_flags, check_numbers, check_physics_mode
 from clutter_gym.noise.profiles import NoiseProfile, resolve_noise
 from clutter_gym.robots import DiffDriveRobot
@@ -138,7 +139,8 @@ class ClutterNavEnv(ClutterEnv):
     alone, a continuous policy's turn passes through zero there, and a deterministic one can stop for good);
     ``physics`` ("auto": a user scene that stacks movable obstacles ticks faster with more solver iterations, as
     much as it needs and never less than ``physics_hz`` and ``solver_iterations``, and the reset's
-    ``info["physics"]`` says what it chose and why; "fixed": always ``physics_hz`` and ``solver_iterations``).
+    ``info["physics"]`` says what it chose and why; "fixed": always ``physics_hz`` and ``solver_iterations``);
+    ``dynamics`` (see "Dynamics").
 
     ``subgoal_lookahead > 0`` makes the env map-based: the ``subgoal`` entry comes from a path planned on the
     known layout (shortest on a costmap that charges passing within 0.25 m of touching; see
@@ -146,6 +148,20 @@ class ClutterNavEnv(ClutterEnv):
     env is mapless: it knows only the goal's relative position.
 
     Defaults are in the signature.
+
+    ## Dynamics
+
+    ``dynamics="physics"`` (the default) simulates the base in pybullet, wheel-floor contact included, every tick.
+    ``"reduced"`` moves a differential drive by its reduced model (:mod:`clutter_gym.dynamics.drive_model`: a
+    unicycle whose sides follow their commands through a first-order lag under an acceleration limit, fitted to the
+    full-physics robot when the env is made) and does not step pybullet while FCL's clearance exceeds the distance
+    the base can cover in one step; nearer than that, the step runs under full physics from the model's state
+    (:mod:`clutter_gym.dynamics.reduced_drive`), and an episode with a movable obstacle runs under full physics
+    throughout. ``"auto"`` takes the reduced model when its fit is within 10% of the robot's speeds (the diffbot's is,
+    the skid-steer Husky's is not) and full physics otherwise. The reset's ``info["dynamics"]`` says which model the
+    episode starts under and why. Motor strength, mass and friction randomisation scale the model's acceleration
+    limit; action latency and noise act on its command as on the motors'. Its error against full physics is in
+    docs/speed-vs-error.md.
 
     ## Movable obstacles
 
@@ -216,11 +232,13 @@ class ClutterNavEnv(ClutterEnv):
         observe_bearing: bool = False,
         robot: str | Mapping[str, Any] = "diffbot",
         physics: str = "auto",
+        dynamics: str = "physics",
     ) -> None:
         check_numbers(ClutterNavEnv.__init__, locals())
         check_env_settings(render_mode, physics_hz, control_hz, solver_iterations, contact_tolerance,
                            env_id="ClutterNav-v1", min_physics_hz=MIN_PHYSICS_HZ)
         check_physics_mode(physics)
+        check_dynamics_mode(dynamics)
         check_flags(terminate_on_collision=terminate_on_collision, reverse=reverse, observe_bearing=observe_bearing)
         self.forward_only = not reverse  # the linear action maps onto stand..full speed (stages.ForwardOnly)
         drive = ground_robot(robot, "ClutterNav-v1", max_linear_speed, max_angular_speed)
@@ -265,6 +283,7 @@ class ClutterNavEnv(ClutterEnv):
             render_mode=render_mode,
             stages=[*([ForwardOnly()] if self.forward_only else []), *([SafetyMonitor(safety)] if safety else [])],
             physics=physics,
+            dynamics=ground_dynamics(dynamics, drive, physics_hz, solver_iterations, control_hz, contact_tolerance),
         )
 
 

@@ -9,8 +9,8 @@ hooks the core calls only where the env has it.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
-from typing import Any, cast
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -20,7 +20,8 @@ from clutter_gym import make_checks as checks
 from clutter_gym.auto_physics import PhysicsChoice
 from clutter_gym.collision import CollisionChecker
 from clutter_gym.datatypes import CollisionReport, RobotState
-from clutter_gym.interfaces import Arena, L, Layout, Robot, Sensor, Task, TickedRobot
+from clutter_gym.dynamics.base import Dynamics, FullPhysics
+from clutter_gym.interfaces import Arena, L, Layout, Robot, Sensor, Task
 from clutter_gym.noise.dynamics import sample_dynamics
 from clutter_gym.noise.profiles import NoiseProfile
 from clutter_gym.sensors.timing import TimedSensors
@@ -50,6 +51,8 @@ class ClutterEnv(gym.Env):
         physics: "fixed" runs every episode at ``physics_hz`` and ``solver_iterations``; "auto" raises them for a
             scene that needs more (:func:`clutter_gym.auto_physics.choose_physics`), never lowers them, and says what
             it chose in the reset's ``info["physics"]``.
+        dynamics: makes the part that moves the robot from the Sim and the robot (:mod:`clutter_gym.dynamics`);
+            full physics when None. The reset's ``info["dynamics"]`` says what it runs the episode under.
     """
 
     metadata = {"render_modes": list(checks.RENDER_MODES), "render_fps": 20}
@@ -65,7 +68,8 @@ class ClutterEnv(gym.Env):
     def __init__(self, physics_hz: float, solver_iterations: int, robot: Robot, arena: Arena[L],
                  sensors: Sequence[Sensor], checker: CollisionChecker, task: Task[L], control_hz: float,
                  noise: NoiseProfile, render_mode: str | None = None, render_size: tuple[int, int] = (320, 240),
-                 stages: Sequence[Stage] = (), physics: str = "fixed") -> None:
+                 stages: Sequence[Stage] = (), physics: str = "fixed",
+                 dynamics: Callable[[Sim, Robot], Dynamics] | None = None) -> None:
         self.sensors = tuple(sensors)
         # an env that never draws gives its obstacles no visual shapes (docs/design-notes.md#obstacle-visuals)
         visuals = render_mode is not None or any(s.renders for s in self.sensors)
@@ -82,8 +86,7 @@ class ClutterEnv(gym.Env):
         self.control_hz = control_hz
         self.substeps = int(round(sim.physics_hz / control_hz))  # physics ticks per action
         self.physics = PhysicsChoice(sim.physics_hz, solver_iterations, "the env's settings (physics='fixed')")
-        # a TickedRobot (interfaces.py) acts before every physics tick; others once per action
-        self._before_tick = cast(TickedRobot, robot).before_tick if getattr(robot, "ticked", False) else None
+        self.dynamics = FullPhysics(sim, robot) if dynamics is None else dynamics(sim, robot)
         self._build_world()
         self.action_space = robot.action_space
         self._bounds = (self.action_space.low.astype(np.float64), self.action_space.high.astype(np.float64))
@@ -148,24 +151,26 @@ class ClutterEnv(gym.Env):
         # Noise draws come from a generator seeded by one draw of np_random, taken whatever the profile: the
         # layouts of a seed are then the same under every noise profile (paired sim-to-real comparisons).
         self._noise_rng = rng = np.random.default_rng(int(self.np_random.integers(2**63)))
-        self.robot.apply_dynamics(sample_dynamics(rng, self.noise.dynamics))
+        self.dynamics.apply_dynamics(sample_dynamics(rng, self.noise.dynamics))
         obstacles, bodies = self.arena.place(scene)
         self.checker.set_scene(obstacles, bodies)
         self.robot.reset_to(scene.start)
         self.sim.move_static(self._goal_marker, self.task.marker_position(scene), yaw_quat(0.0))
         self.scene = scene
-        state = self.robot.state()
+        dynamics = self.dynamics.episode_start(obstacles)
+        state = self.dynamics.state()
         self.timed_sensors.reset(self.sim, state, rng)
         self._activate([s for s in self.stages if s.episode_start(obstacles, bodies, rng)])
         self.task.reset(scene, state)
-        report = self.checker.check(state, self.sim.contact_distances(self.robot.body))
+        report = self.checker.check(state, self.dynamics.contacts())
         if options and "scene" in options:
             checks.check_start(report)
+        self.dynamics.checked(report)
         for checked_hook in self._checked_hooks:
             checked_hook(state)
         obs, info = self._observe(state, report)
         info.update(min_clearance=report.min_clearance, n_contacts=report.n_contacts, is_success=False,
-                    noise_profile=self.noise.name, physics=self.physics.as_info())
+                    noise_profile=self.noise.name, physics=self.physics.as_info(), dynamics=dynamics)
         self._failed_reset = None
         return obs, info
 
@@ -188,17 +193,12 @@ class ClutterEnv(gym.Env):
         command = a
         for actuate_hook in self._actuate_hooks:
             command = actuate_hook(command, self._noise_rng)
-        self.robot.apply_action(command)
-        if self._before_tick is None:
-            self.sim.step(self.substeps)
-        else:
-            for _ in range(self.substeps):
-                self._before_tick()
-                self.sim.step()
+        self.dynamics.advance(command, self.substeps)
         for physics_hook in self._physics_hooks:
             physics_hook()
-        state = self.robot.state()
-        report = self.checker.check(state, self.sim.contact_distances(self.robot.body))
+        state = self.dynamics.state()
+        report = self.checker.check(state, self.dynamics.contacts())
+        self.dynamics.checked(report)
         for checked_hook in self._checked_hooks:
             checked_hook(state)
         obs, info = self._observe(state, report)

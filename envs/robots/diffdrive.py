@@ -106,6 +106,11 @@ class DiffDriveRobot(UrdfRobot):
         self._nominal = dict(zip(links, sim.inertial_properties(self._body, links)))
         return self._body
 
+    @property
+    def com_offset(self) -> np.ndarray:
+        """The base's centre of mass in the base link frame, metres (where pybullet puts the base's pose)."""
+        return self._com_offset
+
     def _set_motor_scale(self, scale: float) -> None:
         self._torques = [self.config.max_wheel_torque * scale] * len(self._wheels)
 
@@ -120,10 +125,10 @@ class DiffDriveRobot(UrdfRobot):
         self._sim.set_pose(self._body, com, q)
         self._sim.forget_contacts(self._body)  # the same seed must not warm-start from the last episode
         self._sim.reset_joints(self._body, self._wheels)
-        self._release()
+        self.release_hold()
         self._sim.set_joint_velocities(self._body, self._wheels, self._still, self._torques)
 
-    def _release(self) -> None:
+    def release_hold(self) -> None:
         """End a standstill hold (if any): the wheels go back to velocity control with re-anchored friction."""
         if self._hold is not None:
             self._hold = None
@@ -140,7 +145,7 @@ class DiffDriveRobot(UrdfRobot):
                 self._sim.set_friction_anchors(self._body, self._wheels, True)
             self._sim.set_joint_positions(self._body, self._wheels, self._hold, self._still, self._torques)
             return
-        self._release()
+        self.release_hold()
         half = 0.5 * c.wheel_separation
         left = (v - w * half) / c.wheel_radius
         right = (v + w * half) / c.wheel_radius

@@ -16,10 +16,12 @@ import pybullet as pb
 class Actuation:
     """Motor commands, joint reads and forces on a Sim's robots (mixed into :class:`~clutter_gym.sim.Sim`)."""
 
-    def reset_joints(self, body: int, joints: Sequence[int], positions: Sequence[float] | None = None) -> None:
-        """Joint positions (rad or m; zero if not given) and zero joint velocities."""
+    def reset_joints(self, body: int, joints: Sequence[int], positions: Sequence[float] | None = None,
+                     velocities: Sequence[float] | None = None) -> None:
+        """Joint positions (rad or m) and velocities (rad/s or m/s), each zero if not given."""
         for k, j in enumerate(joints):
-            pb.resetJointState(body, j, 0.0 if positions is None else positions[k], 0.0, physicsClientId=self._cid)
+            pb.resetJointState(body, j, 0.0 if positions is None else positions[k],
+                               0.0 if velocities is None else velocities[k], physicsClientId=self._cid)
 
     def set_joint_velocities(
         self, body: int, joints: Sequence[int], velocities: Sequence[float], max_forces: Sequence[float]

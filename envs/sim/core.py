@@ -253,6 +253,10 @@ class Sim(Actuation, ObstacleBodies, Rendering, Rays):
         pb.resetBasePositionAndOrientation(body, position, quaternion, physicsClientId=self._cid)
         pb.resetBaseVelocity(body, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), physicsClientId=self._cid)
 
+    def set_base_velocity(self, body: int, linear: Sequence[float], angular: Sequence[float]) -> None:
+        """Set a body's base velocity: of its centre of mass (m/s) and its angular velocity (rad/s), world frame."""
+        pb.resetBaseVelocity(body, linear, angular, physicsClientId=self._cid)
+
     # ------------------------------------------------------------------------------------ introspection
     def link_indices(self, body: int) -> dict[str, int]:
         """URDF link name -> pybullet link index (-1 for the base)."""

@@ -53,6 +53,14 @@ def yaw_quat(yaw: float) -> tuple[float, float, float, float]:
     return (0.0, 0.0, float(np.sin(yaw / 2)), float(np.cos(yaw / 2)))
 
 
+def quat_multiply(a: Sequence[float], b: Sequence[float]) -> tuple[float, float, float, float]:
+    """The rotation ``a`` after ``b``, quaternions (x, y, z, w) as pybullet orders them."""
+    ax, ay, az, aw = a
+    bx, by, bz, bw = b
+    return (aw * bx + ax * bw + ay * bz - az * by, aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw, aw * bw - ax * bx - ay * by - az * bz)
+
+
 def rpy_quat(roll: float, pitch: float, yaw: float) -> np.ndarray:
     """Quaternion (x, y, z, w) of URDF fixed-axis roll-pitch-yaw (R = Rz(yaw) Ry(pitch) Rx(roll))."""
     cr, sr = np.cos(roll / 2), np.sin(roll / 2)

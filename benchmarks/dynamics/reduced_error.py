@@ -1,0 +1,115 @@
+"""ClutterNav-v1's reduced dynamics against full physics, side by side in one process: the divergence of seeded open-
+floor drives, and the potential field's closed-loop episodes on held-out layouts with the step time each model costs.
+
+    python -m benchmarks.dynamics.reduced_error [--drives 20] [--episodes 100] [--density 0.12]
+
+Prints the tables of docs/speed-vs-error.md, "Reduced dynamics".
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+
+import gymnasium as gym
+import numpy as np
+
+import clutter_gym  # noqa: F401  (registers the envs)
+from clutter_gym.training.baselines import PotentialFieldNavigator
+
+#: seconds after which a drive's divergence is read; s each random command is held
+MARKS, HOLD = (1.0, 5.0, 20.0), 0.5
+#: the open floor: a 30 m arena without clutter, the base at its centre, the goal in a far corner
+OPEN = {"arena_size": 30.0, "obstacle_density": 0.0}
+CENTRE = {"scene": {"start": [0.0, 0.0, 0.0], "goal": [13.0, 13.0], "obstacles": []}}
+#: held-out layouts: the seeds evaluation uses (docs/learning.md)
+HELD_OUT = 1_000_000
+
+
+def drive(env: gym.Env, commands: np.ndarray) -> np.ndarray:
+    """(x, y, yaw) of the base after each step of ``commands`` from the open floor's centre."""
+    env.reset(seed=0, options=CENTRE)
+    base = env.unwrapped
+    poses = np.empty((len(commands), 3))
+    for i, command in enumerate(commands):
+        base.step(command)
+        state = base.dynamics.state()
+        poses[i] = state.position[0], state.position[1], state.yaw
+    return poses
+
+
+def divergence(drives: int) -> dict[float, tuple[np.ndarray, np.ndarray]]:
+    """Position (m) and heading (rad) gaps between the models after each of :data:`MARKS`, one per seeded drive."""
+    envs = {mode: gym.make("ClutterNav-v1", dynamics=mode, **OPEN) for mode in ("physics", "reduced")}
+    control_hz = envs["physics"].unwrapped.control_hz
+    steps, hold = int(max(MARKS) * control_hz), int(HOLD * control_hz)
+    gaps = {mark: ([], []) for mark in MARKS}
+    for seed in range(drives):
+        commands = np.repeat(np.random.default_rng(seed).uniform(-1, 1, (steps // hold, 2)), hold, axis=0)
+        full, reduced = (drive(envs[mode], commands.astype(np.float32)) for mode in ("physics", "reduced"))
+        for mark in MARKS:
+            i = int(mark * control_hz) - 1
+            gaps[mark][0].append(math.dist(full[i, :2], reduced[i, :2]))
+            gaps[mark][1].append(abs(math.remainder(full[i, 2] - reduced[i, 2], 2 * math.pi)))
+    for env in envs.values():
+        env.close()
+    return {mark: (np.array(p), np.array(h)) for mark, (p, h) in gaps.items()}
+
+
+def closed_loop(mode: str, episodes: int, density: float, handover: str = "step") -> dict[str, float]:
+    """The potential field's episodes under ``mode``: success, collision episodes, the env's step time (ms) and the
+    share of steps the reduced model ran."""
+    env = gym.make("ClutterNav-v1", dynamics=mode, obstacle_density=density)
+    dynamics = env.unwrapped.dynamics
+    if handover != "step":
+        dynamics.handover = handover
+    field = PotentialFieldNavigator.for_env(env)
+    success = collided = steps = 0
+    seconds = 0.0
+    for i in range(episodes):
+        obs, _ = env.reset(seed=HELD_OUT + i)
+        touched = False
+        while True:
+            action = field(obs)
+            start = time.perf_counter()
+            obs, _, terminated, truncated, info = env.step(action)
+            seconds += time.perf_counter() - start
+            steps += 1
+            touched |= info["cost"] > 0
+            if terminated or truncated:
+                success += bool(info["is_success"])
+                collided += touched
+                break
+    reduced = getattr(dynamics, "reduced_steps", 0)
+    env.close()
+    return {"success": success / episodes, "collisions": collided / episodes, "ms": 1e3 * seconds / steps,
+            "reduced": reduced / steps}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--drives", type=int, default=20)
+    parser.add_argument("--episodes", type=int, default=100)
+    parser.add_argument("--density", type=float, default=0.12)
+    args = parser.parse_args()
+    print(f"## Divergence of {args.drives} seeded open-floor drives (random commands held {HOLD} s)\n")
+    print("| after | position gap median / 90th pct / max (m) | heading gap median / 90th pct / max (deg) |")
+    print("|---|---|---|")
+    for mark, (position, heading) in divergence(args.drives).items():
+        h = np.degrees(heading)
+        print(f"| {mark:g} s | {np.median(position):.3f} / {np.percentile(position, 90):.3f} / {position.max():.3f} "
+              f"| {np.median(h):.1f} / {np.percentile(h, 90):.1f} / {h.max():.1f} |")
+    print(f"\n## Potential field, {args.episodes} held-out layouts at density {args.density}\n")
+    print("| dynamics | success | collision episodes | reduced steps | env step (ms) | speed-up |")
+    print("|---|---|---|---|---|---|")
+    rows = {name: closed_loop(mode, args.episodes, args.density, handover) for name, mode, handover in
+            (("physics", "physics", "step"), ("reduced, hand-over per step", "reduced", "step"),
+             ("reduced, hand-over for the episode", "reduced", "episode"))}
+    for name, row in rows.items():
+        print(f"| {name} | {row['success']:.0%} | {row['collisions']:.0%} | {row['reduced']:.0%} | {row['ms']:.3f} | "
+              f"{rows['physics']['ms'] / row['ms']:.2f}x |")
+
+
+if __name__ == "__main__":
+    main()
