@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from clutter_gym.dynamics.drive_model import LEFT, RIGHT, X, Y, YAW, DriveParams, drive_ticks
+from clutter_gym.dynamics.drive_model import LEFT, RIGHT, YAW, DriveParams, X, Y, drive_ticks
 
 DT = 1.0 / 120.0
 
