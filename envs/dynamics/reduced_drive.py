@@ -152,12 +152,12 @@ class ReducedDrive(Dynamics):
         robot, sim, body = self.robot, self.sim, self.robot.body
         com = rotation @ robot.com_offset
         sim.set_pose(body, position + com, self._quat())
-        sim.set_base_velocity(body, rotation[:, 0] * v + np.cross((0.0, 0.0, w), com), (0.0, 0.0, w))
+        sim.set_base_velocity(body, (rotation[:, 0] * v + np.cross((0.0, 0.0, w), com)).tolist(), (0.0, 0.0, w))
         wheels = robot.wheel_joints
         n_left = len(robot.base.left_wheels)
         radius = robot.config.wheel_radius
         speeds = [self._model[LEFT] / radius] * n_left + [self._model[RIGHT] / radius] * (len(wheels) - n_left)
-        sim.reset_joints(body, wheels, sim.joint_states(body, wheels)[0], speeds)
+        sim.reset_joints(body, wheels, sim.joint_states(body, wheels)[0].tolist(), speeds)
         sim.forget_contacts(body)
         robot.release_hold()
         self.full = True
