@@ -42,9 +42,9 @@ def test_auto_takes_the_reduced_model_where_its_fit_is_within_the_bound():
         assert (fit.error <= AUTO_ERROR_BOUND) is within, (name, fit)
 
 
-@pytest.mark.parametrize(("robot", "mode", "model"), [("diffbot", "auto", "reduced"), ("husky", "auto", "physics"),
-                                                      ("diffbot", "reduced", "reduced"),
-                                                      ("diffbot", "physics", "physics"), ("omnibot", "auto", "physics")])
+@pytest.mark.parametrize(("robot", "mode", "model"), [
+    ("diffbot", "auto", "reduced"), ("husky", "auto", "physics"), ("diffbot", "reduced", "reduced"),
+    ("diffbot", "physics", "physics"), ("omnibot", "auto", "physics")])
 def test_the_reset_says_which_model_runs_and_why(make_env, robot, mode, model):
     env = make_env("ClutterNav-v1", robot=robot, dynamics=mode, obstacle_density=0.0)
     _, info = env.reset(seed=0)
