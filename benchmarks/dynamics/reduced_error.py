@@ -1,7 +1,8 @@
 """ClutterNav-v1's reduced dynamics against full physics, side by side in one process: the divergence of seeded open-
-floor drives, and the potential field's closed-loop episodes on held-out layouts with the step time each model costs.
+floor drives, the potential field's closed-loop episodes on held-out layouts with the step time each model costs,
+and both models' steps/s beside panda-gym's PandaReach-v3 (if installed) in alternating blocks.
 
-    python -m benchmarks.dynamics.reduced_error [--drives 20] [--episodes 100] [--density 0.12]
+    python -m benchmarks.dynamics.reduced_error [--drives 20] [--episodes 100] [--density 0.12] [--rounds 6]
 
 Prints the tables of docs/speed-vs-error.md, "Reduced dynamics".
 """
@@ -16,6 +17,8 @@ import gymnasium as gym
 import numpy as np
 
 import clutter_gym  # noqa: F401  (registers the envs)
+from benchmarks.harness import EnvRunner
+from benchmarks.speed.throughput import make_peer
 from clutter_gym.training.baselines import PotentialFieldNavigator
 
 #: seconds after which a drive's divergence is read; s each random command is held
@@ -87,11 +90,29 @@ def closed_loop(mode: str, episodes: int, density: float, handover: str = "step"
             "reduced": reduced / steps}
 
 
+def versus_peer(rounds: int, steps: int = 1000) -> dict[str, float]:
+    """Median steps/s over ``rounds`` alternating blocks of ``steps`` random actions of ClutterNav-v1 under each model
+    and of PandaReach-v3 (absent when panda-gym is not installed)."""
+    runners = {mode: EnvRunner(gym.make("ClutterNav-v1", dynamics=mode), seed=0) for mode in ("physics", "reduced")}
+    peer = make_peer()
+    if peer is not None:
+        runners["PandaReach-v3"] = peer
+    rates: dict[str, list[float]] = {name: [] for name in runners}
+    for r in range(rounds):
+        for name, runner in runners.items():
+            rng = np.random.default_rng(r)
+            space = runner.env.action_space
+            seconds, _, _ = runner.run(lambda obs, i: rng.uniform(space.low, space.high), steps)
+            rates[name].append(steps / seconds)
+    return {name: float(np.median(values)) for name, values in rates.items()}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--drives", type=int, default=20)
     parser.add_argument("--episodes", type=int, default=100)
     parser.add_argument("--density", type=float, default=0.12)
+    parser.add_argument("--rounds", type=int, default=6)
     args = parser.parse_args()
     print(f"## Divergence of {args.drives} seeded open-floor drives (random commands held {HOLD} s)\n")
     print("| after | position gap median / 90th pct / max (m) | heading gap median / 90th pct / max (deg) |")
@@ -109,6 +130,12 @@ def main() -> None:
     for name, row in rows.items():
         print(f"| {name} | {row['success']:.0%} | {row['collisions']:.0%} | {row['reduced']:.0%} | {row['ms']:.3f} | "
               f"{rows['physics']['ms'] / row['ms']:.2f}x |")
+    rates = versus_peer(args.rounds)
+    print(f"\n## Random actions, {args.rounds} alternating blocks of 1,000 steps (median steps/s)\n")
+    peer = rates.get("PandaReach-v3")
+    for name, rate in rates.items():
+        against = f", {rate / peer:.2f}x PandaReach-v3" if peer and name != "PandaReach-v3" else ""
+        print(f"- {name}: {rate:,.0f} steps/s{against}")
 
 
 if __name__ == "__main__":
