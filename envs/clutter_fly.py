@@ -17,7 +17,8 @@ from clutter_gym.robots import Multirotor, MultirotorConfig
 from clutter_gym.robots.multirotor_model import IMU_LINK, SENSOR_LINK
 from clutter_gym.robots.registry import resolve_robot
 from clutter_gym.robots.rigid_body import RigidBody
-from clutter_gym.sensors import ImuConfig, LidarConfig, build_sensors, camera_config
+from clutter_gym.sensors import LidarConfig, build_sensors
+from clutter_gym.sensors.settings import sensor_configs
 from clutter_gym.sim import GRAVITY
 from clutter_gym.tasks import FlyRewardWeights, FlyTask
 from clutter_gym.util.checks import is_number
@@ -220,11 +221,8 @@ class ClutterFlyEnv(ClutterEnv):
                                     contact_tolerance, max(CLEARANCE_RANGE, clearance_margin), control_hz,
                                     self_collision=False, swept_speed=swept_speed, per_link=False)
         radius = bounding_radius(checker.model, flyer.mass_properties)
-        lidar = LidarConfig(n_rays=n_rays, fov=lidar_fov, max_range=lidar_range, n_channels=lidar_channels,
-                            vertical_fov=lidar_vertical_fov, link=SENSOR_LINK, caster=lidar_caster)
-        camera = camera_config(camera_size, camera_modes, camera_fov, camera_far, camera_renderer, link=SENSOR_LINK)
+        configs = sensor_configs(locals(), control_hz, sensor_link=SENSOR_LINK, imu_link=IMU_LINK)
         profile = resolve_noise(noise)
-        configs = {"lidar": lidar, "imu": ImuConfig(dt=1.0 / control_hz, link=IMU_LINK), "camera": camera}
         sensor_objects = build_sensors(sensors, profile, configs, flyer)
         task = FlyTask(
             FlyRewardWeights(progress=progress_weight, success=success_weight, crash=crash_weight,

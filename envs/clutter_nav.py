@@ -16,7 +16,8 @@ from clutter_gym.noise.profiles import NoiseProfile, resolve_noise
 from clutter_gym.robots import DiffDriveRobot
 from clutter_gym.robots.registry import ground_robot
 from clutter_gym.robots.safety import SafetyConfig, SafetyFilter
-from clutter_gym.sensors import ImuConfig, LidarConfig, build_sensors, camera_config, sensor_links
+from clutter_gym.sensors import LidarConfig, build_sensors, sensor_links
+from clutter_gym.sensors.settings import sensor_configs
 from clutter_gym.stages import ForwardOnly, SafetyMonitor
 from clutter_gym.tasks import NavigateTask, NavRewardWeights
 from clutter_gym.urdf.kinematics import UrdfKinematics
@@ -245,11 +246,9 @@ class ClutterNavEnv(ClutterEnv):
         base = drive.base
         spec = ClutterSpec(arena_size=arena_size, obstacle_density=obstacle_density,
                            movable_fraction=movable_obstacles)
-        lidar = LidarConfig(n_rays=n_rays, fov=lidar_fov, max_range=lidar_range, mount_height=lidar_mount_height,
-                            n_channels=lidar_channels, vertical_fov=lidar_vertical_fov, caster=lidar_caster)
-        camera = camera_config(camera_size, camera_modes, camera_fov, camera_far, camera_renderer)
+        configs = sensor_configs(locals(), control_hz)
+        lidar = configs["lidar"]
         profile = resolve_noise(noise)
-        configs = {"lidar": lidar, "imu": ImuConfig(dt=1.0 / control_hz), "camera": camera}
         sensor_objects = build_sensors(sensors, profile, configs, drive)
         _check_sensor_links(sensors, base)
         task = NavigateTask(
