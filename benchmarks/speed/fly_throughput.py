@@ -251,7 +251,7 @@ class StepProfile:
         u, t = env.unwrapped, PhaseTimers(time.process_time)
         self.timers = t
         names = [name for name, _ in PHASES]
-        u._before_tick = t.wrap(names[0], u._before_tick)
+        u.dynamics._before_tick = t.wrap(names[0], u.dynamics._before_tick)  # full physics: the per-tick hook
         u.sim.step = t.wrap(names[1], u.sim.step)
         u.robot.state = t.wrap(names[2], u.robot.state)
         u.sim.contact_distances = t.wrap(names[3], u.sim.contact_distances)
