@@ -112,8 +112,8 @@ class TickedRobot(Robot, Protocol):
     (a quadrotor's rotor thrusts), which pybullet clears after each ``stepSimulation``, or one whose inner loop runs
     at the physics rate.
 
-    A robot opts in with the class attribute ``ticked = True``. :class:`clutter_gym.core.ClutterEnv` then runs the
-    control period one tick at a time, ``robot.before_tick(); sim.step()``, after :meth:`Robot.apply_action`;
+    A robot opts in with the class attribute ``ticked = True``. The env's full physics
+    (:class:`clutter_gym.dynamics.FullPhysics`) then runs the control period one tick at a time, ``robot.before_tick(); sim.step()``, after :meth:`Robot.apply_action`;
     robots without the attribute keep ``sim.step(substeps)``.
     """
 
