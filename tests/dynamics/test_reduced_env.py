@@ -129,15 +129,17 @@ def test_a_camera_sees_the_base_where_the_model_has_it(make_env):
     assert env.render().shape[2] == 3
 
 
-def test_weaker_motors_accelerate_the_model_slower(make_env):
-    """A motor strength of 0.5 halves the model's acceleration limit: 0.1 s into a full forward command from rest
-    the base has about half the speed."""
-    speeds = {}
-    for scale in (1.0, 0.5):
+@pytest.mark.parametrize("sample", [DynamicsSample(motor_scale=0.5), DynamicsSample(mass_scale=2.0),
+                                    DynamicsSample(friction_scale=0.5)], ids=["motors", "mass", "grip"])
+def test_weaker_motors_more_mass_or_less_grip_accelerate_the_model_slower(make_env, sample):
+    """Half the motors' strength, twice the mass or half the floor's grip halves the model's acceleration limit: 0.1 s
+    into a full forward command from rest the base has about half the speed of the nominal one."""
+    speeds = []
+    for episode in (DynamicsSample(), sample):
         env = make_env("ClutterNav-v1", dynamics="reduced", **OPEN)
         env.reset(seed=0, options=CENTRE)
-        env.unwrapped.dynamics.apply_dynamics(DynamicsSample(motor_scale=scale))
+        env.unwrapped.dynamics.apply_dynamics(episode)
         for _ in range(2):
             obs, *_ = env.step(FORWARD)
-        speeds[scale] = float(obs["velocity"][0])
-    assert speeds[0.5] == pytest.approx(0.5 * speeds[1.0], rel=0.15)
+        speeds.append(float(obs["velocity"][0]))
+    assert speeds[1] == pytest.approx(0.5 * speeds[0], rel=0.15)
