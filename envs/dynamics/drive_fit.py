@@ -12,7 +12,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from clutter_gym.datatypes import DynamicsSample
-from clutter_gym.dynamics.drive_model import LEFT, RIGHT, DriveParams, drive_ticks
+from clutter_gym.dynamics.drive_model import LEFT, RIGHT, STATE_SIZE, DriveParams, drive_ticks
 from clutter_gym.robots.diffdrive import DiffDriveConfig, DiffDriveRobot
 from clutter_gym.robots.wheeled import WheeledBase
 from clutter_gym.sim import Sim
@@ -71,7 +71,7 @@ def probe(robot: DiffDriveRobot, physics_hz: float, solver_iterations: int, cont
 def simulate(params: DriveParams, commands: np.ndarray, config: DiffDriveConfig, physics_hz: float,
              control_hz: float) -> np.ndarray:
     """The model's (forward speed, yaw rate) after each control step of ``commands`` (normalised), from rest."""
-    state = np.zeros(5)
+    state = np.zeros(STATE_SIZE)
     array = params.as_array()
     substeps = int(round(physics_hz / control_hz))
     out = np.empty((len(commands), 2))
@@ -92,7 +92,7 @@ def fit_drive(base: WheeledBase, config: DiffDriveConfig, physics_hz: float, sol
     track = base.wheel_separation
 
     def residual(x: np.ndarray) -> np.ndarray:
-        model = simulate(DriveParams(*x), commands, config, physics_hz, control_hz)
+        model = simulate(DriveParams(*x, wheel_track=track), commands, config, physics_hz, control_hz)
         return ((model - measured) / scale).ravel()
 
     # from the URDF's track and from a wide one (a skid-steer base turns as if its sides were further apart)
@@ -100,8 +100,8 @@ def fit_drive(base: WheeledBase, config: DiffDriveConfig, physics_hz: float, sol
                              bounds=([0.05, 0.0, 0.0, 0.5 * track], [100.0, 1.0, 0.5, 5.0 * track]))
                for start in (1.0, 3.0)), key=lambda result: result.cost)
     error = float(np.sqrt(np.mean(np.reshape(fit.fun, (-1, 2)) ** 2, axis=0)).max())
-    return DriveFit(DriveParams(*(float(x) for x in fit.x)), _grip(base, config, physics_hz, solver_iterations,
-                                                                   control_hz), error)
+    params = DriveParams(*(float(x) for x in fit.x), wheel_track=track)
+    return DriveFit(params, _grip(base, config, physics_hz, solver_iterations, control_hz), error)
 
 
 def _grip(base: WheeledBase, config: DiffDriveConfig, physics_hz: float, solver_iterations: int,

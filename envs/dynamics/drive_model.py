@@ -15,8 +15,10 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-#: rows of a drive state: base origin x, y (m), yaw (rad), the left and right sides' ground speeds (m/s)
-X, Y, YAW, LEFT, RIGHT = range(5)
+#: rows of a drive state: base origin x, y (m), yaw (rad), the left and right sides' ground speeds (m/s), and the
+#: distances each side's wheels have rolled (m, what their encoders count)
+X, Y, YAW, LEFT, RIGHT, LEFT_ROLLED, RIGHT_ROLLED = range(7)
+STATE_SIZE = 7
 
 
 @dataclass(frozen=True)
@@ -29,16 +31,20 @@ class DriveParams:
         time_constant: s, the first-order lag of a side's ground speed towards its command.
         scrub: s/rad, the share of forward speed lost per rad/s of yaw rate.
         track: m, the effective distance between the sides (a skid-steer base turns as if it were wider).
+        wheel_track: m, the URDF's distance between the wheels: the wheels turn at the unicycle model's speeds for
+            the base's forward speed and yaw rate over this track, as their motors are commanded.
     """
 
     acceleration: float
     time_constant: float
     scrub: float
     track: float
+    wheel_track: float
 
     def as_array(self, accel_scale: float = 1.0) -> np.ndarray:
         """The numbers in :func:`drive_ticks`' order, the acceleration limit times ``accel_scale``."""
-        return np.array([self.acceleration * accel_scale, self.time_constant, self.scrub, self.track])
+        return np.array([self.acceleration * accel_scale, self.time_constant, self.scrub, self.track,
+                         self.wheel_track])
 
     def sides(self, speed: float, yaw_rate: float) -> tuple[float, float]:
         """The sides' ground speeds (left, right) m/s of a forward speed m/s and yaw rate rad/s."""
@@ -53,17 +59,21 @@ class DriveParams:
 
 @numba.njit(cache=True)
 def drive_ticks(state: np.ndarray, left: float, right: float, params: np.ndarray, dt: float, ticks: int) -> None:
-    """Advance ``state`` (rows :data:`X` ... :data:`RIGHT`) in place by ``ticks`` ticks of ``dt`` seconds towards the
-    sides' ground-speed commands ``left`` and ``right`` (m/s). Each tick moves the base along the arc of its speeds
-    (the exact unicycle step for speeds held over the tick)."""
-    acceleration, time_constant, scrub, track = params[0], params[1], params[2], params[3]
+    """Advance ``state`` (rows :data:`X` ... :data:`RIGHT_ROLLED`) in place by ``ticks`` ticks of ``dt`` seconds
+    towards the sides' ground-speed commands ``left`` and ``right`` (m/s). Each tick moves the base along the arc of
+    its speeds (the exact unicycle step for speeds held over the tick)."""
+    acceleration, time_constant, scrub, track, wheel_track = params[0], params[1], params[2], params[3], params[4]
     most = acceleration * dt
     share = min(1.0, dt / time_constant) if time_constant > 0.0 else 1.0
     x, y, yaw, u_left, u_right = state[0], state[1], state[2], state[3], state[4]
+    rolled_left, rolled_right = state[5], state[6]
     for _ in range(ticks):
         u_left += min(max((left - u_left) * share, -most), most)
         u_right += min(max((right - u_right) * share, -most), most)
         w = (u_right - u_left) / track
+        mean = 0.5 * (u_left + u_right)
+        rolled_left += (mean - 0.5 * wheel_track * w) * dt
+        rolled_right += (mean + 0.5 * wheel_track * w) * dt
         v = 0.5 * (u_left + u_right) * max(0.0, 1.0 - scrub * abs(w))
         turn = w * dt
         if abs(turn) < 1e-9:
@@ -75,3 +85,4 @@ def drive_ticks(state: np.ndarray, left: float, right: float, params: np.ndarray
             y -= radius * (math.cos(yaw + turn) - math.cos(yaw))
         yaw += turn
     state[0], state[1], state[2], state[3], state[4] = x, y, math.atan2(math.sin(yaw), math.cos(yaw)), u_left, u_right
+    state[5], state[6] = rolled_left, rolled_right

@@ -21,7 +21,7 @@ from scipy.spatial.transform import Rotation
 from clutter_gym.datatypes import CollisionReport, DynamicsSample, LinkStates, Obstacle, RobotState
 from clutter_gym.dynamics.base import Dynamics, FullPhysics
 from clutter_gym.dynamics.drive_fit import DriveFit
-from clutter_gym.dynamics.drive_model import LEFT, RIGHT, YAW, X, Y, drive_ticks
+from clutter_gym.dynamics.drive_model import LEFT, LEFT_ROLLED, RIGHT, RIGHT_ROLLED, STATE_SIZE, YAW, X, Y, drive_ticks
 from clutter_gym.robots.diffdrive import DiffDriveRobot
 from clutter_gym.sim import Sim
 from clutter_gym.util.transforms import quat_multiply, yaw_quat
@@ -52,7 +52,7 @@ class ReducedDrive(Dynamics):
         self.tolerance = contact_tolerance
         self.full, self._episode_full = True, True
         self.reduced_steps = self.full_steps = 0
-        self._model = np.zeros(5)
+        self._model = np.zeros(STATE_SIZE)
         self._array = fit.params.as_array()
         self._last: RobotState | None = None
 
@@ -75,7 +75,11 @@ class ReducedDrive(Dynamics):
         self._rest_quat = tuple(Rotation.from_matrix(self._rest).as_quat())
         self._link_offsets = (state.links.position - state.position) @ rotation
         self._link_rotations = np.einsum("ji,njk->nik", rotation, state.links.rotation)
-        self._model[:] = (state.position[0], state.position[1], yaw, 0.0, 0.0)
+        self._model[:] = (state.position[0], state.position[1], yaw, 0.0, 0.0, 0.0, 0.0)
+        robot = self.robot
+        self._wheels = robot.wheel_joints
+        self._n_left = len(robot.base.left_wheels)
+        self._wheel_angles = self.sim.joint_states(robot.body, self._wheels)[0]
         movable = any(o.movable for o in obstacles)
         self._episode_full = self.full = movable
         self._last = state
@@ -92,7 +96,10 @@ class ReducedDrive(Dynamics):
         c = self.robot.config
         left, right = self.fit.params.sides(float(command[0]) * c.max_linear_speed,
                                             float(command[1]) * c.max_angular_speed)
-        drive_ticks(self._model, left, right, self._array, 1.0 / self.sim.physics_hz, substeps)
+        m = self._model
+        rolled = m[LEFT_ROLLED], m[RIGHT_ROLLED]
+        drive_ticks(m, left, right, self._array, 1.0 / self.sim.physics_hz, substeps)
+        self._turn_wheels(m[LEFT_ROLLED] - rolled[0], m[RIGHT_ROLLED] - rolled[1])
         if self.sim.visuals:  # a camera or a rendered frame shows the robot where the model has it
             position, rotation, _, _ = self._pose()
             self.sim.set_pose(self.robot.body, position + rotation @ self.robot.com_offset, self._quat())
@@ -142,6 +149,19 @@ class ReducedDrive(Dynamics):
         v, w = self.fit.params.body(m[LEFT], m[RIGHT])
         return np.array([m[X], m[Y], self._height]), _yaw_matrix(m[YAW]) @ self._rest, v, w
 
+    def _turn_wheels(self, left: float, right: float) -> None:
+        """Roll the pybullet body's wheels by the distances ``left`` and ``right`` (m) they rolled over the step, and
+        set their speeds to the model's: the encoders (the odometry sensor) read them, and full physics takes them
+        over at a hand-over."""
+        n, radius, m = self._n_left, self.robot.config.wheel_radius, self._model
+        angles = self._wheel_angles
+        angles[:n] += left / radius
+        angles[n:] += right / radius
+        p = self.fit.params
+        mean, half = 0.5 * (m[LEFT] + m[RIGHT]), 0.5 * p.wheel_track * (m[RIGHT] - m[LEFT]) / p.track
+        speeds = [(mean - half) / radius] * n + [(mean + half) / radius] * (len(angles) - n)
+        self.sim.reset_joints(self.robot.body, self._wheels, angles.tolist(), speeds)
+
     def _quat(self) -> tuple[float, float, float, float]:
         return quat_multiply(yaw_quat(float(self._model[YAW])), self._rest_quat)
 
@@ -153,11 +173,6 @@ class ReducedDrive(Dynamics):
         com = rotation @ robot.com_offset
         sim.set_pose(body, position + com, self._quat())
         sim.set_base_velocity(body, (rotation[:, 0] * v + np.cross((0.0, 0.0, w), com)).tolist(), (0.0, 0.0, w))
-        wheels = robot.wheel_joints
-        n_left = len(robot.base.left_wheels)
-        radius = robot.config.wheel_radius
-        speeds = [self._model[LEFT] / radius] * n_left + [self._model[RIGHT] / radius] * (len(wheels) - n_left)
-        sim.reset_joints(body, wheels, sim.joint_states(body, wheels)[0].tolist(), speeds)
         sim.forget_contacts(body)
         robot.release_hold()
         self.full = True
@@ -170,7 +185,8 @@ class ReducedDrive(Dynamics):
         w = float(rotation[:, 2] @ ang)
         p = self.fit.params
         left, right = p.sides(v / max(1e-6, 1.0 - p.scrub * abs(w)), w)
-        self._model[:] = (state.position[0], state.position[1], state.yaw, left, right)
+        self._model[:] = (state.position[0], state.position[1], state.yaw, left, right, 0.0, 0.0)
+        self._wheel_angles = self.sim.joint_states(self.robot.body, self._wheels)[0]
         self.full = False
 
 
