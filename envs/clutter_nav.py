@@ -161,8 +161,8 @@ class ClutterNavEnv(ClutterEnv):
     throughout. ``"auto"`` takes the reduced model when its fit is within 10% of the robot's speeds (the diffbot's is,
     the skid-steer Husky's is not) and full physics otherwise. The reset's ``info["dynamics"]`` says which model the
     episode starts under and why. Motor strength, mass and friction randomisation scale the model's acceleration
-    limit; action latency and noise act on its command as on the motors'. Its error against full physics is in
-    docs/speed-vs-error.md.
+    limit; action latency and noise act on its command as on the motors'. Its error against full physics and its
+    speed: docs/benchmarks.md, "Reduced dynamics".
 
     ## Movable obstacles
 
