@@ -184,6 +184,13 @@ def test_the_sensors_blocks_distil_a_teacher_into_a_student_that_reads_no_map(en
     assert config.timesteps == config.distill.warmup_steps + config.distill.rounds * config.distill.round_steps
 
 
+def test_the_nav_student_trains_under_the_reduced_dynamics_and_is_evaluated_under_full_physics():
+    args = build_parser().parse_args(["train", "--env", "ClutterNav-v1", "--hyperparams", "sensors"])
+    config = config_for("ClutterNav-v1", train_overrides(args))
+    assert config.train_env_mix["dynamics"] == ["reduced"]
+    assert "dynamics" not in config.env_kwargs  # evaluation, validation and load() make the env's default: physics
+
+
 def test_the_last_rounds_sensor_only_fly_block_reads_no_map():
     args = build_parser().parse_args(["train", "--env", "ClutterFly-v1", "--hyperparams", "sensors-ppo"])
     config = config_for("ClutterFly-v1", train_overrides(args))
