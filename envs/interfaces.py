@@ -113,8 +113,9 @@ class TickedRobot(Robot, Protocol):
     at the physics rate.
 
     A robot opts in with the class attribute ``ticked = True``. The env's full physics
-    (:class:`clutter_gym.dynamics.FullPhysics`) then runs the control period one tick at a time, ``robot.before_tick(); sim.step()``, after :meth:`Robot.apply_action`;
-    robots without the attribute keep ``sim.step(substeps)``.
+    (:class:`clutter_gym.dynamics.FullPhysics`) then runs the control period one tick at a time,
+    ``robot.before_tick(); sim.step()``, after :meth:`Robot.apply_action`; robots without the attribute keep
+    ``sim.step(substeps)``.
     """
 
     @property
