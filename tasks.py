@@ -35,7 +35,8 @@ TYPED_MODULES = ("clutter_gym.datatypes", "clutter_gym.interfaces", "clutter_gym
                  "clutter_gym.worlds.near_field", "clutter_gym.worlds.pool", "clutter_gym.sim.primitives",
                  "clutter_gym.urdf.checks", "clutter_gym.urdf.geometry", "clutter_gym.urdf.kinematics",
                  "clutter_gym.collision.build", "clutter_gym.sensors",
-                 "clutter_gym.sensors.odometry", "clutter_gym.noise.profiles", "clutter_gym.noise.odometry",
+                 "clutter_gym.sensors.odometry", "clutter_gym.sensors.settings", "clutter_gym.noise.profiles",
+                 "clutter_gym.noise.odometry",
                  "clutter_gym.robots.omni", "clutter_gym.robots.registry")
 #: and these packages, every module in them: the step stages and the dynamics parts
 TYPED_PACKAGES = ("clutter_gym.stages", "clutter_gym.dynamics")

@@ -92,7 +92,7 @@ def fit_drive(base: WheeledBase, config: DiffDriveConfig, physics_hz: float, sol
     track = base.wheel_separation
 
     def residual(x: np.ndarray) -> np.ndarray:
-        model = simulate(DriveParams(*x, wheel_track=track), commands, config, physics_hz, control_hz)
+        model = simulate(DriveParams(x[0], x[1], x[2], x[3], track), commands, config, physics_hz, control_hz)
         return ((model - measured) / scale).ravel()
 
     # from the URDF's track and from a wide one (a skid-steer base turns as if its sides were further apart)
@@ -100,7 +100,8 @@ def fit_drive(base: WheeledBase, config: DiffDriveConfig, physics_hz: float, sol
                              bounds=([0.05, 0.0, 0.0, 0.5 * track], [100.0, 1.0, 0.5, 5.0 * track]))
                for start in (1.0, 3.0)), key=lambda result: result.cost)
     error = float(np.sqrt(np.mean(np.reshape(fit.fun, (-1, 2)) ** 2, axis=0)).max())
-    params = DriveParams(*(float(x) for x in fit.x), wheel_track=track)
+    acceleration, lag, scrub, effective_track = (float(x) for x in fit.x)
+    params = DriveParams(acceleration, lag, scrub, effective_track, track)
     return DriveFit(params, _grip(base, config, physics_hz, solver_iterations, control_hz), error)
 
 

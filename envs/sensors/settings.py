@@ -5,6 +5,7 @@ and camera here; an env passes only the arguments it has, and the config's own d
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import replace
 from typing import Any
 
 from clutter_gym.sensors.camera import CameraConfig, camera_config
@@ -35,10 +36,13 @@ def sensor_configs(arguments: Mapping[str, Any], control_hz: float, sensor_link:
         if argument in arguments:
             grouped[sensor][field] = arguments[argument]
     camera = grouped["camera"]
-    links = {} if sensor_link is None else {"link": sensor_link}
-    return {
-        "lidar": LidarConfig(**grouped["lidar"], **links),
-        "imu": ImuConfig(dt=1.0 / control_hz, **({} if imu_link is None else {"link": imu_link})),
-        "camera": camera_config(camera["size"], camera["modes"], camera["fov"], camera["far"], camera["renderer"],
-                                **links) if camera else CameraConfig(),
-    }
+    lidar = LidarConfig(**grouped["lidar"])
+    imu = ImuConfig(dt=1.0 / control_hz)
+    mounted = CameraConfig()
+    if camera:
+        mounted = camera_config(camera["size"], camera["modes"], camera["fov"], camera["far"], camera["renderer"])
+    if sensor_link is not None:
+        lidar, mounted = replace(lidar, link=sensor_link), replace(mounted, link=sensor_link)
+    if imu_link is not None:
+        imu = replace(imu, link=imu_link)
+    return {"lidar": lidar, "imu": imu, "camera": mounted}
