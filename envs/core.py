@@ -9,7 +9,7 @@ hooks the core calls only where the env has it.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import gymnasium as gym
@@ -20,7 +20,7 @@ from clutter_gym import make_checks as checks
 from clutter_gym.auto_physics import PhysicsChoice
 from clutter_gym.collision import CollisionChecker
 from clutter_gym.datatypes import CollisionReport, RobotState
-from clutter_gym.dynamics.base import Dynamics, FullPhysics
+from clutter_gym.dynamics.base import DynamicsFactory, FullPhysics
 from clutter_gym.interfaces import Arena, L, Layout, Robot, Sensor, Task
 from clutter_gym.noise.dynamics import sample_dynamics
 from clutter_gym.noise.profiles import NoiseProfile
@@ -69,7 +69,7 @@ class ClutterEnv(gym.Env):
                  sensors: Sequence[Sensor], checker: CollisionChecker, task: Task[L], control_hz: float,
                  noise: NoiseProfile, render_mode: str | None = None, render_size: tuple[int, int] = (320, 240),
                  stages: Sequence[Stage] = (), physics: str = "fixed",
-                 dynamics: Callable[[Sim, Robot], Dynamics] | None = None) -> None:
+                 dynamics: DynamicsFactory | None = None) -> None:
         self.sensors = tuple(sensors)
         # an env that never draws gives its obstacles no visual shapes (docs/design-notes.md#obstacle-visuals)
         visuals = render_mode is not None or any(s.renders for s in self.sensors)

@@ -10,7 +10,7 @@ collision check, :meth:`Dynamics.checked`.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import cast
 
 import numpy as np
@@ -77,3 +77,7 @@ class FullPhysics(Dynamics):
 
     def contacts(self) -> list[tuple[int, float]]:
         return self.sim.contact_distances(self.robot.body)
+
+
+#: what an env takes as ``dynamics``: the part made from its Sim and its robot
+DynamicsFactory = Callable[[Sim, Robot], Dynamics]

@@ -9,22 +9,18 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from functools import partial
 from typing import Any
 
-from clutter_gym.dynamics.base import Dynamics, FullPhysics
+from clutter_gym.dynamics.base import DynamicsFactory, FullPhysics
 from clutter_gym.dynamics.drive_fit import fit_drive
 from clutter_gym.dynamics.reduced_drive import ReducedDrive
 from clutter_gym.robots.diffdrive import DiffDriveRobot
-from clutter_gym.sim import Sim
 
 DYNAMICS_MODES = ("physics", "reduced", "auto")
 #: the largest error of a reduced drive model that ``"auto"`` takes: the root-mean-square speed error over its fit's
 #: probe, as a share of the commanded maxima (docs/speed-vs-error.md, "Reduced dynamics")
 AUTO_ERROR_BOUND = 0.10
-
-DynamicsFactory = Callable[[Sim, Any], Dynamics]
 
 
 def check_dynamics_mode(dynamics: Any) -> None:

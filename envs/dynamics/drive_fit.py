@@ -5,7 +5,9 @@ the measured ones by least squares. Done once per base, drive limits and rates i
 
 from __future__ import annotations
 
+import contextlib
 import functools
+from collections.abc import Iterator
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -51,11 +53,7 @@ def probe(robot: DiffDriveRobot, physics_hz: float, solver_iterations: int, cont
         (the command of each control step (n, 2), normalised; the forward speed m/s and yaw rate rad/s after it
         (n, 2)).
     """
-    sim = Sim(physics_hz=physics_hz, solver_iterations=solver_iterations, visuals=False)
-    try:
-        sim.add_ground(visual_size=2.0)
-        robot.load(sim)
-        robot.reset_pose(0.0, 0.0, 0.0)
+    with _on_empty_floor(robot, physics_hz, solver_iterations) as sim:
         substeps = int(round(physics_hz / control_hz))
         steps = np.repeat(np.asarray(commands, dtype=np.float64), int(round(hold * control_hz)), axis=0)
         speeds = np.empty_like(steps)
@@ -64,8 +62,6 @@ def probe(robot: DiffDriveRobot, physics_hz: float, solver_iterations: int, cont
             sim.step(substeps)
             speeds[i] = robot.observe(robot.state())["velocity"][:2]
         return steps, speeds
-    finally:
-        sim.close()
 
 
 def simulate(params: DriveParams, commands: np.ndarray, config: DiffDriveConfig, physics_hz: float,
@@ -110,14 +106,21 @@ def _grip(base: WheeledBase, config: DiffDriveConfig, physics_hz: float, solver_
     """The base's forward acceleration from rest, m/s^2, over one control step of a full forward command with
     :data:`GRIP_TORQUE_SCALE` times the motors' torque: the wheels slip, and the floor's friction sets it."""
     robot = DiffDriveRobot(replace(config, max_linear_speed=2.0), base)
+    with _on_empty_floor(robot, physics_hz, solver_iterations) as sim:
+        robot.apply_dynamics(DynamicsSample(motor_scale=GRIP_TORQUE_SCALE))
+        robot.apply_action(np.array([1.0, 0.0]))
+        sim.step(int(round(physics_hz / control_hz)))
+        return float(robot.observe(robot.state())["velocity"][0]) * control_hz
+
+
+@contextlib.contextmanager
+def _on_empty_floor(robot: DiffDriveRobot, physics_hz: float, solver_iterations: int) -> Iterator[Sim]:
+    """A Sim of its own with only a floor and ``robot`` at rest at the origin, closed on leaving."""
     sim = Sim(physics_hz=physics_hz, solver_iterations=solver_iterations, visuals=False)
     try:
         sim.add_ground(visual_size=2.0)
         robot.load(sim)
         robot.reset_pose(0.0, 0.0, 0.0)
-        robot.apply_dynamics(DynamicsSample(motor_scale=GRIP_TORQUE_SCALE))
-        robot.apply_action(np.array([1.0, 0.0]))
-        sim.step(int(round(physics_hz / control_hz)))
-        return float(robot.observe(robot.state())["velocity"][0]) * control_hz
+        yield sim
     finally:
         sim.close()

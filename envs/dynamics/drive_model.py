@@ -74,7 +74,7 @@ def drive_ticks(state: np.ndarray, left: float, right: float, params: np.ndarray
         mean = 0.5 * (u_left + u_right)
         rolled_left += (mean - 0.5 * wheel_track * w) * dt
         rolled_right += (mean + 0.5 * wheel_track * w) * dt
-        v = 0.5 * (u_left + u_right) * max(0.0, 1.0 - scrub * abs(w))
+        v = mean * max(0.0, 1.0 - scrub * abs(w))
         turn = w * dt
         if abs(turn) < 1e-9:
             x += v * dt * math.cos(yaw)
