@@ -140,7 +140,9 @@ class TrainConfig:
             :mod:`clutter_gym.training.residual`).
         residual_space: what a residual policy's action adds to: ``"action"``, the base controller's action;
             ``"velocity"`` (ClutterFly-v1), the velocity its flyer commands, the policy's action then being a
-            (3,) velocity offset in units of the flyer's top speed (:func:`clutter_gym.training.residual.residual_map`).
+            (3,) velocity offset in units of the flyer's top speed; ``"waypoint"``, where the base controller goes
+            (ClutterNav-v1's and ClutterFly-v1's direction, ClutterReach-v1's hand displacement and pitch)
+            (:func:`clutter_gym.training.residual.residual_map`).
         residual_base: gains of the base controller other than its defaults, ClutterFly-v1's flyer only
             (``{attitude_gain: 4.0}``; the names: :data:`clutter_gym.training.residual.FLYER_GAINS`).
         env_kwargs: extra ``gym.make`` keyword arguments. Its ``noise`` entry, if any, holds noise-section

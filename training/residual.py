@@ -28,6 +28,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
+from clutter_gym.training.hand_controller import HandController
 from clutter_gym.util.checks import is_number
 
 Pursuit = Callable[[dict[str, np.ndarray]], np.ndarray]
@@ -38,9 +39,11 @@ MAPLESS_ENVS = ("ClutterNav-v1", "ClutterReach-v1", "ClutterFly-v1")
 RESIDUAL_SPACES = ("action", "velocity", "waypoint")
 #: Turn gain of ClutterNav-v1's potential field when a policy picks its waypoint (its own default).
 TURN_GAIN = 1.5
-#: The angles of a waypoint a policy picks (``residual_space="waypoint"``), as the radians its action entries -1..1
-#: span: ClutterNav-v1's bearing; ClutterFly-v1's azimuth and elevation, body frame.
-WAYPOINT_SCALES = {"ClutterNav-v1": (math.pi,), "ClutterFly-v1": (math.pi, math.pi / 2)}
+#: What the entries -1..1 of a waypoint a policy picks (``residual_space="waypoint"``) span: ClutterNav-v1's bearing
+#: and ClutterFly-v1's azimuth and elevation (body frame), radians; ClutterReach-v1's hand displacement (metres) and
+#: pitch (radians about its middle; :mod:`clutter_gym.training.hand_controller`).
+WAYPOINT_SCALES = {"ClutterNav-v1": (math.pi,), "ClutterFly-v1": (math.pi, math.pi / 2),
+                   "ClutterReach-v1": HandController.waypoint_scales}
 #: Yaw rate per radian between the nose and the velocity commanded, 1/s, of the velocity residual's flyer.
 FACING_GAIN = 2.0
 #: The gains of ClutterFly-v1's flyer a run may set (``residual_base``), each in (0, :data:`MAX_BASE_GAIN`]; its
@@ -73,6 +76,10 @@ def subgoal_pursuit(env_id: str, gain: float, env: gym.Env | None = None, maples
         if space == "waypoint":
             return _field(env, gain or TURN_GAIN)
         return _batched(_field(env, gain))
+    if env_id == "ClutterReach-v1" and space == "waypoint":
+        if env is None:
+            raise ValueError("ClutterReach-v1's hand controller needs the env, for its arm and joint speeds")
+        return HandController.for_env(env)
     if env_id == "ClutterReach-v1" and not mapless:
         return lambda obs: np.clip(gain * np.asarray(obs["subgoal"], dtype=np.float32), -1.0, 1.0)
     if env_id == "ClutterReach-v1":
@@ -105,8 +112,8 @@ def check_residual_space(env_id: str, space: str) -> None:
         raise ValueError(f"residual_space 'velocity' is ClutterFly-v1's (a residual on its flyer's velocity "
                          f"command), got {env_id!r}")
     if space == "waypoint" and env_id not in WAYPOINT_SCALES:
-        raise ValueError(f"residual_space 'waypoint' is {' and '.join(WAYPOINT_SCALES)}'s (the direction their "
-                         f"LIDAR potential fields steer for), got {env_id!r}")
+        raise ValueError(f"residual_space 'waypoint' is {', '.join(WAYPOINT_SCALES)}'s (where their base "
+                         f"controllers steer for), got {env_id!r}")
 
 
 def check_residual_base(env_id: str, base: dict[str, float]) -> None:
@@ -138,7 +145,7 @@ def _field(env: gym.Env, gain: float) -> Pursuit:
 def _rows(obs: dict[str, np.ndarray], action: Any, act: Callable[[dict, np.ndarray], np.ndarray]) -> np.ndarray:
     """``act(obs, action)`` for one observation, or row by row for a batch."""
     action = np.asarray(action, dtype=float)
-    if np.ndim(obs["goal"]) == 1:
+    if action.ndim == 1:
         return act(obs, action)
     return np.stack([act({key: value[i] for key, value in obs.items()}, action[i]) for i in range(len(action))])
 
@@ -164,10 +171,12 @@ def residual_map(pursuit: Pursuit, space: str = "action") -> Callable[[dict[str,
     :class:`~clutter_gym.training.baselines.CascadedFlyer` commands, in units of its top speed along body x, y, z,
     and the sum, capped at that speed, goes to the flyer's inner loops, which also turn the nose towards it
     (``yaw_gain`` :data:`FACING_GAIN`): the policy steers, the flyer flies, and the LIDAR and the camera look where
-    the drone goes. A zero action is the pursuit's own action either way. ``"waypoint"`` (ClutterNav-v1): the policy's
-    (1,) action is the bearing of the point to steer for, in units of pi, and the pursuit's
-    :class:`~clutter_gym.training.baselines.PotentialFieldNavigator` steers for it (the policy picks where to go, the
-    field how to get there past the obstacles its LIDAR sees).
+    the drone goes. A zero action is the pursuit's own action either way. ``"waypoint"``: the policy picks where to
+    go and the base controller how: on ClutterNav-v1 its (1,) action is the bearing of the point to steer for, in
+    units of pi, and the :class:`~clutter_gym.training.baselines.PotentialFieldNavigator` steers for it past the
+    obstacles its LIDAR sees; on ClutterFly-v1, an azimuth and elevation the field flyer flies; on ClutterReach-v1,
+    the hand's displacement and pitch, which the :class:`~clutter_gym.training.hand_controller.HandController`
+    turns into joint velocities.
     """
     if space == "action":
         return lambda obs, action: residual_action(obs, action, pursuit)

@@ -9,6 +9,9 @@ it is made with the teacher's env arguments (:data:`TEACHERS`) on top of the stu
 obstacles the LIDAR has hit this episode, or hits in its current scan (:mod:`clutter_gym.training.known_map`):
 what a student with a memory, or without one, could in principle match. They measure how much of the
 student-teacher gap the map explains (docs/learning.md, "How much of the teacher a student can see").
+ClutterReach-v1's ``"line-up"`` reaches into a shelf's compartment the same way on every layout
+(:mod:`clutter_gym.training.line_up_teachers`), in joint velocities or, for a student acting through the hand
+controller, in its space.
 
 A teacher answers in the student's action space: the env's for ClutterNav-v1 and ClutterReach-v1; for
 ClutterFly-v1, the velocity the flight controller's inner loops fly (:data:`clutter_gym.training.residual`'s
@@ -31,7 +34,7 @@ import numpy as np
 TEACHERS: dict[str, dict[str, dict[str, Any]]] = {
     "ClutterNav-v1": {"planner": {"subgoal_lookahead": 0.5}, "committed": {"subgoal_lookahead": 0.5},
                       "seen-map": {"subgoal_lookahead": 0.5}, "in-range": {"subgoal_lookahead": 0.5}},
-    "ClutterReach-v1": {"planner": {"subgoal_lookahead": 0.1}},
+    "ClutterReach-v1": {"planner": {"subgoal_lookahead": 0.1}, "line-up": {}},
     "ClutterFly-v1": {"planner": {"subgoal_lookahead": 0.5}, "seen-map": {"subgoal_lookahead": 0.5},
                       "in-range": {"subgoal_lookahead": 0.5}},
 }
@@ -142,7 +145,14 @@ def make_teacher(env_id: str, name: str, env: gym.Env, space: str = "action") ->
         return SeenMapFlyer(env, keep, space == "waypoint")
     if env_id == "ClutterNav-v1":
         return PlannerNavigator(env, COMMIT if name == "committed" else 0.0, space == "waypoint")
+    if env_id == "ClutterReach-v1" and name == "line-up":
+        from clutter_gym.training.line_up_teachers import LineUpHand, LineUpReacher
+
+        return LineUpHand(env) if space == "waypoint" else LineUpReacher(env)
     if env_id == "ClutterReach-v1":
+        if space == "waypoint":
+            raise ValueError("teacher.name 'planner' of ClutterReach-v1 answers in joint velocities; a student "
+                             "acting through the hand controller (residual_space: waypoint) needs 'line-up'")
         return PlannerReacher()
     return PlannerFlyer(env, space == "waypoint")
 
