@@ -230,6 +230,13 @@ class TrainConfig:
             raise ValueError("residual_gain > 0 on ClutterReach-v1 without a subgoal (a residual on the proximity "
                              "field) needs env_kwargs.observe_directions: true and control: joint_velocity")
         check_residual_space(self.env_id, self.residual_space)
+        if self.env_id == "ClutterReach-v1" and self.residual_space == "waypoint":
+            if self.teacher.name and self.teacher.name != "line-up":
+                raise ValueError("residual_space waypoint on ClutterReach-v1 (the hand controller) needs teacher.name "
+                                 f"'line-up', the teacher that answers in the hand's space, got {self.teacher.name!r}")
+            if self.env_kwargs.get("control", "joint_velocity") != "joint_velocity":
+                raise ValueError("residual_space waypoint on ClutterReach-v1 drives the joints: it needs "
+                                 "env_kwargs.control: joint_velocity")
         if self.residual_space != "action" and not (self.residual_gain or self.teacher.name):
             raise ValueError(f"residual_space {self.residual_space!r} needs residual_gain > 0, or a teacher (the "
                              "student then commands the velocity itself)")

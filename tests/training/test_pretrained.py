@@ -10,7 +10,8 @@ from clutter_gym.training import load
 from clutter_gym.training.evaluate import evaluate
 from clutter_gym.training.pretrained import card, pretrained_folder, pretrained_names
 
-SHIPPED = ["ClutterFly-v1", "ClutterFly-v1-student", "ClutterNav-v1", "ClutterNav-v1-student", "ClutterReach-v1"]
+SHIPPED = ["ClutterFly-v1", "ClutterFly-v1-student", "ClutterNav-v1", "ClutterNav-v1-student", "ClutterReach-v1",
+           "ClutterReach-v1-student"]
 
 
 def test_the_shipped_agents_are_there_with_cards_that_say_how_they_were_made():

@@ -3,14 +3,16 @@
 from __future__ import annotations
 
 import math
+from importlib import resources
 
 import numpy as np
 import pytest
+import yaml
 
 from clutter_gym import ENV_IDS
 from clutter_gym.cli import build_parser, main
 from clutter_gym.training.commands import train_overrides
-from clutter_gym.training.config import PPOHyperparams, TrainConfig, config_for, hyperparams_table
+from clutter_gym.training.config import PPOHyperparams, TrainConfig, config_for, deep_merge, hyperparams_table
 from clutter_gym.training.stats import mean_interval, wilson_interval
 
 
@@ -179,7 +181,9 @@ def test_the_sensors_blocks_distil_a_teacher_into_a_student_that_reads_no_map(en
     args = build_parser().parse_args(["train", "--env", env_id, "--hyperparams", "sensors"])
     config = config_for(env_id, train_overrides(args))
     assert config.teacher.name and config.env_kwargs["subgoal_lookahead"] == 0.0
-    assert config.teacher_kwargs()["subgoal_lookahead"] > 0  # the teacher's map-based parts are its own
+    # the teacher's map-based parts are its own: the env's planner subgoal, or ClutterReach's line-up teacher's
+    # planning on the scene, which needs no env argument
+    assert config.teacher_kwargs().get("subgoal_lookahead", 0.0) > 0 or config.teacher.name == "line-up"
     # the block stops when the distillation does: no PPO steps after its warm-up and rounds
     assert config.timesteps == config.distill.warmup_steps + config.distill.rounds * config.distill.round_steps
 
@@ -203,3 +207,18 @@ def test_the_last_rounds_sensor_only_reach_block_reads_no_map():
     config = config_for("ClutterReach-v1", train_overrides(args))
     assert config.env_kwargs["subgoal_lookahead"] == 0.0 and config.env_kwargs["observe_directions"]
     assert config.residual_gain > 0 and config.train_layouts == 0  # no planning, so no layout pool to plan once
+
+
+@pytest.mark.parametrize(("overrides", "message"), [
+    ({"teacher": {"name": "planner"}}, "needs teacher.name 'line-up'"),
+    ({"teacher": {"name": "line-up"}, "env_kwargs": {"control": "ee_position", "subgoal_lookahead": 0.0,
+                                                     "observe_directions": True}}, "needs env_kwargs.control"),
+])
+def test_the_reach_hand_controller_refuses_a_teacher_or_control_it_cannot_use(overrides, message):
+    """The shipped Reach student block with one setting changed: the planner teacher answers in joint velocities,
+    and the hand controller drives the joints."""
+    text = resources.files("clutter_gym.training").joinpath("hyperparams", "sensors.yml").read_text()
+    block = yaml.safe_load(text)["ClutterReach-v1"]
+    config_for("ClutterReach-v1", block)  # the block itself is valid
+    with pytest.raises(ValueError, match=message):
+        config_for("ClutterReach-v1", deep_merge(block, overrides))
