@@ -96,7 +96,7 @@ class LineUpHand(Teacher):
         hand = self.planner.hand.frames(np.asarray(obs["joint_position"], dtype=float))[0, :3, 3]
         aim = points[0]
         for k in range(len(points) - 1, 0, -1):  # the furthest leg the hand is on
-            if _tube_distance(hand, points[k - 1], points[k]) <= TUBE:
+            if tube_distance(hand, points[k - 1], points[k]) <= TUBE:
                 aim = points[k]
                 break
         offset = aim - hand
@@ -125,7 +125,7 @@ class LineUpHand(Teacher):
         return np.array([over, front, end]), pitch
 
 
-def _tube_distance(point: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
+def tube_distance(point: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
     """Distance from ``point`` to the segment from ``a`` to ``b``."""
     ab = b - a
     t = float(np.clip((point - a) @ ab / max(float(ab @ ab), 1e-12), 0.0, 1.0))

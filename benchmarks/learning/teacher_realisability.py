@@ -7,6 +7,11 @@ student-teacher gap that no imitation can close without memory, or at all.
 
     python -m benchmarks.learning.teacher_realisability --env ClutterNav-v1 --episodes 100
     python -m benchmarks.learning.teacher_realisability --env ClutterFly-v1 --episodes 50 --levels 0.05
+    python -m benchmarks.learning.teacher_realisability --env ClutterReach-v1 --teachers line-up
+    python -m benchmarks.learning.teacher_realisability --env ClutterReach-v1 --space action
+
+``--space action`` drives the env's own actions instead of the student's interface (ClutterReach-v1's joint
+velocities, where its ``planner`` teacher answers, against the student's hand controller).
 """
 
 from __future__ import annotations
@@ -28,14 +33,17 @@ LEVELS = {"ClutterNav-v1": ("obstacle_density", (0.05, 0.12, 0.2)), "ClutterFly-
           "ClutterReach-v1": ("n_obstacles", (6,))}
 
 
-def drive(env_id: str, teacher: str, level: tuple[str, float], episodes: int, noise: str = "none") -> dict:
-    """The teacher's own episodes in the student's env at one clutter level: the evaluation summary's metrics."""
+def drive(env_id: str, teacher: str, level: tuple[str, float], episodes: int, noise: str = "none",
+          interface: bool = True) -> dict:
+    """The teacher's own episodes in the student's env at one clutter level, through the student's action
+    interface (or, without ``interface``, the env's own actions): the evaluation summary's metrics."""
     config = config_for(env_id, user_settings(read_hyperparams_file("sensors"), env_id))
     kwargs = {**config.make_kwargs(noise), level[0]: level[1], **TEACHERS[env_id][teacher]}
     env = gym.make(env_id, **kwargs)
-    if config.uses_base:  # the student's interface: a waypoint the pursuit follows, or the flyer's velocity
+    space = config.residual_space if interface else "action"
+    if interface and config.uses_base:  # a waypoint the base controller follows, or the flyer's velocity
         env = SubgoalResidual(env, config.residual_gain, config.residual_space, config.residual_base)
-    labelled = TeacherLabels(env, make_teacher(env_id, teacher, env, config.residual_space), teacher_share=1.0)
+    labelled = TeacherLabels(env, make_teacher(env_id, teacher, env, space), teacher_share=1.0)
     idle = np.zeros(env.action_space.shape, dtype=np.float32)  # ignored: the teacher drives every episode
     try:
         rows = rollouts(labelled, lambda obs, state: (idle, state), episodes, EVAL_SEED)
@@ -51,6 +59,8 @@ def main() -> None:
     parser.add_argument("--teachers", nargs="+", default=None, help="default: every teacher of the env")
     parser.add_argument("--levels", type=float, nargs="+", default=None, help="clutter levels (default: the env's)")
     parser.add_argument("--noise", default="none")
+    parser.add_argument("--space", choices=("student", "action"), default="student",
+                        help="the student's action interface, or the env's own actions")
     args = parser.parse_args()
     key, levels = LEVELS[args.env]
     levels = args.levels or levels
@@ -62,7 +72,7 @@ def main() -> None:
     for teacher in teachers:
         cells = []
         for value in levels:
-            metrics = drive(args.env, teacher, (key, value), args.episodes, args.noise)
+            metrics = drive(args.env, teacher, (key, value), args.episodes, args.noise, args.space == "student")
             s, c = metrics["success_rate"], metrics["collision_rate"]
             cells.append(f"{s['value']:.0%} [{s['ci95'][0]:.0%}, {s['ci95'][1]:.0%}] / {c['value']:.0%}")
         print(f"| {teacher} | " + " | ".join(cells) + " |", flush=True)

@@ -5,6 +5,7 @@ in the open by its route."""
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -89,3 +90,19 @@ def test_the_hand_teacher_reaches_a_target_in_the_open_over_it_and_down(hand_env
 def test_the_planner_teacher_refuses_the_hand_space(hand_env):
     with pytest.raises(ValueError, match="needs 'line-up'"):
         make_teacher("ClutterReach-v1", "planner", hand_env, space="waypoint")
+
+
+def test_the_reach_benchmarks_drive_the_teachers_in_either_space_and_the_controller_alone():
+    """The commands behind docs/learning.md's ClutterReach teacher rows and its controller-alone row."""
+    from helpers import run_benchmark
+
+    for args, teacher in ((("--teachers", "line-up"), "line-up"), (("--space", "action", "--teachers", "planner"),
+                                                                    "planner")):
+        done = run_benchmark("benchmarks.learning.teacher_realisability", "--env", "ClutterReach-v1", "--episodes",
+                             "1", *args)
+        assert done.returncode == 0, done.stderr[-2000:]
+        assert re.search(rf"^\| {teacher} \| \d+% \[\d+%, \d+%\] / \d+% \|$", done.stdout, re.M), done.stdout
+    done = run_benchmark("benchmarks.learning.reach_diagnosis", "--over-and-down", "--episodes", "2")
+    assert done.returncode == 0, done.stderr[-2000:]
+    rows = re.findall(r"^\| (table|shelf) \| (\d+) \| \d+ \| \d+ \| \d+ \|$", done.stdout, re.M)
+    assert [place for place, _ in rows] == ["table", "shelf"] and sum(int(n) for _, n in rows) == 2
