@@ -17,6 +17,9 @@ from clutter_gym.training.figures import plt, save_figure
 from clutter_gym.training.report import rolling_rate
 from clutter_gym.training.run_dir import RunDir
 
+#: PPO's scalars, one panel each (a run that only distilled logs neither).
+PPO_TAGS = ("train/std", "train/explained_variance")
+
 
 def scalars(run: Path, tag: str) -> tuple[np.ndarray, np.ndarray]:
     """(steps, values) of one TensorBoard scalar of a run (empty when it was not logged)."""
@@ -37,8 +40,10 @@ def main() -> None:
     parser.add_argument("--run", action="append", required=True, metavar="NAME=RUN_DIR")
     parser.add_argument("--out", required=True, help="the PNG to write")
     args = parser.parse_args()
-    fig, axes = plt.subplots(1, 4, figsize=(16, 3.6))
-    for spec in args.run:
+    ppo = [{tag: scalars(Path(spec.partition("=")[2]), tag) for tag in PPO_TAGS} for spec in args.run]
+    panels = 4 if any(len(steps) for curves in ppo for steps, _ in curves.values()) else 2  # distillation only: 2
+    fig, axes = plt.subplots(1, panels, figsize=(4 * panels, 3.6))
+    for spec, curves in zip(args.run, ppo):
         name, _, folder = spec.partition("=")
         run = RunDir(folder)
         validations = run.read_validations()
@@ -50,9 +55,8 @@ def main() -> None:
         if episodes:
             axes[1].plot([r["timestep"] for r in episodes], rolling_rate(np.array([r["success"] for r in episodes])),
                          color=line.get_color())
-        for ax, tag in ((axes[2], "train/std"), (axes[3], "train/explained_variance")):
-            steps, values = scalars(Path(folder), tag)
-            ax.plot(steps, values, color=line.get_color())
+        for ax, tag in zip(axes[2:], PPO_TAGS):
+            ax.plot(*curves[tag], color=line.get_color())
     titles = ("validation success (solid), collisions (dotted)", "training success, rolling",
               "action std", "explained variance")
     for ax, title in zip(axes, titles):
