@@ -22,6 +22,7 @@ from clutter_gym.training.distill_config import DistillSettings, TeacherSettings
 from clutter_gym.training.env_settings import check_env_kwargs, check_mix, reject_unknown
 from clutter_gym.training.residual import MAPLESS_ENVS, PURSUIT_ENVS, check_residual_base, check_residual_space
 from clutter_gym.training.scan_memory import MEMORY_KINDS
+from clutter_gym.training.teachers import check_teacher
 from clutter_gym.util.checks import short_repr
 from clutter_gym.util.safe_yaml import read_yaml
 
@@ -230,13 +231,12 @@ class TrainConfig:
             raise ValueError("residual_gain > 0 on ClutterReach-v1 without a subgoal (a residual on the proximity "
                              "field) needs env_kwargs.observe_directions: true and control: joint_velocity")
         check_residual_space(self.env_id, self.residual_space)
-        if self.env_id == "ClutterReach-v1" and self.residual_space == "waypoint":
-            if self.teacher.name and self.teacher.name != "line-up":
-                raise ValueError("residual_space waypoint on ClutterReach-v1 (the hand controller) needs teacher.name "
-                                 f"'line-up', the teacher that answers in the hand's space, got {self.teacher.name!r}")
-            if self.env_kwargs.get("control", "joint_velocity") != "joint_velocity":
-                raise ValueError("residual_space waypoint on ClutterReach-v1 drives the joints: it needs "
-                                 "env_kwargs.control: joint_velocity")
+        if self.teacher.name:
+            check_teacher(self.env_id, self.teacher.name, self.residual_space)
+        if (self.env_id == "ClutterReach-v1" and self.residual_space == "waypoint"
+                and self.env_kwargs.get("control", "joint_velocity") != "joint_velocity"):
+            raise ValueError("residual_space waypoint on ClutterReach-v1 drives the joints: it needs "
+                             "env_kwargs.control: joint_velocity")
         if self.residual_space != "action" and not (self.residual_gain or self.teacher.name):
             raise ValueError(f"residual_space {self.residual_space!r} needs residual_gain > 0, or a teacher (the "
                              "student then commands the velocity itself)")

@@ -60,10 +60,10 @@ class HandController:
         """The joint-velocity action (float32, within [-1, 1]) moving the hand by (dx, dy, dz) metres, pitched
         ``PITCH_MID + pitch`` radians below level, from the observation's joints and target."""
         q = np.asarray(obs["joint_position"], dtype=float)
-        point = self.hand.frames(q)[0, :3, 3] + np.array([dx, dy, dz])
         target = np.asarray(obs["target"], dtype=float)
         rest = self.rest.copy()
         rest[0] = math.atan2(target[1], target[0])  # the ready posture, turned to face the target
-        change = self.hand.step(q, point, hand_axis(target, PITCH_MID + pitch), rest=rest)[0]
+        change = self.hand.step(q, np.array([dx, dy, dz]), hand_axis(target, PITCH_MID + pitch), rest=rest,
+                                relative=True)[0]
         action = change / self.joint_step
         return (action / max(1.0, float(np.abs(action).max()))).astype(np.float32)

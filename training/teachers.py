@@ -44,12 +44,16 @@ COMMIT = math.pi / 3
 REACH_PURSUIT_GAIN = 15.0
 
 
-def check_teacher(env_id: str, name: str) -> None:
-    """Raises a named ValueError unless ``name`` is a teacher of ``env_id``."""
+def check_teacher(env_id: str, name: str, space: str = "action") -> None:
+    """Raises a named ValueError unless ``name`` is a teacher of ``env_id`` that answers in the student's action
+    ``space``: ClutterReach-v1's hand controller (``"waypoint"``) has only the ``line-up`` teacher."""
     if env_id not in TEACHERS:
         raise ValueError(f"teacher: {env_id} has no teacher; the envs with one: {sorted(TEACHERS)}")
     if name not in TEACHERS[env_id]:
         raise ValueError(f"teacher.name must be one of {sorted(TEACHERS[env_id])} for {env_id}, got {name!r}")
+    if env_id == "ClutterReach-v1" and space == "waypoint" and name != "line-up":
+        raise ValueError(f"residual_space waypoint on ClutterReach-v1 (the hand controller) needs teacher.name "
+                         f"'line-up', the teacher that answers in the hand's space, got {name!r}")
 
 
 class Teacher(ABC):
@@ -133,9 +137,9 @@ def make_teacher(env_id: str, name: str, env: gym.Env, space: str = "action") ->
     answering in the student's action ``space`` (:func:`clutter_gym.training.residual.residual_map`).
 
     Raises:
-        ValueError: no such teacher (:func:`check_teacher`).
+        ValueError: no such teacher, or none that answers in ``space`` (:func:`check_teacher`).
     """
-    check_teacher(env_id, name)
+    check_teacher(env_id, name, space)
     if name in ("seen-map", "in-range"):
         from clutter_gym.training.known_map import SeenMapFlyer, SeenMapNavigator
 
@@ -150,9 +154,6 @@ def make_teacher(env_id: str, name: str, env: gym.Env, space: str = "action") ->
 
         return LineUpHand(env) if space == "waypoint" else LineUpReacher(env)
     if env_id == "ClutterReach-v1":
-        if space == "waypoint":
-            raise ValueError("teacher.name 'planner' of ClutterReach-v1 answers in joint velocities; a student "
-                             "acting through the hand controller (residual_space: waypoint) needs 'line-up'")
         return PlannerReacher()
     return PlannerFlyer(env, space == "waypoint")
 

@@ -15,6 +15,7 @@ first five obstacles (clutter_gym.worlds.table.sample).
 from __future__ import annotations
 
 import argparse
+import math
 from collections import Counter
 from collections.abc import Callable
 from typing import Any
@@ -24,8 +25,7 @@ import numpy as np
 
 from clutter_gym.training import load
 from clutter_gym.training.config import EVAL_SEED, config_for, read_hyperparams_file, user_settings
-from clutter_gym.training.hand_controller import HAND_STEP
-from clutter_gym.training.line_up_teachers import ABOVE, TRAVEL_HEIGHT, TUBE, tube_distance
+from clutter_gym.training.line_up_teachers import over_route, route_action
 from clutter_gym.training.residual import SubgoalResidual
 
 SHELF_PARTS = 5
@@ -51,12 +51,8 @@ def over_and_down() -> tuple[gym.Env, Callable]:
     hand = env.pursuit.hand
 
     def predict(obs: dict, state: Any) -> tuple[np.ndarray, Any]:
-        target = np.asarray(obs["target"], dtype=float)
         here = hand.frames(np.asarray(obs["joint_position"], dtype=float))[0, :3, 3]
-        over = np.array([target[0], target[1], max(target[2] + ABOVE, TRAVEL_HEIGHT)])
-        aim = target if tube_distance(here, over, target) <= TUBE else over
-        move = (aim - here) / max(HAND_STEP, float(np.abs(aim - here).max()))
-        return np.append(move, 1.0).astype(np.float32), state  # pitch +1: pointing down
+        return route_action(here, over_route(np.asarray(obs["target"], dtype=float)), math.pi / 2), state
     return env, predict
 
 

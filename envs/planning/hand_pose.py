@@ -49,11 +49,16 @@ class HandPose:
         self.lower, self.upper = np.asarray(arm.lower, dtype=float), np.asarray(arm.upper, dtype=float)
         self.n_joints = len(arm.arm_joints)
 
-    def frames(self, q: np.ndarray) -> np.ndarray:
-        """The hand's frames (n, 4, 4) at arm configurations ``q`` (n, n_joints), fingers at their opening."""
+    def link_frames(self, q: np.ndarray) -> dict[str, np.ndarray]:
+        """Every link's frames (n, 4, 4) at arm configurations ``q`` (n, n_joints), fingers (if any) at their
+        opening."""
         q = np.atleast_2d(q)
         fingers = np.full((len(q), len(self.arm.finger_joints)), self.arm.finger_opening)
-        return self.kinematics.forward(np.concatenate([q, fingers], axis=1))[self.arm.ee_link]
+        return self.kinematics.forward(np.concatenate([q, fingers], axis=1))
+
+    def frames(self, q: np.ndarray) -> np.ndarray:
+        """The hand's frames (n, 4, 4) at arm configurations ``q`` (n, n_joints)."""
+        return self.link_frames(q)[self.arm.ee_link]
 
     def residual(self, q: np.ndarray, point: np.ndarray, axis: np.ndarray) -> np.ndarray:
         """(n, 7): the hand's offset from ``point``, its approach (z) axis minus ``axis``, and the vertical
@@ -62,15 +67,18 @@ class HandPose:
         return np.concatenate([frame[:, :3, 3] - point, frame[:, :3, 2] - axis, frame[:, 2:3, 1]], axis=1)
 
     def step(self, q: np.ndarray, point: np.ndarray, axis: np.ndarray, damping: float = 0.05,
-             weight: float = AXIS_WEIGHT, rest: np.ndarray | None = None) -> np.ndarray:
+             weight: float = AXIS_WEIGHT, rest: np.ndarray | None = None, relative: bool = False) -> np.ndarray:
         """One damped-least-squares change (n, n_joints) of configurations ``q`` (n, n_joints) towards the pose,
-        the axis rows weighted by ``weight``. A joint the change would take within :data:`LIMIT_BAND` of a limit is
-        held and the rest solved again; with ``rest`` (n_joints,), the redundant motion also turns the joints
-        towards it (:data:`POSTURE_GAIN`), in the Jacobian's null space."""
+        the axis rows weighted by ``weight``; with ``relative``, ``point`` is the hand's displacement from where it
+        is at ``q`` (read from the same forward-kinematics pass). A joint the change would take within
+        :data:`LIMIT_BAND` of a limit is held and the rest solved again; with ``rest`` (n_joints,), the redundant
+        motion also turns the joints towards it (:data:`POSTURE_GAIN`), in the Jacobian's null space."""
         q = np.atleast_2d(q)
         n, dof = q.shape
         stacked = np.concatenate([q[:, None, :], q[:, None, :] + np.eye(dof) * _EPS], axis=1).reshape(-1, dof)
-        r = self.residual(stacked, point, axis).reshape(n, dof + 1, -1)
+        r = self.residual(stacked, np.zeros(3) if relative else point, axis).reshape(n, dof + 1, -1)
+        if relative:
+            r[..., :3] -= r[:, :1, :3] + point  # each row's hand position minus (where the hand is + the move)
         r[..., 3:] *= weight
         error, jac = r[:, 0], ((r[:, 1:] - r[:, :1]) / _EPS).transpose(0, 2, 1)  # (n, 7), (n, 7, dof)
         free = np.ones((n, dof))

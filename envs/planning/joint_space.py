@@ -19,6 +19,7 @@ import numpy as np
 
 from clutter_gym.collision import CollisionChecker, RobotCollisionModel
 from clutter_gym.datatypes import Obstacle
+from clutter_gym.planning.hand_pose import HandPose, approach_axis
 from clutter_gym.planning.path import RESOLUTION
 from clutter_gym.robots.arm_model import ArmModel
 from clutter_gym.robots.panda import panda_model
@@ -63,7 +64,8 @@ class ConfigurationChecker:
     def __init__(self, fidelity: str = "convex", margin: float = 0.02, arm: ArmModel | None = None) -> None:
         self.arm = arm = arm or panda_model()
         self.lower, self.upper, self.n_joints = arm.lower, arm.upper, len(arm.arm_joints)
-        self.kinematics = UrdfKinematics(arm.urdf)
+        self.hand = HandPose(arm)
+        self.kinematics = self.hand.kinematics
         names = (arm.base_link, *arm.tracked_links)
         self.model = RobotCollisionModel.from_urdf(arm.urdf, fidelity, names)
         self.checker = CollisionChecker(self.model, base_link=arm.base_link, clearance_range=margin,
@@ -78,9 +80,7 @@ class ConfigurationChecker:
 
     def frames(self, q: np.ndarray) -> dict[str, np.ndarray]:
         """Link frames (n, 4, 4) of arm configurations ``q`` (n, n_joints), fingers (if any) at their opening."""
-        q = np.atleast_2d(q)
-        fingers = np.full((len(q), len(self.arm.finger_joints)), self.arm.finger_opening)
-        return self.kinematics.forward(np.concatenate([q, fingers], axis=1))
+        return self.hand.link_frames(q)
 
     def ee_positions(self, q: np.ndarray) -> np.ndarray:
         """End-effector positions (n, 3) of configurations ``q`` (n, n_joints)."""
@@ -275,7 +275,7 @@ class ArmPlanner:
     def approaches(self, goals: np.ndarray, target: np.ndarray) -> list[tuple[np.ndarray, int]]:
         """Per goal, configurations with the end effector ``APPROACH`` metres back towards the base (out of a
         shelf) and above (out of the clutter), where IK from the goal converges and the straight edge is free."""
-        radial = np.array([target[0], target[1], 0.0]) / max(np.hypot(target[0], target[1]), 1e-9)
+        radial = approach_axis(target)
         ee = self.checker.ee_positions(goals)
         out = []
         for direction in (-radial, np.array([0.0, 0.0, 1.0])):

@@ -16,7 +16,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from clutter_gym.datatypes import Obstacle
-from clutter_gym.planning.hand_pose import HandPose, approach_axis, hand_axis
+from clutter_gym.planning.hand_pose import approach_axis, hand_axis
 from clutter_gym.planning.joint_space import ArmPlanner, _edge_free, rrt_connect, shortcut
 from clutter_gym.planning.path import RESOLUTION, JointPath
 from clutter_gym.robots.arm_model import ArmModel
@@ -63,7 +63,7 @@ class LineUpPlanner(ArmPlanner):
 
     def __init__(self, margin: float = 0.02, fidelity: str = "convex", arm: ArmModel | None = None) -> None:
         super().__init__(margin, fidelity, arm)
-        self.hand = HandPose(self.checker.arm)
+        self.hand = self.checker.hand
 
     def plan(self, obstacles: Sequence[Obstacle], start: np.ndarray, target: np.ndarray,
              rng: np.random.Generator) -> np.ndarray | None:

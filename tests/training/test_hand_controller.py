@@ -88,7 +88,7 @@ def test_the_hand_teacher_reaches_a_target_in_the_open_over_it_and_down(hand_env
 
 
 def test_the_planner_teacher_refuses_the_hand_space(hand_env):
-    with pytest.raises(ValueError, match="needs 'line-up'"):
+    with pytest.raises(ValueError, match="needs teacher.name 'line-up'"):
         make_teacher("ClutterReach-v1", "planner", hand_env, space="waypoint")
 
 
