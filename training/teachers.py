@@ -35,8 +35,8 @@ TEACHERS: dict[str, dict[str, dict[str, Any]]] = {
     "ClutterNav-v1": {"planner": {"subgoal_lookahead": 0.5}, "committed": {"subgoal_lookahead": 0.5},
                       "seen-map": {"subgoal_lookahead": 0.5}, "in-range": {"subgoal_lookahead": 0.5}},
     "ClutterReach-v1": {"planner": {"subgoal_lookahead": 0.1}, "line-up": {}},
-    "ClutterFly-v1": {"planner": {"subgoal_lookahead": 0.5}, "seen-map": {"subgoal_lookahead": 0.5},
-                      "in-range": {"subgoal_lookahead": 0.5}},
+    "ClutterFly-v1": {"planner": {"subgoal_lookahead": 0.5}, "taut": {"subgoal_lookahead": 0.5},
+                      "seen-map": {"subgoal_lookahead": 0.5}, "in-range": {"subgoal_lookahead": 0.5}},
 }
 #: radians: how much shorter the other way round may be before ClutterNav-v1's committed teachers turn it
 COMMIT = math.pi / 3
@@ -155,6 +155,10 @@ def make_teacher(env_id: str, name: str, env: gym.Env, space: str = "action") ->
         return LineUpHand(env) if space == "waypoint" else LineUpReacher(env)
     if env_id == "ClutterReach-v1":
         return PlannerReacher()
+    if name == "taut":
+        from clutter_gym.training.taut_path import TautFlyer
+
+        return TautFlyer(env, space == "waypoint")
     return PlannerFlyer(env, space == "waypoint")
 
 
