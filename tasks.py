@@ -38,8 +38,8 @@ TYPED_MODULES = ("clutter_gym.datatypes", "clutter_gym.interfaces", "clutter_gym
                  "clutter_gym.sensors.odometry", "clutter_gym.sensors.settings", "clutter_gym.noise.profiles",
                  "clutter_gym.noise.odometry",
                  "clutter_gym.robots.omni", "clutter_gym.robots.registry")
-#: and these packages, every module in them: the step stages and the dynamics parts
-TYPED_PACKAGES = ("clutter_gym.stages", "clutter_gym.dynamics")
+#: and these packages, every module in them: the step stages, the dynamics parts and the Sim with its parts
+TYPED_PACKAGES = ("clutter_gym.stages", "clutter_gym.dynamics", "clutter_gym.sim")
 #: The Pythons pybullet 3.2.7 has wheels for, newest first.
 WHEEL_PYTHONS = ((3, 11), (3, 10))
 

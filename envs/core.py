@@ -155,7 +155,7 @@ class ClutterEnv(gym.Env):
         obstacles, bodies = self.arena.place(scene)
         self.checker.set_scene(obstacles, bodies)
         self.robot.reset_to(scene.start)
-        self.sim.move_static(self._goal_marker, self.task.marker_position(scene), yaw_quat(0.0))
+        self.sim.obstacles.move_static(self._goal_marker, self.task.marker_position(scene), yaw_quat(0.0))
         self.scene = scene
         dynamics = self.dynamics.episode_start(obstacles)
         state = self.dynamics.state()

@@ -243,7 +243,7 @@ def test_obstacles_have_visual_shapes_where_the_env_draws(make_env, kwargs, draw
     assert (colours == {(1.0, 1.0, 1.0, 1.0)}) is not draws
     if not draws:
         with pytest.raises(RuntimeError, match="visuals=False"):
-            sim.render(32, 32, (0.0, -5.0, 5.0), (0.0, 0.0, 0.0))
+            sim.rendering.render(32, 32, (0.0, -5.0, 5.0), (0.0, 0.0, 0.0))
 
 
 def test_close_frees_the_client_and_200_cycles_leak_nothing_measurable():

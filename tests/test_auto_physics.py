@@ -59,11 +59,11 @@ def test_a_stack_holds_within_a_millimetre_for_30_s_under_auto(make_env, masses)
     _, info = env.reset(seed=0, options={"scene": scene(stack(masses))})
     assert info["physics"]["physics_hz"] > 120.0 and "column" in info["physics"]["reason"]
     sim, bodies = env.unwrapped.sim, env.unwrapped.movable_bodies
-    start, _ = sim.body_poses(bodies)
+    start, _ = sim.obstacles.body_poses(bodies)
     drift = 0.0
     for _ in range(600):  # 30 s at 20 Hz
         env.step(np.zeros(2))
-        position, _ = sim.body_poses(bodies)
+        position, _ = sim.obstacles.body_poses(bodies)
         drift = max(drift, float(np.abs(position[:, :2] - start[:, :2]).max()))
     assert drift <= 1e-3
 

@@ -35,7 +35,7 @@ def _demo_frames(make_env, env_id: str, seeds=range(4), every: int = 25, steps: 
 def _robot_pixels(env) -> int:
     base = env.unwrapped
     view = base.render_view()
-    seg = base.sim.render_segmentation(view.width, view.height, view.eye, view.target, view.fov_deg)
+    seg = base.sim.rendering.render_segmentation(view.width, view.height, view.eye, view.target, view.fov_deg)
     return int((seg == base.robot.body).sum())
 
 
@@ -57,7 +57,7 @@ def test_the_fly_chase_camera_keeps_clutter_out_from_between_it_and_the_drone(ma
         base = env.unwrapped
         view = base.render_view()
         drone = base.robot.state().position
-        assert base.sim.ray_hit_fractions([drone.tolist()], [list(view.eye)])[0] == 1.0
+        assert base.sim.rays.ray_hit_fractions([drone.tolist()], [list(view.eye)])[0] == 1.0
         assert 0.2 - 1e-6 <= np.linalg.norm(np.subtract(view.eye, drone)) <= 0.66
 
 
@@ -97,7 +97,7 @@ def test_human_mode_points_the_gui_camera_as_the_rgb_array_view(make_env, monkey
     env.reset(seed=0)
     base = env.unwrapped
     calls = []
-    monkeypatch.setattr(base.sim, "follow_camera", lambda *args: calls.append(args))
+    monkeypatch.setattr(base.sim.rendering, "follow_camera", lambda *args: calls.append(args))
     monkeypatch.setattr(base, "render_mode", "human")
     assert base.render() is None
     view = base.render_view()

@@ -54,21 +54,21 @@ def exact_caster() -> tuple[float, np.ndarray]:
     """The exact caster's scan time (us) among the 20 cylinders and its range errors (mm) on the fan."""
     sim = Sim(visuals=False)
     try:
-        sim.add_static_cylinders(R, H, (1, 1, 1, 1), [[2 * math.cos(a), 2 * math.sin(a), H / 2]
+        sim.obstacles.add_static_cylinders(R, H, (1, 1, 1, 1), [[2 * math.cos(a), 2 * math.sin(a), H / 2]
                                                       for a in 2 * math.pi * np.arange(20) / 20])
         starts, ends = (np.array(v) for v in _scan())
-        sim.ray_hit_fractions(starts, ends, caster="exact")  # compiled (or loaded from numba's cache) untimed
+        sim.rays.ray_hit_fractions(starts, ends, caster="exact")  # compiled (or loaded from numba's cache) untimed
         t0, n = time.perf_counter(), 300
         for _ in range(n):
-            sim.ray_hit_fractions(starts, ends, caster="exact")
+            sim.rays.ray_hit_fractions(starts, ends, caster="exact")
         seconds = (time.perf_counter() - t0) / n
     finally:
         sim.close()
     sim = Sim(visuals=False)
     try:
-        sim.add_static_cylinders(R, H, (1, 1, 1, 1), [[2, 0, H / 2]])
+        sim.obstacles.add_static_cylinders(R, H, (1, 1, 1, 1), [[2, 0, H / 2]])
         beams, starts, ends = _fan()
-        errors = _exact_mm(beams, sim.ray_hit_fractions(np.array(starts), np.array(ends), caster="exact"))
+        errors = _exact_mm(beams, sim.rays.ray_hit_fractions(np.array(starts), np.array(ends), caster="exact"))
     finally:
         sim.close()
     return seconds * 1e6, errors

@@ -45,13 +45,13 @@ def hold(n: int, physics_hz: float, iterations: int, seconds: float, masses: tup
     env = gym.make("ClutterNav-v1", physics_hz=physics_hz, solver_iterations=iterations, sensors=(), physics=physics)
     _, info = env.reset(seed=0, options={"scene": stack_scene(n, masses)})
     sim, bodies = env.unwrapped.sim, env.unwrapped.movable_bodies
-    start, start_rotation = sim.body_poses(bodies)
+    start, start_rotation = sim.obstacles.body_poses(bodies)
     drift, tilt, zero = 0.0, 0.0, np.zeros(2)
     steps = int(round(seconds * env.unwrapped.metadata["render_fps"]))
     began = time.perf_counter()
     for _ in range(steps):
         env.step(zero)
-        position, rotation = sim.body_poses(bodies)
+        position, rotation = sim.obstacles.body_poses(bodies)
         drift = max(drift, float(np.abs(position[:, :2] - start[:, :2]).max()))
         tilt = max(tilt, float(tilt_degrees(start_rotation, rotation).max()))
     elapsed = time.perf_counter() - began

@@ -29,8 +29,8 @@ class FlyFloor:
         self.recorder.reset(seed=seed)
         self.twin.reset(seed=seed)
         self._ticks: list[tuple] = []
-        sim = self.recorder.unwrapped.sim
-        apply_forces, apply_wrench = sim.apply_base_forces, sim.apply_base_wrench
+        actuation = self.recorder.unwrapped.sim.actuation
+        apply_forces, apply_wrench = actuation.apply_base_forces, actuation.apply_base_wrench
 
         def forces(body, forces, points):
             self._ticks.append((forces, points))
@@ -40,7 +40,7 @@ class FlyFloor:
             self._ticks[-1] += (force, torque)
             apply_wrench(body, force, torque)
 
-        sim.apply_base_forces, sim.apply_base_wrench = forces, wrench
+        actuation.apply_base_forces, actuation.apply_base_wrench = forces, wrench
 
     def run(self, actions: np.ndarray) -> tuple[float, float, int]:
         """Record ``actions`` on the recorder, then replay them on the twin: (wall s, CPU s) of the replay's steps,

@@ -79,7 +79,7 @@ class ReducedDrive(Dynamics):
         robot = self.robot
         self._wheels = robot.wheel_joints
         self._n_left = len(robot.base.left_wheels)
-        self._wheel_angles = self.sim.joint_states(robot.body, self._wheels)[0]
+        self._wheel_angles = self.sim.actuation.joint_states(robot.body, self._wheels)[0]
         movable = any(o.movable for o in obstacles)
         self._episode_full = self.full = movable
         self._last = state
@@ -160,7 +160,7 @@ class ReducedDrive(Dynamics):
         p = self.fit.params
         mean, half = 0.5 * (m[LEFT] + m[RIGHT]), 0.5 * p.wheel_track * (m[RIGHT] - m[LEFT]) / p.track
         speeds = [(mean - half) / radius] * n + [(mean + half) / radius] * (len(angles) - n)
-        self.sim.reset_joints(self.robot.body, self._wheels, angles.tolist(), speeds)
+        self.sim.actuation.reset_joints(self.robot.body, self._wheels, angles.tolist(), speeds)
 
     def _quat(self) -> tuple[float, float, float, float]:
         return quat_multiply(yaw_quat(float(self._model[YAW])), self._rest_quat)
@@ -173,7 +173,7 @@ class ReducedDrive(Dynamics):
         com = rotation @ robot.com_offset
         sim.set_pose(body, position + com, self._quat())
         sim.set_base_velocity(body, (rotation[:, 0] * v + np.cross((0.0, 0.0, w), com)).tolist(), (0.0, 0.0, w))
-        sim.forget_contacts(body)
+        sim.record.forget_contacts(body)
         robot.release_hold()
         self.full = True
 
@@ -186,7 +186,7 @@ class ReducedDrive(Dynamics):
         p = self.fit.params
         left, right = p.sides(v / max(1e-6, 1.0 - p.scrub * abs(w)), w)
         self._model[:] = (state.position[0], state.position[1], state.yaw, left, right, 0.0, 0.0)
-        self._wheel_angles = self.sim.joint_states(self.robot.body, self._wheels)[0]
+        self._wheel_angles = self.sim.actuation.joint_states(self.robot.body, self._wheels)[0]
         self.full = False
 
 

@@ -93,7 +93,7 @@ class Arm(UrdfRobot):
         self._index_links(m.tracked_links)
         self._ee = self.link_index[m.ee_link]
         links = sorted(i for i in self.link_index.values() if i >= 0)
-        self._nominal = dict(zip(links, sim.inertial_properties(self._body, links)))
+        self._nominal = dict(zip(links, sim.actuation.inertial_properties(self._body, links)))
         self._forces = m.effort_limit.copy()
         self._all_movable = sorted(self._arm + self._fingers)
         return self._body
@@ -103,25 +103,25 @@ class Arm(UrdfRobot):
 
     def reset_to(self, q: tuple[float, ...]) -> None:
         """Arm at joint positions ``q`` (n,) at rest, fingers (if any) at their opening, motors holding."""
-        self._sim.reset_joints(self._body, self._arm, q)
+        self._sim.actuation.reset_joints(self._body, self._arm, q)
         if self._fingers:
             opening = [self.model.finger_opening] * len(self._fingers)
-            self._sim.reset_joints(self._body, self._fingers, opening)
-        self._sim.forget_contacts(self._body)
+            self._sim.actuation.reset_joints(self._body, self._fingers, opening)
+        self._sim.record.forget_contacts(self._body)
         self._target = np.array(q, dtype=float)
         if self._fingers:
             n = len(self._fingers)
-            self._sim.set_joint_positions(self._body, self._fingers, opening, [0.0] * n, [20.0] * n)
+            self._sim.actuation.set_joint_positions(self._body, self._fingers, opening, [0.0] * n, [20.0] * n)
         self._hold(np.zeros(len(self._arm)))
         self._ee_target = self._sim.link_frame(self._body, self._ee)[0]
 
     def _hold(self, velocity: np.ndarray) -> None:
-        self._sim.set_joint_positions(self._body, self._arm, self._target.tolist(), velocity.tolist(),
+        self._sim.actuation.set_joint_positions(self._body, self._arm, self._target.tolist(), velocity.tolist(),
                                       self._forces.tolist())
 
     def apply_action(self, action: np.ndarray) -> None:
         """Move the joint targets for one control period from a clipped, normalised action."""
-        q, _ = self._sim.joint_states(self._body, self._arm)
+        q, _ = self._sim.actuation.joint_states(self._body, self._arm)
         if self.config.control == "joint_velocity":
             velocity = np.asarray(action, dtype=float) * self.speed
             travel = 2.0 * self.speed * self.control_dt
@@ -129,8 +129,8 @@ class Arm(UrdfRobot):
         else:
             ee, _ = self._sim.link_frame(self._body, self._ee)
             self._ee_target = ee + np.asarray(action, dtype=float) * self.config.max_ee_step
-            solution = self._sim.inverse_kinematics(self._body, self._ee, self._ee_target, EE_DOWN, self._ik_lower,
-                                                    self._ik_upper, self._ik_rest)
+            solution = self._sim.actuation.inverse_kinematics(self._body, self._ee, self._ee_target, EE_DOWN,
+                                                              self._ik_lower, self._ik_upper, self._ik_rest)
             target = solution[[self._all_movable.index(j) for j in self._arm]]
             velocity = (target - q) / self.control_dt
         m = self.model
@@ -139,7 +139,7 @@ class Arm(UrdfRobot):
 
     def state(self) -> RobotState:
         """Ground-truth state from two batched pybullet reads (the base is fixed at the origin)."""
-        q, dq = self._sim.joint_states(self._body, self._arm)
+        q, dq = self._sim.actuation.joint_states(self._body, self._arm)
         return RobotState(
             position=np.zeros(3),
             rotation=np.eye(3),

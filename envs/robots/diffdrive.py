@@ -103,7 +103,7 @@ class DiffDriveRobot(UrdfRobot):
         self._torques = [self.config.max_wheel_torque] * len(self._wheels)
         self._still = [0.0] * len(self._wheels)
         links = [-1, *sorted(self.link_index.values())]
-        self._nominal = dict(zip(links, sim.inertial_properties(self._body, links)))
+        self._nominal = dict(zip(links, sim.actuation.inertial_properties(self._body, links)))
         return self._body
 
     @property
@@ -123,16 +123,16 @@ class DiffDriveRobot(UrdfRobot):
         q = yaw_quat(yaw)
         com = np.array([x, y, self.base.base_height]) + quat_to_matrix(np.array(q)) @ self._com_offset
         self._sim.set_pose(self._body, com, q)
-        self._sim.forget_contacts(self._body)  # the same seed must not warm-start from the last episode
-        self._sim.reset_joints(self._body, self._wheels)
+        self._sim.record.forget_contacts(self._body)  # the same seed must not warm-start from the last episode
+        self._sim.actuation.reset_joints(self._body, self._wheels)
         self.release_hold()
-        self._sim.set_joint_velocities(self._body, self._wheels, self._still, self._torques)
+        self._sim.actuation.set_joint_velocities(self._body, self._wheels, self._still, self._torques)
 
     def release_hold(self) -> None:
         """End a standstill hold (if any): the wheels go back to velocity control with re-anchored friction."""
         if self._hold is not None:
             self._hold = None
-            self._sim.set_friction_anchors(self._body, self._wheels, False)
+            self._sim.actuation.set_friction_anchors(self._body, self._wheels, False)
 
     def apply_action(self, action: np.ndarray) -> None:
         """Command wheel speeds from a clipped, normalised (linear, angular) action."""
@@ -141,17 +141,17 @@ class DiffDriveRobot(UrdfRobot):
         w = float(action[1]) * c.max_angular_speed
         if v == 0.0 and w == 0.0:
             if self._hold is None:
-                self._hold = self._sim.joint_states(self._body, self._wheels)[0].tolist()
-                self._sim.set_friction_anchors(self._body, self._wheels, True)
-            self._sim.set_joint_positions(self._body, self._wheels, self._hold, self._still, self._torques)
+                self._hold = self._sim.actuation.joint_states(self._body, self._wheels)[0].tolist()
+                self._sim.actuation.set_friction_anchors(self._body, self._wheels, True)
+            self._sim.actuation.set_joint_positions(self._body, self._wheels, self._hold, self._still, self._torques)
             return
         self.release_hold()
         half = 0.5 * c.wheel_separation
         left = (v - w * half) / c.wheel_radius
         right = (v + w * half) / c.wheel_radius
         n = self._n_left
-        self._sim.set_joint_velocities(self._body, self._wheels, [left] * n + [right] * (len(self._wheels) - n),
-                                       self._torques)
+        self._sim.actuation.set_joint_velocities(self._body, self._wheels,
+                                                 [left] * n + [right] * (len(self._wheels) - n), self._torques)
 
     def state(self) -> RobotState:
         """Ground-truth state from batched pybullet reads."""

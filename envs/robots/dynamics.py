@@ -22,7 +22,7 @@ def scale_link_dynamics(
         sample: this episode's dynamics.
     """
     for link, (mass, friction, inertia) in nominal.items():
-        sim.set_dynamics(
+        sim.actuation.set_dynamics(
             body,
             link,
             mass=mass * sample.mass_scale,

@@ -212,8 +212,9 @@ class Multirotor(UrdfRobot):
                 inertia has products of inertia (pybullet takes principal moments only).
         """
         self._load(sim, merge_fixed_links=True)
-        sim.set_damping(self._body, 0.0, 0.0)
-        sim.paint(self._body, self.model.colour)  # one colour: a camera hides the merged body and shows it again
+        sim.actuation.set_damping(self._body, 0.0, 0.0)
+        # one colour: a camera hides the merged body and shows it again
+        sim.rendering.paint(self._body, self.model.colour)
         self.link_index = sim.link_indices(self._body)  # the merged body's: the tracked links follow from the base
         self.link_names = self.model.tracked_links
         body = self.mass_properties
@@ -230,7 +231,7 @@ class Multirotor(UrdfRobot):
         if not in_principal_axes(body.inertia):
             raise ValueError(f"{self.urdf_path}: give the airframe's inertia in principal axes, got "
                              f"{body.inertia.tolist()}")
-        (_, friction, _), = sim.inertial_properties(self._body, [-1])
+        (_, friction, _), = sim.actuation.inertial_properties(self._body, [-1])
         self._nominal = {-1: (body.mass, friction, tuple(np.diag(body.inertia).tolist()))}
         scale_link_dynamics(sim, self._body, self._nominal, DynamicsSample())
         self._thrust_scale = 1.0
@@ -247,7 +248,7 @@ class Multirotor(UrdfRobot):
         q = yaw_quat(yaw)
         com = np.array([x, y, z]) + quat_to_matrix(np.array(q)) @ self._com_offset
         self._sim.set_pose(self._body, com, q)
-        self._sim.forget_contacts(self._body)
+        self._sim.record.forget_contacts(self._body)
         self._controller.reset()
         if self._estimator is not None:
             self._estimator.reset()
@@ -297,14 +298,14 @@ class Multirotor(UrdfRobot):
             ux, uy, uz = rot[6:9]  # the world's up axis in the body frame
             heights = [z + (ux * x + uy * y + uz * h) for x, y, h in self._hubs]
             thrusts = [f * gain for f, gain in zip(thrusts, ground_effect_gain(heights, self.model.rotor_radius))]
-        sim.apply_base_forces(self._body, [(0.0, 0.0, f) for f in thrusts], self._hubs)
+        sim.actuation.apply_base_forces(self._body, [(0.0, 0.0, f) for f in thrusts], self._hubs)
         yaw = rotors.yaw_torque(speeds, self.model.spin) * scale
         if self._drag:
             drag = rotor_drag(times_transposed(rot, lin), speeds, self.model.drag_xy, self.model.drag_z)
             force = times(rot, drag)
         else:
             force = _ZERO
-        sim.apply_base_wrench(self._body, force, (yaw * rot[2], yaw * rot[5], yaw * rot[8]))
+        sim.actuation.apply_base_wrench(self._body, force, (yaw * rot[2], yaw * rot[5], yaw * rot[8]))
 
     def state(self) -> RobotState:
         """Ground-truth state from one pybullet read of the base: the airframe is rigid, so the tracked links'

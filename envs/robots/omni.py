@@ -141,14 +141,14 @@ class OmniBase(UrdfRobot):
     def load(self, sim: Sim) -> int:
         self._load(sim)
         self._world = sim  # the Sim, typed as loaded
-        sim.set_damping(self._body, 0.0, 0.0)  # pybullet's default damping would drag on the velocity loop
+        sim.actuation.set_damping(self._body, 0.0, 0.0)  # pybullet's default damping would drag on the velocity loop
         self._index_links(self.base.tracked_links)
         self._com_offset = sim.base_inertial_offset(self._body)
         com, rotation, _, _ = sim.base_state(self._body)
         # where the whole body's centre of mass sits from the base link's, in the base frame
-        self._whole_com = np.reshape(rotation, (3, 3)).T @ (sim.centre_of_mass(self._body) - np.asarray(com))
+        self._whole_com = np.reshape(rotation, (3, 3)).T @ (sim.actuation.centre_of_mass(self._body) - np.asarray(com))
         links = [-1, *sorted(self.link_index.values())]
-        self._nominal = dict(zip(links, sim.inertial_properties(self._body, links)))
+        self._nominal = dict(zip(links, sim.actuation.inertial_properties(self._body, links)))
         self._mass = sum(mass for mass, _, _ in self._nominal.values())
         # the links' own yaw inertias (the casters' offsets add under 10% on the omnibot, left out)
         self._yaw_inertia = sum(inertia[2] for _, _, inertia in self._nominal.values())
@@ -163,7 +163,7 @@ class OmniBase(UrdfRobot):
         q = yaw_quat(yaw)
         self._world.set_pose(self._body, np.array([x, y, self.base.base_height]) + quat_to_matrix(np.array(q))
                            @ self._com_offset, q)
-        self._world.forget_contacts(self._body)
+        self._world.record.forget_contacts(self._body)
         self._command = (0.0, 0.0, 0.0)
 
     def apply_action(self, action: np.ndarray) -> None:
@@ -193,7 +193,8 @@ class OmniBase(UrdfRobot):
         ox, oy, oz = self._whole_com
         rx, ry, rz = (rot[0] * ox + rot[1] * oy + rot[2] * oz, rot[3] * ox + rot[4] * oy + rot[5] * oz,
                       rot[6] * ox + rot[7] * oy + rot[8] * oz)
-        self._world.apply_base_wrench(self._body, (fx, fy, 0.0), (-rz * fy, rz * fx, torque + rx * fy - ry * fx))
+        self._world.actuation.apply_base_wrench(self._body, (fx, fy, 0.0),
+                                                (-rz * fy, rz * fx, torque + rx * fy - ry * fx))
 
     def state(self) -> RobotState:
         return floating_base_state(self._world, self._body, self._com_offset, list(self._tracked), self.link_names,

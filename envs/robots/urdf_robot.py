@@ -50,7 +50,7 @@ class UrdfRobot:
                                        merge_fixed_links=merge_fixed_links)
         except ValueError as error:
             raise ValueError(f"robot {self.name!r}: {error}") from None
-        sim.hide_from_rays(self._body)
+        sim.rays.hide_from_rays(self._body)
         self._dynamics = DynamicsSample()
         return self._body
 

@@ -158,7 +158,7 @@ class Camera:
 
     def reset(self, sim: Sim, state: RobotState, rng: np.random.Generator) -> None:
         if self.config.renderer == "egl" and not self._egl_loaded:
-            sim.use_egl()
+            sim.rendering.use_egl()
             self._egl_loaded = True
         self._rgb_episode = start_rgb_episode(rng, self.rgb_noise)
         self._depth_episode = start_depth_episode(rng, self.depth_noise)
@@ -179,11 +179,11 @@ class Camera:
         if c.renderer == "rays":
             i = self.intrinsics
             axes = np.array([rotation[:, 0], -rotation[:, 1], -rotation[:, 2]])  # forward, right, down
-            images["depth"], ids = sim.ray_cast_image(c.width, c.height, eye, axes, (i.fx, i.fy, i.cx, i.cy), c.near,
-                                                      c.far)
+            images["depth"], ids = sim.rendering.ray_cast_image(c.width, c.height, eye, axes, (i.fx, i.fy, i.cx, i.cy),
+                                                                c.near, c.far)
         else:
             view = _view_matrix(eye, rotation)
-            images["rgb"], buffer, ids = sim.camera_image(
+            images["rgb"], buffer, ids = sim.rendering.camera_image(
                 c.width, c.height, view, self.projection, "segmentation" in c.modes, behind=state.body
             )
             if "depth" in c.modes:

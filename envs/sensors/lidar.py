@@ -133,16 +133,16 @@ class Lidar:
             row = state.link(self.config.link)
             origin, axes = state.links.position[row], state.links.rotation[row]
             starts, ends = (self._starts, self._ends) if starts is None or ends is None else (starts, ends)
-            if self.config.caster == "exact" and sim.exact_rays_model_world():
-                fractions = sim.cast_exact(starts, ends, origin, axes)
+            if self.config.caster == "exact" and sim.rays.exact_rays_model_world():
+                fractions = sim.rays.cast_exact(starts, ends, origin, axes)
             else:
-                fractions = sim.ray_hit_fractions(starts @ axes.T + origin, ends @ axes.T + origin)
+                fractions = sim.rays.ray_hit_fractions(starts @ axes.T + origin, ends @ axes.T + origin)
         else:
             if starts is None or ends is None:  # pybullet converts ready lists faster, the exact caster takes arrays
                 exact = self.config.caster == "exact"
                 starts, ends = (self._starts, self._ends) if exact else (self.ray_starts, self.ray_ends)
-            fractions = sim.ray_hit_fractions(starts, ends, body=state.body, link=state.link_index[self.config.link],
-                                              caster=self.config.caster)
+            fractions = sim.rays.ray_hit_fractions(starts, ends, body=state.body,
+                                                   link=state.link_index[self.config.link], caster=self.config.caster)
         return (self.config.min_range + fractions * self._span).reshape(self.config.shape)
 
     def read(self, sim: Sim, state: RobotState, rng: np.random.Generator) -> np.ndarray:

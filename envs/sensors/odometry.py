@@ -56,7 +56,7 @@ class WheelOdometry:
 
     def _sides(self, sim: Sim, state: RobotState) -> tuple[float, float]:
         """The left and right sides' angles as the encoders count them."""
-        angles, _ = sim.joint_states(state.body, self.robot.wheel_joints)
+        angles, _ = sim.actuation.joint_states(state.body, self.robot.wheel_joints)
         ticks = self.noise.ticks_per_rev
         return (encoder_angle(float(np.mean(angles[:self._n_left])), ticks),
                 encoder_angle(float(np.mean(angles[self._n_left:])), ticks))

@@ -2,8 +2,9 @@
 
 Every pybullet call in clutter-gym goes through :class:`Sim`. It passes its own ``physicsClientId`` to pybullet
 directly rather than going through ``pybullet_utils.BulletClient``, which adds overhead to every call
-(docs/design-notes.md#no-bulletclient). The class is in parts: :mod:`.core` (the client, robots, the hot
-path), :mod:`.obstacles` (obstacle bodies), :mod:`.rays` (ray casts) and :mod:`.rendering` (camera images).
+(docs/design-notes.md#no-bulletclient). :mod:`.core` holds the client, loading and the hot path's reads; its parts
+are objects on one shared :mod:`.world_record`: ``sim.actuation`` (:mod:`.actuation`), ``sim.obstacles``
+(:mod:`.obstacles`), ``sim.rays`` (:mod:`.rays`) and ``sim.rendering`` (:mod:`.rendering`).
 
 pybullet prints its build banner (stderr) and URDF/shape warnings (stdout) from C, straight to the file
 descriptors; :func:`~clutter_gym.util.quiet.quiet_c_output` silences them around the calls that print, so output

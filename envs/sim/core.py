@@ -1,8 +1,9 @@
 """:class:`Sim`: one pybullet physics client, its world and robots, and the batched reads of the hot path.
 
-Robot actuation (:mod:`clutter_gym.sim.actuation`), obstacle bodies (:mod:`clutter_gym.sim.obstacles`), ray casts
-(:mod:`clutter_gym.sim.rays`) and camera images (:mod:`clutter_gym.sim.rendering`) are its other parts, mixed into
-the class; all share the client id and the caches :meth:`Sim._empty_world` sets.
+Robot actuation (``sim.actuation``: :mod:`clutter_gym.sim.actuation`), obstacle bodies (``sim.obstacles``:
+:mod:`clutter_gym.sim.obstacles`), ray casts (``sim.rays``: :mod:`clutter_gym.sim.rays`) and camera images
+(``sim.rendering``: :mod:`clutter_gym.sim.rendering`) are its parts, objects that each take the one state they share,
+the :class:`~clutter_gym.sim.world_record.WorldRecord` of what was made in the world.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from clutter_gym.sim.obstacles import ObstacleBodies
 from clutter_gym.sim.primitives import PrimitiveTable
 from clutter_gym.sim.rays import Rays
 from clutter_gym.sim.rendering import Rendering
+from clutter_gym.sim.world_record import WorldRecord
 from clutter_gym.util.quiet import quiet_c_output
 from clutter_gym.util.view_culling import ViewCuller
 
@@ -46,7 +48,7 @@ def pybullet_data_file(relative: str) -> Path:
     return Path(pybullet_data.getDataPath()) / relative
 
 
-class Sim(Actuation, ObstacleBodies, Rendering, Rays):
+class Sim:
     """One pybullet physics client.
 
     Args:
@@ -55,15 +57,12 @@ class Sim(Actuation, ObstacleBodies, Rendering, Rays):
         gravity: gravitational acceleration in m/s^2 (points along -z).
         gui: open the pybullet GUI window (needs a display) instead of a DIRECT client.
         visuals: give static boxes and cylinders visual shapes. Without them nothing can be drawn
-            (:meth:`render` and :meth:`camera_image` raise), and cylinders are much cheaper to make: TinyRenderer
-            tessellates the visual of each cylinder body anew (docs/design-notes.md#obstacle-visuals).
+            (``rendering.render`` and ``rendering.camera_image`` raise), and cylinders are much cheaper to make:
+            TinyRenderer tessellates the visual of each cylinder body anew (docs/design-notes.md#obstacle-visuals).
 
     Attributes:
-        bodies: body id of each body given a name (:meth:`load_urdf`, :meth:`add_ground`, :meth:`add_marker`).
-        culler: bounding spheres and shown colours of the static bodies made here (boxes, cylinders, markers), for
-            culling them from the camera frames they cannot appear in (:meth:`camera_image`).
-        primitives: the shapes and poses of the boxes, cylinders, ground and markers made here, which
-            :meth:`ray_cast_image` draws and the exact ray caster casts against (:meth:`ray_hit_fractions`).
+        record: what was made in the world, which the parts share (:class:`WorldRecord`).
+        actuation, obstacles, rays, rendering: the parts (see the module docstring).
     """
 
     def __init__(
@@ -86,28 +85,19 @@ class Sim(Actuation, ObstacleBodies, Rendering, Rays):
         self.physics_hz = float(physics_hz)
         self.solver_iterations = int(solver_iterations)
         self._gravity = float(gravity)
-        self._renderer = pb.ER_TINY_RENDERER
-        self.visuals = visuals
+        self.record = WorldRecord(self._cid, visuals)
+        self.actuation = Actuation(self.record)
+        self.obstacles = ObstacleBodies(self.record)
+        self.rays = Rays(self.record, self.link_frame)
+        self.rendering = Rendering(self.record)
         self._empty_world()
         if gui:
             pb.configureDebugVisualizer(pb.COV_ENABLE_GUI, 0, physicsClientId=self._cid)
 
     def _empty_world(self) -> None:
         """Set the physics parameters and forget every body and shape (the world is empty)."""
-        self.bodies: dict[str, int] = {}
-        self._body_ids: set[int] = set()
-        self._freed: set[int] = set()  # removed body ids pybullet has not given out again
-        self._filters: dict[int, tuple[int, int]] = {}  # body -> (collision group, mask) set by this Sim
+        self.record.clear()
         self._inertial_frames: dict[tuple, np.ndarray | None] = {}  # (body, links) -> inertial axes, or None: aligned
-        self._visuals: dict[int, list[tuple[int, tuple]]] = {}
-        self._shapes: dict[tuple, tuple[int, int]] = {}  # (kind, sizes, rgba) -> (collision, visual) shape ids
-        self._removed_bodies = 0
-        self._world_version = 0  # counts the changes that may change what a ray can hit
-        self._exact_rays_key: tuple[int, int] | None = None  # (version, pybullet's body count) last checked
-        self._exact_rays = False
-        self._ground = -1
-        self.culler = ViewCuller()
-        self.primitives = PrimitiveTable()
         pb.setPhysicsEngineParameter(deterministicOverlappingPairs=1, physicsClientId=self._cid)
         self.set_physics(self.physics_hz, self.solver_iterations)
         pb.setGravity(0.0, 0.0, -self._gravity, physicsClientId=self._cid)
@@ -122,7 +112,7 @@ class Sim(Actuation, ObstacleBodies, Rendering, Rays):
     def needs_rebuild(self) -> bool:
         """True once the world holds more memory pybullet cannot free than :data:`MAX_SHAPES` distinct obstacle
         shapes or :data:`MAX_REMOVED_BODIES` removed bodies: time to :meth:`clear` it and build it again."""
-        return len(self._shapes) > MAX_SHAPES or self._removed_bodies > MAX_REMOVED_BODIES
+        return len(self.record.shapes) > MAX_SHAPES or self.record.removed_bodies > MAX_REMOVED_BODIES
 
     def clear(self) -> None:
         """Remove every body and shape (``resetSimulation``, which frees their memory) and keep the parameters.
@@ -145,7 +135,7 @@ class Sim(Actuation, ObstacleBodies, Rendering, Rays):
     def close(self) -> None:
         """Disconnect the client; safe to call twice. A Sim that is garbage collected unclosed disconnects too."""
         self._finalizer()
-        self._cid = -1
+        self._cid = self.record.cid = -1
 
     # ------------------------------------------------------------------------------------------- bodies
     def add_ground(self, visual_size: float, name: str = "ground") -> int:
@@ -165,11 +155,11 @@ class Sim(Actuation, ObstacleBodies, Rendering, Rays):
             pb.GEOM_BOX, halfExtents=(half, half, 0.0005), visualFramePosition=(0.0, 0.0, -0.0005),
             rgbaColor=(0.85, 0.85, 0.8, 1.0), physicsClientId=self._cid,
         )
-        body = self._static_bodies(shape, visual, [(0.0, 0.0, 0.0)])[0]
+        body = self.obstacles.static_bodies(shape, visual, [(0.0, 0.0, 0.0)])[0]
         # drawn as the square; the exact ray caster meets the plane itself
         self.primitives.add(body, "box", (half, half, 0.0005), (0.0, 0.0, 0.0), offset=(0.0, 0.0, -0.0005),
                             solid=False)
-        self._ground = body
+        self.record.ground = body
         return self._register(name, body)
 
     def load_urdf(
@@ -206,9 +196,7 @@ class Sim(Actuation, ObstacleBodies, Rendering, Rays):
                 body = pb.loadURDF(str(path), position, useFixedBase=fixed_base, flags=flags, physicsClientId=self._cid)
         except pb.error as exc:
             raise ValueError(f"pybullet could not load URDF {path}: {exc}") from exc
-        self._body_ids.add(body)
-        self._freed.discard(body)
-        self._world_version += 1
+        self.record.made([body])
         return self._register(name, body)
 
     def add_marker(self, name: str, radius: float, rgba: Sequence[float]) -> int:
@@ -219,7 +207,7 @@ class Sim(Actuation, ObstacleBodies, Rendering, Rays):
         vis = pb.createVisualShape(
             pb.GEOM_CYLINDER, radius=radius, length=0.01, rgbaColor=rgba, physicsClientId=self._cid
         )
-        body = self._static_bodies(-1, vis, [(0.0, 0.0, 0.0)], float(np.hypot(radius, 0.005)), rgba)[0]
+        body = self.obstacles.static_bodies(-1, vis, [(0.0, 0.0, 0.0)], float(np.hypot(radius, 0.005)), rgba)[0]
         self.primitives.add(body, "cylinder", (radius, radius, 0.005), (0.0, 0.0, 0.0), solid=False)
         return self._register(name, body)
 
@@ -228,24 +216,6 @@ class Sim(Actuation, ObstacleBodies, Rendering, Rays):
             raise ValueError(f"a body named {name!r} already exists")
         self.bodies[name] = body
         return body
-
-    def forget_contacts(self, body: int) -> None:
-        """Drop Bullet's cached contact manifolds of ``body`` (call after teleporting it).
-
-        Bullet keeps a pair's contact points, and the impulses it warm-starts the solver with, for as long as the
-        points stay within the breaking threshold. A body reset to where it just was would start its episode
-        warm-started from the last one, so the same seed would not give the same trajectory. Re-applying the
-        collision filter re-registers the link colliders with the broad phase, which deletes their pairs. Only
-        bodies whose filter this Sim set (:meth:`hide_from_rays`) can be re-registered.
-        """
-        if body not in self._filters:
-            raise ValueError(f"body {body} has no recorded collision filter; call hide_from_rays first")
-        self._apply_filter(body)
-
-    def _apply_filter(self, body: int) -> None:
-        group, mask = self._filters[body]
-        for link in range(-1, pb.getNumJoints(body, physicsClientId=self._cid)):
-            pb.setCollisionFilterGroupMask(body, link, group, mask, physicsClientId=self._cid)
 
     def set_pose(self, body: int, position: Sequence[float], quaternion: Sequence[float]) -> None:
         """Teleport a body's base inertial frame to ``position`` (metres) and ``quaternion`` (x, y, z, w), world
@@ -343,13 +313,35 @@ class Sim(Actuation, ObstacleBodies, Rendering, Rays):
         return np.array(com) - rotation @ np.array(offset), rotation
 
     def body_ids(self) -> list[int]:
-        """Ids of every body in the world, in increasing order (kept here: pybullet's client does not list the bodies
-        :meth:`_static_bodies` makes in batches)."""
-        return sorted(self._body_ids)
+        """Ids of every body in the world, in increasing order (kept by the record: pybullet's client does not list
+        the bodies ``obstacles.static_bodies`` makes in batches)."""
+        return sorted(self.record.body_ids)
 
     def body_names(self) -> dict[int, str]:
         """Body id -> name of every named body (see :meth:`load_urdf`, :meth:`add_ground`, :meth:`add_marker`)."""
         return {body: name for name, body in self.bodies.items()}
+
+    @property
+    def bodies(self) -> dict[str, int]:
+        """Body id of each body given a name (:meth:`load_urdf`, :meth:`add_ground`, :meth:`add_marker`)."""
+        return self.record.bodies
+
+    @property
+    def primitives(self) -> PrimitiveTable:
+        """The shapes and poses of the boxes, cylinders, ground and markers made here, which the ray-cast camera
+        draws and the exact ray caster casts against."""
+        return self.record.primitives
+
+    @property
+    def culler(self) -> ViewCuller:
+        """Bounding spheres and shown colours of the static bodies made here, for culling them from the camera
+        frames they cannot appear in."""
+        return self.record.culler
+
+    @property
+    def visuals(self) -> bool:
+        """Whether the obstacles have visual shapes (the constructor's ``visuals``)."""
+        return self.record.visuals
 
     @property
     def gravity(self) -> float:

@@ -1,7 +1,8 @@
 """Obstacle bodies: static boxes and cylinders made in batches, movable ones with a mass, and the pool's moves.
 
-Part of :class:`clutter_gym.sim.Sim` (a mixin: it uses the client id and the shape, filter and body caches the Sim
-keeps). Every body here is a plain (maximal-coordinate) rigid body, cheaper each physics tick than a multibody.
+A part of :class:`clutter_gym.sim.Sim` (``sim.obstacles``) on the Sim's
+:class:`~clutter_gym.sim.world_record.WorldRecord`: its client id and its body, shape and filter records. Every
+body here is a plain (maximal-coordinate) rigid body, cheaper each physics tick than a multibody.
 """
 
 from __future__ import annotations
@@ -11,6 +12,7 @@ from collections.abc import Sequence
 import numpy as np
 import pybullet as pb
 
+from clutter_gym.sim.world_record import WorldRecord
 from clutter_gym.util.meshes import prism_mesh
 
 CYLINDER_SIDES = 64
@@ -25,7 +27,10 @@ _STATIC_MASK = -1 ^ _STATIC_GROUP
 
 
 class ObstacleBodies:
-    """Making, moving, hiding and removing obstacle bodies (mixed into :class:`~clutter_gym.sim.Sim`)."""
+    """Making, moving, hiding and removing the obstacle bodies of one Sim's world."""
+
+    def __init__(self, record: WorldRecord) -> None:
+        self._record = record
 
     def add_static_boxes(
         self, half_extents: Sequence[float], rgba: Sequence[float], positions: Sequence[Sequence[float]]
@@ -41,21 +46,21 @@ class ObstacleBodies:
             positions: centres, one per box.
         """
         shapes = self._box_shapes(half_extents, rgba)
-        bodies = self._static_bodies(*shapes, positions, float(np.linalg.norm(half_extents)), rgba)
+        bodies = self.static_bodies(*shapes, positions, float(np.linalg.norm(half_extents)), rgba)
         for body, position in zip(bodies, positions):
-            self.primitives.add(body, "box", half_extents, position)
+            self._record.primitives.add(body, "box", half_extents, position)
         return bodies
 
     def _box_shapes(self, half_extents: Sequence[float], rgba: Sequence[float]) -> tuple[int, int]:
         """(collision, visual) shape ids of a box, made once per size and colour; static and movable boxes share
         them."""
         key = ("box", tuple(map(float, half_extents)), tuple(rgba))
-        if key not in self._shapes:
-            self._shapes[key] = (
-                pb.createCollisionShape(pb.GEOM_BOX, halfExtents=half_extents, physicsClientId=self._cid),
+        if key not in self._record.shapes:
+            self._record.shapes[key] = (
+                pb.createCollisionShape(pb.GEOM_BOX, halfExtents=half_extents, physicsClientId=self._record.cid),
                 self._visual_shape(pb.GEOM_BOX, halfExtents=half_extents, rgbaColor=rgba),
             )
-        return self._shapes[key]
+        return self._record.shapes[key]
 
     def add_static_cylinders(
         self, radius: float, height: float, rgba: Sequence[float], positions: Sequence[Sequence[float]]
@@ -76,30 +81,30 @@ class ObstacleBodies:
             positions: centres, one per cylinder.
         """
         key = ("cylinder", (float(radius), float(height)), tuple(rgba))
-        if key not in self._shapes:
+        if key not in self._record.shapes:
             vertices, indices = _UNIT_PRISM  # one shared list: pybullet keeps a reference to every list it is given
-            self._shapes[key] = (
+            self._record.shapes[key] = (
                 pb.createCollisionShape(
                     pb.GEOM_MESH,
                     vertices=vertices,
                     indices=indices,
                     meshScale=[radius, radius, height],
                     flags=pb.GEOM_FORCE_CONCAVE_TRIMESH,
-                    physicsClientId=self._cid,
+                    physicsClientId=self._record.cid,
                 ),
                 self._visual_shape(pb.GEOM_CYLINDER, radius=radius, length=height, rgbaColor=rgba),
             )
-        bodies = self._static_bodies(*self._shapes[key], positions, float(np.hypot(radius, 0.5 * height)), rgba)
+        bodies = self.static_bodies(*self._record.shapes[key], positions, float(np.hypot(radius, 0.5 * height)), rgba)
         for body, position in zip(bodies, positions):
-            pb.changeDynamics(body, -1, collisionMargin=0.0, physicsClientId=self._cid)
-            self.primitives.add(body, "cylinder", (radius, radius, 0.5 * height), position)
+            pb.changeDynamics(body, -1, collisionMargin=0.0, physicsClientId=self._record.cid)
+            self._record.primitives.add(body, "cylinder", (radius, radius, 0.5 * height), position)
         return bodies
 
     def add_movable_box(self, half_extents: Sequence[float], rgba: Sequence[float]) -> int:
         """Add a dynamic box centred at the origin, parked (mass 0) until :meth:`set_mass` gives it a mass; returns
         its body id. Shapes are shared like :meth:`add_static_boxes`'s."""
         body = self._movable_body(*self._box_shapes(half_extents, rgba), float(np.linalg.norm(half_extents)), rgba)
-        self.primitives.add(body, "box", half_extents, (0.0, 0.0, 0.0))
+        self._record.primitives.add(body, "box", half_extents, (0.0, 0.0, 0.0))
         return body
 
     def add_movable_cylinder(self, radius: float, height: float, rgba: Sequence[float]) -> int:
@@ -109,30 +114,28 @@ class ObstacleBodies:
         concave triangle mesh), without collision margin, so rays and contacts see the same shape either way.
         """
         key = ("movable cylinder", (float(radius), float(height)), tuple(rgba))
-        if key not in self._shapes:
+        if key not in self._record.shapes:
             vertices, _ = _UNIT_PRISM
-            self._shapes[key] = (
+            self._record.shapes[key] = (
                 pb.createCollisionShape(pb.GEOM_MESH, vertices=vertices, meshScale=[radius, radius, height],
-                                        physicsClientId=self._cid),
+                                        physicsClientId=self._record.cid),
                 self._visual_shape(pb.GEOM_CYLINDER, radius=radius, length=height, rgbaColor=rgba),
             )
-        body = self._movable_body(*self._shapes[key], float(np.hypot(radius, 0.5 * height)), rgba)
-        pb.changeDynamics(body, -1, collisionMargin=0.0, physicsClientId=self._cid)
-        self.primitives.add(body, "cylinder", (radius, radius, 0.5 * height), (0.0, 0.0, 0.0))
+        body = self._movable_body(*self._record.shapes[key], float(np.hypot(radius, 0.5 * height)), rgba)
+        pb.changeDynamics(body, -1, collisionMargin=0.0, physicsClientId=self._record.cid)
+        self._record.primitives.add(body, "cylinder", (radius, radius, 0.5 * height), (0.0, 0.0, 0.0))
         return body
 
     def _movable_body(self, collision: int, visual: int, radius: float, rgba: Sequence[float]) -> int:
         """A rigid body made with a mass, so that it is dynamic (a body made with mass 0 stays static for good),
-        then parked at mass 0; its collision filter is recorded so that :meth:`forget_contacts` can reset it. One
-        call each, which returns the true id whatever removed ids wait for reuse."""
-        body = pb.createMultiBody(1.0, collision, visual, useMaximalCoordinates=True, physicsClientId=self._cid)
-        pb.changeDynamics(body, -1, mass=0.0, physicsClientId=self._cid)
-        self._body_ids.add(body)
-        self._world_version += 1
-        self._freed.discard(body)
-        self._filters[body] = (_DYNAMIC_GROUP, -1)
-        if self.visuals:
-            self.culler.add(body, radius, tuple(np.float32(rgba).tolist()))
+        then parked at mass 0; its collision filter is recorded so that ``WorldRecord.forget_contacts`` can reset it.
+        One call each, which returns the true id whatever removed ids wait for reuse."""
+        body = pb.createMultiBody(1.0, collision, visual, useMaximalCoordinates=True, physicsClientId=self._record.cid)
+        pb.changeDynamics(body, -1, mass=0.0, physicsClientId=self._record.cid)
+        self._record.made([body])
+        self._record.filters[body] = (_DYNAMIC_GROUP, -1)
+        if self._record.visuals:
+            self._record.culler.add(body, radius, tuple(np.asarray(rgba, dtype=np.float32).tolist()))
         return body
 
     def set_mass(self, body: int, mass: float, inertia: Sequence[float] = (0.0, 0.0, 0.0)) -> None:
@@ -142,28 +145,28 @@ class ObstacleBodies:
         asleep once it has rested a while, as Bullet's bodies can (pybullet turns that off by default): a resting
         body then stays exactly where it is until something touches it."""
         pb.changeDynamics(body, -1, mass=mass, localInertiaDiagonal=inertia,
-                          activationState=pb.ACTIVATION_STATE_ENABLE_SLEEPING, physicsClientId=self._cid)
-        pb.resetBaseVelocity(body, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), physicsClientId=self._cid)
-        self.forget_contacts(body)
+                          activationState=pb.ACTIVATION_STATE_ENABLE_SLEEPING, physicsClientId=self._record.cid)
+        pb.resetBaseVelocity(body, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), physicsClientId=self._record.cid)
+        self._record.forget_contacts(body)
 
     def body_poses(self, bodies: Sequence[int]) -> tuple[np.ndarray, np.ndarray]:
         """(n, 3) positions (metres) and (n, 3, 3) rotation matrices of ``bodies``' base frames; the view culler
         follows them (call it after the physics moved them)."""
-        poses = [pb.getBasePositionAndOrientation(b, physicsClientId=self._cid) for b in bodies]
+        poses = [pb.getBasePositionAndOrientation(b, physicsClientId=self._record.cid) for b in bodies]
         positions = np.array([p for p, _ in poses], dtype=float).reshape(-1, 3)
         rotations = np.array([pb.getMatrixFromQuaternion(q) for _, q in poses], dtype=float).reshape(-1, 3, 3)
         for body, position, rotation in zip(bodies, positions, rotations):
-            self.culler.move(body, position)
-            self.primitives.move(body, position, rotation)
+            self._record.culler.move(body, position)
+            self._record.primitives.move(body, position, rotation)
         return positions, rotations
 
     def _visual_shape(self, geometry: int, **kwargs) -> int:
-        """A visual shape of an obstacle, or -1 (none) when this Sim has no :attr:`visuals`."""
-        if not self.visuals:
+        """A visual shape of an obstacle, or -1 (none) when the Sim has no visuals."""
+        if not self._record.visuals:
             return -1
-        return pb.createVisualShape(geometry, **kwargs, physicsClientId=self._cid)
+        return pb.createVisualShape(geometry, **kwargs, physicsClientId=self._record.cid)
 
-    def _static_bodies(
+    def static_bodies(
         self,
         collision: int,
         visual: int,
@@ -180,16 +183,16 @@ class ObstacleBodies:
         Bodies are made up to :data:`MAX_BODY_BATCH` in one ``createMultiBody(batchPositions=...)`` call. After a
         call pybullet's server serialises a description of the body it made and its client parses it, most of what
         a call costs; a batch describes only its last body (docs/design-notes.md#batched-bodies). The client's list
-        of bodies (``getNumBodies``) then misses the others: :meth:`body_ids` keeps them. pybullet numbers a batch as
-        if its ids were consecutive, which holds only while no removed id is left for it to reuse (it reuses those
-        first), so until then bodies are made one call each, and each call returns its true id.
+        of bodies (``getNumBodies``) then misses the others: :attr:`WorldRecord.body_ids` keeps them. pybullet
+        numbers a batch as if its ids were consecutive, which holds only while no removed id is left for it to reuse
+        (it reuses those first), so until then bodies are made one call each, and each call returns its true id.
 
         Args:
             collision: collision shape id (-1: visual only).
             visual: visual shape id (-1: none).
             positions: base positions in metres, world frame.
             radius: radius in metres of a sphere about a body's origin that holds its visual. Bodies given one join
-                :attr:`culler` (when this Sim has :attr:`visuals`) and are culled from the camera frames they cannot
+                the record's culler (when the Sim has visuals) and are culled from the camera frames they cannot
                 appear in.
             rgba: the visual's colour, each channel in [0, 1] (needed with ``radius``).
         """
@@ -197,23 +200,23 @@ class ObstacleBodies:
         bodies: list[int] = []
         while len(bodies) < len(positions):
             batch = positions[len(bodies):len(bodies) + MAX_BODY_BATCH]
-            if self._freed:
+            if self._record.freed:
                 body = pb.createMultiBody(
-                    0.0, collision, visual, batch[0], useMaximalCoordinates=True, physicsClientId=self._cid
+                    0.0, collision, visual, batch[0], useMaximalCoordinates=True, physicsClientId=self._record.cid
                 )
-                self._freed.discard(body)
+                self._record.freed.discard(body)
                 bodies.append(body)
             else:
                 bodies.extend(pb.createMultiBody(
-                    0.0, collision, visual, useMaximalCoordinates=True, batchPositions=batch, physicsClientId=self._cid
+                    0.0, collision, visual, useMaximalCoordinates=True, batchPositions=batch,
+                    physicsClientId=self._record.cid,
                 ))
-        self._body_ids.update(bodies)
-        self._world_version += 1
-        if radius is not None and self.visuals:
-            colour = tuple(np.float32(rgba).tolist())  # the colour as pybullet stores it: single precision
+        self._record.made(bodies)
+        if radius is not None and self._record.visuals:
+            colour = tuple(np.asarray(rgba, dtype=np.float32).tolist())  # as pybullet stores it: single precision
             for body, position in zip(bodies, positions):
-                self.culler.add(body, radius, colour)
-                self.culler.move(body, position)
+                self._record.culler.add(body, radius, colour)
+                self._record.culler.move(body, position)
         return bodies
 
     def order_broadphase(self, bodies: Sequence[int]) -> None:
@@ -225,47 +228,49 @@ class ObstacleBodies:
         (docs/design-notes.md#batched-bodies). Their cached contacts go, as those of a body just made would.
         """
         for body in bodies:
-            group, mask = self._filters.get(body, (_STATIC_GROUP, _STATIC_MASK))  # movable bodies keep their own
-            pb.setCollisionFilterGroupMask(body, -1, group, mask, physicsClientId=self._cid)
+            group, mask = self._record.filters.get(body, (_STATIC_GROUP, _STATIC_MASK))  # movable bodies keep their own
+            pb.setCollisionFilterGroupMask(body, -1, group, mask, physicsClientId=self._record.cid)
 
     def remove_body(self, body: int) -> None:
         """Delete a body from the world (its collision and visual shapes stay cached for reuse)."""
-        pb.removeBody(body, physicsClientId=self._cid)
-        self.culler.remove(body)
-        self.primitives.remove(body)
-        self._visuals.pop(body, None)
-        self._body_ids.discard(body)
-        self._world_version += 1
-        if body == self._ground:
-            self._ground = -1
-        self._freed.add(body)
-        self._removed_bodies += 1
+        pb.removeBody(body, physicsClientId=self._record.cid)
+        self._record.culler.remove(body)
+        self._record.primitives.remove(body)
+        record = self._record
+        record.colours.pop(body, None)
+        record.body_ids.discard(body)
+        record.version += 1
+        if body == record.ground:
+            record.ground = -1
+        record.freed.add(body)
+        record.removed_bodies += 1
 
     def set_visible(self, body: int, visible: bool, rgba: Sequence[float]) -> None:
         """Show a single-shape body in colour ``rgba`` (channels in [0, 1]), or hide it from every renderer (fully
         transparent shapes are skipped by TinyRenderer: a parked obstacle then costs a camera frame nothing).
 
-        Only the ray-cast camera's :attr:`primitives` are told in a Sim without :attr:`visuals`."""
-        self.primitives.show(body, visible)
-        if not self.visuals:
+        Only the ray-cast camera's the record's primitives are told in a Sim without :attr:`visuals`."""
+        self._record.primitives.show(body, visible)
+        if not self._record.visuals:
             return
         colour = (*rgba[:3], rgba[3] if visible else 0.0)
-        pb.changeVisualShape(body, -1, rgbaColor=colour, physicsClientId=self._cid)
-        self.culler.set_colour(body, colour)
+        pb.changeVisualShape(body, -1, rgbaColor=colour, physicsClientId=self._record.cid)
+        self._record.culler.set_colour(body, colour)
 
     def sleep(self, body: int) -> None:
         """Deactivate a static body so the physics tick skips it (teleporting it wakes it again)."""
-        pb.changeDynamics(body, -1, activationState=pb.ACTIVATION_STATE_SLEEP, physicsClientId=self._cid)
+        pb.changeDynamics(body, -1, activationState=pb.ACTIVATION_STATE_SLEEP, physicsClientId=self._record.cid)
 
     def rotation_matrices(self, quaternions: Sequence[Sequence[float]]) -> np.ndarray:
         """(n, 3, 3) rotation matrices of ``quaternions`` (x, y, z, w) as :meth:`move_static` gives them to
-        :attr:`primitives`, bit for bit."""
-        rows = [pb.getMatrixFromQuaternion(q, physicsClientId=self._cid) for q in quaternions]
+        the record's primitives, bit for bit."""
+        rows = [pb.getMatrixFromQuaternion(q, physicsClientId=self._record.cid) for q in quaternions]
         return np.array(rows, dtype=float).reshape(-1, 3, 3)
 
     def move_static(self, body: int, position: Sequence[float], quaternion: Sequence[float]) -> None:
         """Teleport a static body's base inertial frame to ``position`` (metres, world frame) and ``quaternion``
         (x, y, z, w); it has no velocity to reset."""
-        pb.resetBasePositionAndOrientation(body, position, quaternion, physicsClientId=self._cid)
-        self.culler.move(body, position)
-        self.primitives.move(body, position, pb.getMatrixFromQuaternion(quaternion, physicsClientId=self._cid))
+        pb.resetBasePositionAndOrientation(body, position, quaternion, physicsClientId=self._record.cid)
+        self._record.culler.move(body, position)
+        rotation = pb.getMatrixFromQuaternion(quaternion, physicsClientId=self._record.cid)
+        self._record.primitives.move(body, position, rotation)

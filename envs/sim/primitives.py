@@ -98,7 +98,7 @@ class PrimitiveTable:
         self._backdrop, self._backdrop_shown, self._any_shown = None, np.zeros(0, dtype=bool), False
         self._joined.clear()
 
-    def move(self, body: int, position: Sequence[float], rotation: np.ndarray | Sequence[float]) -> None:
+    def move(self, body: int, position: Sequence[float] | np.ndarray, rotation: np.ndarray | Sequence[float]) -> None:
         """Put a tracked body at ``position`` (metres) turned by ``rotation`` (3, 3, or its 9 values row by row),
         world frame."""
         if body in self._rows:

@@ -1,7 +1,7 @@
 """Ray casts of a :class:`~clutter_gym.sim.Sim`: pybullet's ``rayTestBatch`` or the exact caster over its primitives.
 
-Part of :class:`clutter_gym.sim.Sim` (a mixin: it uses the client id, the body and filter records and the
-:class:`~clutter_gym.sim.primitives.PrimitiveTable` the Sim keeps). The exact caster
+A part of :class:`clutter_gym.sim.Sim` (``sim.rays``) on the Sim's :class:`~clutter_gym.sim.world_record.WorldRecord`:
+its client id, body and filter records and :class:`~clutter_gym.sim.primitives.PrimitiveTable`. The exact caster
 (:func:`~clutter_gym.sim.ray_casting.cast_rays`) answers only while it models everything a ray can hit: the ground
 plane and the boxes and cylinders made here. A world that holds anything else a ray can see (a URDF not hidden from
 rays, a mesh, a body made with raw pybullet calls) is cast by pybullet.
@@ -10,11 +10,13 @@ rays, a mesh, a body made with raw pybullet calls) is cast by pybullet.
 from __future__ import annotations
 
 import operator
+from collections.abc import Callable
 
 import numpy as np
 import pybullet as pb
 
 from clutter_gym.sim.ray_casting import cast_rays
+from clutter_gym.sim.world_record import WorldRecord
 
 #: Collision-filter group of bodies that rays do not report (the robot: a LIDAR never sees its own chassis).
 #: pybullet applies the ray mask after the narrow phase, so this is about correctness, not speed.
@@ -28,7 +30,17 @@ _ORIGIN, _AXES = np.zeros(3), np.eye(3)
 
 
 class Rays:
-    """Batched ray casts (mixed into :class:`~clutter_gym.sim.Sim`)."""
+    """Batched ray casts of one Sim's world.
+
+    Args:
+        record: the Sim's world record.
+        link_frame: the Sim's ``link_frame(body, link)`` -> (origin, rotation) of a link's URDF frame, world frame.
+    """
+
+    def __init__(self, record: WorldRecord, link_frame: Callable[[int, int], tuple[np.ndarray, np.ndarray]]) -> None:
+        self._record, self._link_frame = record, link_frame
+        self._exact_rays_key: tuple[int, int] | None = None  # (record version, pybullet's body count) last checked
+        self._exact_rays = False
 
     def ray_hit_fractions(
         self, starts: list | np.ndarray, ends: list | np.ndarray, body: int = -1, link: int = -1,
@@ -59,9 +71,9 @@ class Rays:
         if caster not in RAY_CASTERS:
             raise ValueError(f"caster must be one of {RAY_CASTERS}, got {caster!r}")
         if caster == "exact" and (body < 0 or link >= 0) and self.exact_rays_model_world():
-            origin, axes = self.link_frame(body, link) if body >= 0 else (_ORIGIN, _AXES)
+            origin, axes = self._link_frame(body, link) if body >= 0 else (_ORIGIN, _AXES)
             return self.cast_exact(starts, ends, origin, axes)
-        if self.primitives.backdrop_shown:
+        if self._record.primitives.backdrop_shown:
             raise RuntimeError("pybullet cannot cast these rays: a large scene keeps its far obstacles out of the "
                                "physics world (worlds/near_field.py), and the world holds bodies the exact caster does "
                                "not model; set env.unwrapped.arena.near_field = False before reset to keep every "
@@ -73,7 +85,7 @@ class Rays:
             ])
         hits = pb.rayTestBatch(
             starts, ends, parentObjectUniqueId=body, parentLinkIndex=link, numThreads=1,
-            collisionFilterMask=_RAY_MASK, physicsClientId=self._cid,
+            collisionFilterMask=_RAY_MASK, physicsClientId=self._record.cid,
         )
         return np.fromiter(map(_HIT_FRACTION, hits), dtype=float, count=len(hits))
 
@@ -83,21 +95,22 @@ class Rays:
         (3,) with ``axes`` (3, 3, as columns; default: the world frame), whatever else the world holds: check
         :meth:`exact_rays_model_world` first."""
         starts, ends = np.asarray(starts, dtype=float), np.asarray(ends, dtype=float)
-        _, kinds, centres, rotations, halves = self.primitives.solids()
+        _, kinds, centres, rotations, halves = self._record.primitives.solids()
         fractions = np.empty(len(starts))
         cast_rays(_ORIGIN if origin is None else origin, _AXES if axes is None else axes, starts, ends, kinds, centres,
-                  rotations, halves, self._ground >= 0, fractions)
+                  rotations, halves, self._record.ground >= 0, fractions)
         return fractions
 
     def exact_rays_model_world(self) -> bool:
         """Whether the exact caster sees everything pybullet's rays would: every body is the ground, a box or
-        cylinder of :attr:`primitives`, a marker (no collision shape) or hidden from rays. Answered again only after
-        the world changed (a body made, loaded, removed or hidden here, or by raw pybullet calls)."""
-        key = (self._world_version, pb.getNumBodies(physicsClientId=self._cid))
+        cylinder of the record's primitives, a marker (no collision shape) or hidden from rays. Answered again only
+        after the world changed (a body made, loaded, removed or hidden through the Sim, or by raw pybullet calls)."""
+        record = self._record
+        key = (record.version, pb.getNumBodies(physicsClientId=record.cid))
         if self._exact_rays_key != key:
-            known = self._body_ids | {pb.getBodyUniqueId(i, physicsClientId=self._cid) for i in range(key[1])}
+            known = record.body_ids | {pb.getBodyUniqueId(i, physicsClientId=record.cid) for i in range(key[1])}
             self._exact_rays = all(
-                b in self.primitives or self._filters.get(b, (0, 0))[0] == RAY_INVISIBLE_GROUP for b in known
+                b in record.primitives or record.filters.get(b, (0, 0))[0] == RAY_INVISIBLE_GROUP for b in known
             )
             self._exact_rays_key = key
         return self._exact_rays
@@ -108,6 +121,6 @@ class Rays:
         Bullet's default masks (all bits for dynamic bodies, all but the static bit for static ones) include this
         group, so contacts with the ground and obstacles are unchanged.
         """
-        self._filters[body] = (RAY_INVISIBLE_GROUP, -1)
-        self._world_version += 1
-        self._apply_filter(body)
+        self._record.filters[body] = (RAY_INVISIBLE_GROUP, -1)
+        self._record.version += 1
+        self._record.apply_filter(body)

@@ -34,4 +34,4 @@ class Movables(Stage):
         return bool(movable)
 
     def physics_done(self) -> None:
-        self._checker.move_obstacles(self.indices, *self._sim.body_poses(self.bodies))
+        self._checker.move_obstacles(self.indices, *self._sim.obstacles.body_poses(self.bodies))

@@ -59,9 +59,9 @@ class RenderTrail(Stage):
         (:func:`clutter_gym.util.overlay.draw_marks`); ``human``: points the GUI camera the same way (None)."""
         env, view = self._env, self.view()
         if human:
-            env.sim.follow_camera(view.target, *orbit_angles(view.eye, view.target))
+            env.sim.rendering.follow_camera(view.target, *orbit_angles(view.eye, view.target))
             return None
-        frame = env.sim.render(view.width, view.height, view.eye, view.target, view.fov_deg)
+        frame = env.sim.rendering.render(view.width, view.height, view.eye, view.target, view.fov_deg)
         focus, goal = self._focus_and_goal()
         return draw_marks(frame, view, (focus, self._radius), (goal, env.task.success_radius), self.trail)
 

@@ -63,7 +63,7 @@ class ViewCuller:
         self._spheres[body] = [0.0, 0.0, 0.0, float(radius) + CULL_MARGIN]
         self._set_shown(body, tuple(rgba))
 
-    def move(self, body: int, centre: Sequence[float]) -> None:
+    def move(self, body: int, centre: Sequence[float] | np.ndarray) -> None:
         """Put a tracked body's sphere at ``centre`` (world frame, metres)."""
         sphere = self._spheres.get(body)
         if sphere is not None:

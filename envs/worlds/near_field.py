@@ -71,7 +71,7 @@ class NearField:
         self._enclosing = 0.5 * np.linalg.norm(np.array([o.size for o in chosen], dtype=float), axis=1)
         halves = np.array([[0.5 * o.size[0], 0.5 * o.size[1], 0.5 * o.size[2]] for o in chosen])
         # the rotation a body's row gets (Sim.move_static), so that rays meet the same surfaces
-        rotations = self._sim.rotation_matrices([yaw_quat(o.yaw) for o in chosen])
+        rotations = self._sim.obstacles.rotation_matrices([yaw_quat(o.yaw) for o in chosen])
         self._sim.primitives.set_backdrop([o.shape for o in chosen], centres, rotations, halves)
         self._sim.primitives.show_backdrop(np.ones(len(static), dtype=bool))
         return self.pool.place(obstacles, [i for i, o in enumerate(obstacles) if o.movable])

@@ -65,9 +65,9 @@ class ObstaclePool:
         self.fixed = fixed
         self.fixed_bodies = []
         for o in fixed:
-            (body,) = self._sim.add_static_boxes([0.5 * s for s in o.size], _COLOURS["wall"], [o.centre])
-            self._sim.move_static(body, o.centre, yaw_quat(o.yaw))
-            self._sim.sleep(body)
+            (body,) = self._sim.obstacles.add_static_boxes([0.5 * s for s in o.size], _COLOURS["wall"], [o.centre])
+            self._sim.obstacles.move_static(body, o.centre, yaw_quat(o.yaw))
+            self._sim.obstacles.sleep(body)
             self.fixed_bodies.append(body)
 
     @property
@@ -92,13 +92,13 @@ class ObstaclePool:
         colour = _COLOURS[shape]
         o = obstacles[0]
         if shape == "movable box":
-            return [self._sim.add_movable_box([0.5 * s for s in size], colour) for _ in obstacles]
+            return [self._sim.obstacles.add_movable_box([0.5 * s for s in size], colour) for _ in obstacles]
         if shape == "movable cylinder":
-            return [self._sim.add_movable_cylinder(o.radius, size[2], colour) for _ in obstacles]
+            return [self._sim.obstacles.add_movable_cylinder(o.radius, size[2], colour) for _ in obstacles]
         centres = [o.centre for o in obstacles]
         if shape == "box":
-            return self._sim.add_static_boxes([0.5 * s for s in size], colour, centres)
-        return self._sim.add_static_cylinders(o.radius, size[2], colour, centres)
+            return self._sim.obstacles.add_static_boxes([0.5 * s for s in size], colour, centres)
+        return self._sim.obstacles.add_static_cylinders(o.radius, size[2], colour, centres)
 
     def place(self, obstacles: tuple[Obstacle, ...], shown: Sequence[int] | None = None) -> list[int]:
         """Show exactly ``obstacles`` (in order), or only those with the indices ``shown``, and park the bodies they no
@@ -113,7 +113,7 @@ class ObstaclePool:
         self._release(released)
         indices = range(len(obstacles)) if shown is None else shown
         bodies, made = self._acquire(obstacles, indices, {body for _, body in released})
-        self._sim.order_broadphase(made)
+        self._sim.obstacles.order_broadphase(made)
         self._active = {i: (_key(obstacles[i]), body) for i, body in zip(indices, bodies)}
         self._park(released)
         out = [-1] * len(obstacles)
@@ -128,7 +128,7 @@ class ObstaclePool:
         released = [self._active.pop(i) for i in leave]
         self._release(released)
         bodies, _ = self._acquire(obstacles, enter, {body for _, body in released})
-        self._sim.order_broadphase(bodies)
+        self._sim.obstacles.order_broadphase(bodies)
         for i, body in zip(enter, bodies):
             self._active[i] = (_key(obstacles[i]), body)
         self._park(released)
@@ -152,7 +152,7 @@ class ObstaclePool:
                 body = self._free[key].pop()
                 del self._parked[body]
                 if body not in shown:
-                    self._sim.set_visible(body, True, _COLOURS[key[0]])
+                    self._sim.obstacles.set_visible(body, True, _COLOURS[key[0]])
                 bodies.append(body)
             else:
                 missing[key].append(n)
@@ -163,11 +163,11 @@ class ObstaclePool:
         placed = cast(list[int], bodies)
         for i, body in zip(indices, placed):
             o = obstacles[i]
-            self._sim.move_static(body, o.centre, yaw_quat(o.yaw))
+            self._sim.obstacles.move_static(body, o.centre, yaw_quat(o.yaw))
             if o.movable:  # awake, so that it settles where it was put and stays put by its own contacts
-                self._sim.set_mass(body, o.mass, inertia(o))
+                self._sim.obstacles.set_mass(body, o.mass, inertia(o))
             else:
-                self._sim.sleep(body)
+                self._sim.obstacles.sleep(body)
         return placed, [placed[n] for n in sorted(n for positions in missing.values() for n in positions)]
 
     def _park(self, released: list[tuple[tuple, int]]) -> None:
@@ -176,11 +176,11 @@ class ObstaclePool:
         for _, body in released:
             if body in self._parked:
                 if self._parked[body][0].startswith("movable"):
-                    self._sim.set_mass(body, 0.0)
+                    self._sim.obstacles.set_mass(body, 0.0)
                 position = (PARK_SPACING * (body % 64), PARK_SPACING * (body // 64), PARK_DEPTH)
-                self._sim.move_static(body, position, (0.0, 0.0, 0.0, 1.0))
-                self._sim.sleep(body)
-                self._sim.set_visible(body, False, _COLOURS[self._parked[body][0]])
+                self._sim.obstacles.move_static(body, position, (0.0, 0.0, 0.0, 1.0))
+                self._sim.obstacles.sleep(body)
+                self._sim.obstacles.set_visible(body, False, _COLOURS[self._parked[body][0]])
 
     def _evict(self) -> None:
         """Delete the least recently parked bodies beyond ``max_parked``."""
@@ -189,7 +189,7 @@ class ObstaclePool:
             return
         gone = list(islice(self._parked, excess))
         for body in gone:
-            self._sim.remove_body(body)
+            self._sim.obstacles.remove_body(body)
             del self._parked[body]
         gone_set = set(gone)
         for key, free in self._free.items():

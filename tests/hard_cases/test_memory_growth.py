@@ -44,12 +44,12 @@ def test_generated_layouts_share_shapes_and_hold_memory_flat():
     sim = env.unwrapped.sim
     for _ in range(300):  # warm up: the pool and the shape cache fill
         env.reset()
-    shapes, before = len(sim._shapes), resident_mib()
+    shapes, before = len(sim.record.shapes), resident_mib()
     for _ in range(1000):
         env.reset()
     growth = resident_mib() - before
     env.close()
-    assert len(sim._shapes) <= shapes + 2  # 27 box and 9 cylinder sizes, the table: a few late first draws
+    assert len(sim.record.shapes) <= shapes + 2  # 27 box and 9 cylinder sizes, the table: a few late first draws
     assert growth < 2, f"{growth:.1f} MiB over 1,000 resets"
 
 
@@ -64,7 +64,7 @@ def test_new_sizes_every_reset_rebuild_the_world_and_hold_memory_flat(monkeypatc
     for _ in range(300):
         env.reset(options={"scene": new_sizes_scene(rng)})
     growth = resident_mib() - before
-    assert len(env.unwrapped.sim._shapes) <= 60 + 5
+    assert len(env.unwrapped.sim.record.shapes) <= 60 + 5
     env.close()
     assert growth < 8, f"{growth:.1f} MiB over 300 resets"
 

@@ -97,15 +97,15 @@ def test_rays_and_camera_see_the_whole_scene_exactly():
             continue
         state = near.unwrapped.robot.state()
         starts, ends = fan(state.position)
-        np.testing.assert_array_equal(near.unwrapped.sim.cast_exact(starts, ends),
-                                      full.unwrapped.sim.cast_exact(starts, ends))
+        np.testing.assert_array_equal(near.unwrapped.sim.rays.cast_exact(starts, ends),
+                                      full.unwrapped.sim.rays.cast_exact(starts, ends))
         # the camera's view from the robot, drawn in both worlds (the full world's robot is elsewhere: not drawn)
         eye = np.array([state.position[0], state.position[1], 0.3])
         forward, left = state.rotation[:, 0], state.rotation[:, 1]
         axes = np.array([forward, -left, [0.0, 0.0, -1.0]])
-        depth, ids = near.unwrapped.sim.ray_cast_image(96, 72, eye, axes, (60.0, 60.0, 47.5, 35.5), 0.05, 12.0)
-        depth_full, ids_full = full.unwrapped.sim.ray_cast_image(96, 72, eye, axes, (60.0, 60.0, 47.5, 35.5), 0.05,
-                                                                 12.0)
+        intrinsics = (60.0, 60.0, 47.5, 35.5)
+        depth, ids = near.unwrapped.sim.rendering.ray_cast_image(96, 72, eye, axes, intrinsics, 0.05, 12.0)
+        depth_full, ids_full = full.unwrapped.sim.rendering.ray_cast_image(96, 72, eye, axes, intrinsics, 0.05, 12.0)
         np.testing.assert_array_equal(depth, depth_full)
         np.testing.assert_array_equal(what_is_seen(near, ids), what_is_seen(full, ids_full))
         backdrop_pixels += int((ids == BACKDROP_ID).sum())
@@ -184,17 +184,17 @@ def test_the_backdrop_is_seen_only_where_it_is_shown():
                                 np.array([[0.5, 0.5, 0.5], [0.25, 0.25, 0.5]]))
     starts = np.array([[0.0, 0.0, 0.5], [0.0, 0.0, 0.5]])
     ends = np.array([[10.0, 0.0, 0.5], [-10.0, 0.0, 0.5]])
-    np.testing.assert_array_equal(sim.cast_exact(starts, ends), [1.0, 1.0])  # none shown yet
+    np.testing.assert_array_equal(sim.rays.cast_exact(starts, ends), [1.0, 1.0])  # none shown yet
     sim.primitives.show_backdrop(np.array([True, False]))
-    np.testing.assert_allclose(sim.cast_exact(starts, ends), [0.15, 1.0])
+    np.testing.assert_allclose(sim.rays.cast_exact(starts, ends), [0.15, 1.0])
     sim.primitives.show_backdrop(np.array([True, True]))
-    np.testing.assert_allclose(sim.cast_exact(starts, ends), [0.15, 0.175])
+    np.testing.assert_allclose(sim.rays.cast_exact(starts, ends), [0.15, 0.175])
     ids = sim.primitives.arrays()[0]
     assert (ids == BACKDROP_ID).sum() == 2
     with pytest.raises(ValueError, match="one flag per backdrop row"):
         sim.primitives.show_backdrop(np.array([True]))
     with pytest.raises(RuntimeError, match="near_field = False"):  # pybullet's rays would pass through them
-        sim.ray_hit_fractions(starts, ends, caster="pybullet")
+        sim.rays.ray_hit_fractions(starts, ends, caster="pybullet")
     sim.primitives.clear_backdrop()
-    np.testing.assert_array_equal(sim.cast_exact(starts, ends), [1.0, 1.0])
+    np.testing.assert_array_equal(sim.rays.cast_exact(starts, ends), [1.0, 1.0])
     sim.close()

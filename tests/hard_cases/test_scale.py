@@ -231,7 +231,7 @@ def test_link_frame_of_a_link_whose_inertial_frame_is_turned(tmp_path, offset):
     sim = Sim()
     try:
         body = sim.load_urdf("turned", urdf, position=(offset, offset, 1.0), fixed_base=True)
-        sim.reset_joints(body, [0], [0.5])
+        sim.actuation.reset_joints(body, [0], [0.5])
         origin, rotation = sim.link_frame(body, 0)
         exact = UrdfKinematics(urdf).forward(np.array([[0.5]]))["arm"][0]
         np.testing.assert_allclose(origin, exact[:3, 3] + [offset, offset, 1.0], rtol=0, atol=ulps(1.0 + offset, 20))

@@ -37,11 +37,11 @@ def test_beams_that_hit_nothing_or_start_inside_an_obstacle():
     occurs in the envs, whose beams start 0.12 m from the mount, inside the robot's footprint."""
     sim = Sim()
     try:
-        sim.add_static_boxes((0.5, 0.5, 0.5), (1, 0, 0, 1), [(0.0, 0.0, 0.5)])
-        sim.add_static_cylinders(0.5, 1.0, (0, 1, 0, 1), [(5.0, 0.0, 0.5)])
+        sim.obstacles.add_static_boxes((0.5, 0.5, 0.5), (1, 0, 0, 1), [(0.0, 0.0, 0.5)])
+        sim.obstacles.add_static_cylinders(0.5, 1.0, (0, 1, 0, 1), [(5.0, 0.0, 0.5)])
         starts = [[0, 3, 0.5], [0, 0, 0.5], [5, 0, 0.5], [-2, 0, 0.5]]
         ends = [[4, 3, 0.5], [2, 0, 0.5], [7, 0, 0.5], [2, 0, 0.5]]
-        nothing, in_box, in_cylinder, outside = sim.ray_hit_fractions(starts, ends)
+        nothing, in_box, in_cylinder, outside = sim.rays.ray_hit_fractions(starts, ends)
     finally:
         sim.close()
     assert nothing == 1.0 and in_box == 1.0

@@ -91,7 +91,7 @@ def test_dynamics_randomisation_changes_the_robot_each_episode_and_only_then(mak
     masses = set()
     for seed in range(4):
         env.reset(seed=seed)
-        mass, friction, _ = env.unwrapped.sim.inertial_properties(robot.body, [-1])[0]
+        mass, friction, _ = env.unwrapped.sim.actuation.inertial_properties(robot.body, [-1])[0]
         nominal_mass, nominal_friction, _ = robot._nominal[-1]
         assert 0.7 * nominal_mass <= mass <= 1.3 * nominal_mass
         assert 0.7 * nominal_friction <= friction <= 1.3 * nominal_friction
@@ -99,7 +99,8 @@ def test_dynamics_randomisation_changes_the_robot_each_episode_and_only_then(mak
     assert len(masses) == 4
     clean = make_env()
     clean.reset(seed=0)
-    assert clean.unwrapped.sim.inertial_properties(clean.unwrapped.robot.body, [-1])[0][0] == robot._nominal[-1][0]
+    inertial = clean.unwrapped.sim.actuation.inertial_properties(clean.unwrapped.robot.body, [-1])
+    assert inertial[0][0] == robot._nominal[-1][0]
 
 
 @pytest.mark.filterwarnings("ignore::UserWarning")

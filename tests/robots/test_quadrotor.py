@@ -84,7 +84,7 @@ def test_urdf_mass_properties_are_the_stated_closed_forms_and_crazyflie_sized(si
     # pybullet holds the URDF's masses and inertias, not inertias it recomputed from the collision shapes
     sim, robot = make(sims)
     names = {index: name for name, index in robot.link_index.items()}
-    for link, (mass, _, inertia) in zip(names, sim.inertial_properties(robot.body, list(names))):
+    for link, (mass, _, inertia) in zip(names, sim.actuation.inertial_properties(robot.body, list(names))):
         urdf_mass, urdf_inertia = body.link_inertias[names[link]]
         assert mass == urdf_mass
         np.testing.assert_array_equal(inertia, np.diag(urdf_inertia))
@@ -120,7 +120,7 @@ def test_base_link_carries_the_parts_closed_forms_composed(sims):
     np.testing.assert_allclose(body.inertia, inertia, rtol=1e-12, atol=1e-18)  # the file's 13 digits
     sim, robot = make(sims)
     assert sim.link_indices(robot.body) == {"base_link": -1}  # one merged body
-    (merged_mass, _, merged_inertia), = sim.inertial_properties(robot.body, [-1])
+    (merged_mass, _, merged_inertia), = sim.actuation.inertial_properties(robot.body, [-1])
     assert merged_mass == body.mass
     np.testing.assert_array_equal(merged_inertia, np.diag(body.inertia))
     np.testing.assert_allclose(sim.base_inertial_offset(robot.body), body.com, atol=1e-15)

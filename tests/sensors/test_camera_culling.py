@@ -28,8 +28,8 @@ def frames_agree(env) -> tuple[np.ndarray, list[int]]:
     state = u.robot.state()
     view = _view_matrix(*sim.link_frame(state.body, state.link_index[c.link]))
     args = (c.width, c.height, view, camera.projection, True)
-    plain = sim.camera_image(*args, behind=state.body, cull=False)
-    culled = sim.camera_image(*args, behind=state.body, cull=True)
+    plain = sim.rendering.camera_image(*args, behind=state.body, cull=False)
+    culled = sim.rendering.camera_image(*args, behind=state.body, cull=True)
     for name, a, b in zip(("rgb", "depth buffer", "segmentation"), plain, culled):
         np.testing.assert_array_equal(a, b, err_msg=f"{name} differs")
     culled_ids = sim.culler.outside_view(view, camera.projection, c.width, c.height)
@@ -113,7 +113,8 @@ def test_no_pixel_ray_meets_a_culled_body(size, far):
     edges = rays[(columns.ravel() % (k.width - 1) == 0) | (rows.ravel() % (k.height - 1) == 0)]
     sim = Sim()
     try:
-        bodies = [body for he in half_extents for body in sim.add_static_boxes(he, (0.5, 0.5, 0.5, 1.0), [(0, 0, 0)])]
+        bodies = [body for he in half_extents
+                  for body in sim.obstacles.add_static_boxes(he, (0.5, 0.5, 0.5, 1.0), [(0, 0, 0)])]
         near_edge = 0
         for _ in range(6):
             rotation, _ = np.linalg.qr(rng.normal(size=(3, 3)))
@@ -126,7 +127,7 @@ def test_no_pixel_ray_meets_a_culled_body(size, far):
             offset = radii + CULL_MARGIN + depth / k.fx * rng.uniform(-1, 3, len(bodies))
             centres = np.column_stack([depth, ray[:, 1:] * depth[:, None] + offset[:, None] * outward])
             for body, centre in zip(bodies, centres):
-                sim.move_static(body, eye + rotation @ centre, (0.0, 0.0, 0.0, 1.0))
+                sim.obstacles.move_static(body, eye + rotation @ centre, (0.0, 0.0, 0.0, 1.0))
             for body in sim.culler.outside_view(_view_matrix(eye, rotation), camera.projection, k.width, k.height):
                 i = bodies.index(body)
                 along = np.clip(rays @ centres[i] / (rays * rays).sum(axis=1), config.near, far)

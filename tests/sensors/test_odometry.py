@@ -25,6 +25,7 @@ class FakeWheels:
 
     def __init__(self):
         self.angles = np.zeros(2)
+        self.actuation = self  # the Sim's part that reads joints
 
     def joint_states(self, body, joints):
         return self.angles.copy(), np.zeros(2)

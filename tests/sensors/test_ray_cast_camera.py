@@ -25,7 +25,7 @@ U = (np.arange(SIZE) - (SIZE - 1) / 2) / F  # normalised image coordinate of eac
 
 
 def cast(sim: Sim, eye=(0.0, 0.0, 0.0), near: float = 0.05, far: float = 10.0):
-    return sim.ray_cast_image(SIZE, SIZE, np.array(eye, dtype=float), LEVEL, INTRINSICS, near, far)
+    return sim.rendering.ray_cast_image(SIZE, SIZE, np.array(eye, dtype=float), LEVEL, INTRINSICS, near, far)
 
 
 @pytest.fixture
@@ -37,7 +37,7 @@ def sim():
 
 def test_a_box_face_reads_its_distance(sim):
     """A face 3 m ahead, 2 m square: every pixel whose ray meets it reads 3 m exactly, every other pixel 0."""
-    (box,) = sim.add_static_boxes((0.1, 1.0, 1.0), (0.5, 0.5, 0.5, 1.0), [(3.1, 0.0, 0.0)])
+    (box,) = sim.obstacles.add_static_boxes((0.1, 1.0, 1.0), (0.5, 0.5, 0.5, 1.0), [(3.1, 0.0, 0.0)])
     depth, ids = cast(sim)
     inside = (np.abs(U[:, None]) * 3.0 < 1.0) & (np.abs(U[None, :]) * 3.0 < 1.0)
     np.testing.assert_array_equal(depth[inside], 3.0)
@@ -49,7 +49,7 @@ def test_a_cylinder_along_the_middle_row(sim):
     """An upright cylinder of radius r, d ahead: along the level middle row the ray (1, -u, 0) meets the circle at
     t = (d - sqrt(d^2 - (1 + u^2)(d^2 - r^2))) / (1 + u^2); past the tangent rays nothing."""
     d, r = 4.0, 0.5
-    sim.add_static_cylinders(r, 2.0, (0.5, 0.5, 0.5, 1.0), [(d, 0.0, 0.0)])
+    sim.obstacles.add_static_cylinders(r, 2.0, (0.5, 0.5, 0.5, 1.0), [(d, 0.0, 0.0)])
     depth, _ = cast(sim)
     row = depth[SIZE // 2]
     disc = d * d - (1 + U**2) * (d * d - r * r)
@@ -64,9 +64,9 @@ def test_a_cylinder_cap_from_above(sim):
     """Looking straight down at an upright cylinder's top, h below the eye: the pixels whose ray meets the top's
     plane within the radius read h, the others nothing (their rays diverge from the side)."""
     h, r = 2.0, 0.6
-    sim.add_static_cylinders(r, 1.0, (0.5, 0.5, 0.5, 1.0), [(0.0, 0.0, -h - 0.5)])
+    sim.obstacles.add_static_cylinders(r, 1.0, (0.5, 0.5, 0.5, 1.0), [(0.0, 0.0, -h - 0.5)])
     down = np.array([[0.0, 0.0, -1.0], [0.0, -1.0, 0.0], [-1.0, 0.0, 0.0]])  # forward -z, right -y, down -x
-    depth, _ = sim.ray_cast_image(SIZE, SIZE, np.zeros(3), down, INTRINSICS, 0.05, 10.0)
+    depth, _ = sim.rendering.ray_cast_image(SIZE, SIZE, np.zeros(3), down, INTRINSICS, 0.05, 10.0)
     inside = np.hypot(U[:, None], U[None, :]) * h <= r
     assert inside.sum() > 50
     np.testing.assert_array_equal(depth[inside], h)
@@ -89,7 +89,7 @@ def test_the_ground_from_a_level_camera(sim):
 def test_near_and_far_planes(sim):
     """A box cut by the near plane shows its far face from inside (as a rasteriser without back-face culling
     does); a surface at or beyond the far plane is not seen."""
-    sim.add_static_boxes((0.24, 5.0, 5.0), (0.5, 0.5, 0.5, 1.0), [(0.26, 0.0, 0.0)])  # x from 0.02 to 0.5
+    sim.obstacles.add_static_boxes((0.24, 5.0, 5.0), (0.5, 0.5, 0.5, 1.0), [(0.26, 0.0, 0.0)])  # x from 0.02 to 0.5
     depth, _ = cast(sim, near=0.05)
     np.testing.assert_allclose(depth, 0.5, rtol=1e-12)
     depth, ids = cast(sim, near=0.05, far=0.5)
@@ -99,27 +99,27 @@ def test_near_and_far_planes(sim):
 
 def test_the_table_follows_the_bodies(sim):
     """Hidden, moved, turned and removed bodies are drawn as the Sim holds them."""
-    (box,) = sim.add_static_boxes((0.5, 0.5, 0.5), (0.5, 0.5, 0.5, 1.0), [(3.0, 0.0, 0.0)])
+    (box,) = sim.obstacles.add_static_boxes((0.5, 0.5, 0.5), (0.5, 0.5, 0.5, 1.0), [(3.0, 0.0, 0.0)])
     middle = SIZE // 2
     assert cast(sim)[0][middle, middle] == pytest.approx(2.5)
-    sim.set_visible(box, False, (0.5, 0.5, 0.5, 1.0))
+    sim.obstacles.set_visible(box, False, (0.5, 0.5, 0.5, 1.0))
     assert cast(sim)[0][middle, middle] == 0.0
-    sim.set_visible(box, True, (0.5, 0.5, 0.5, 1.0))
-    sim.move_static(box, (4.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))
+    sim.obstacles.set_visible(box, True, (0.5, 0.5, 0.5, 1.0))
+    sim.obstacles.move_static(box, (4.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))
     assert cast(sim)[0][middle, middle] == pytest.approx(3.5)
     # turned 45 degrees about z: the middle ray meets the vertical edge, half a diagonal nearer than the centre
-    sim.move_static(box, (4.0, 0.0, 0.0), (0.0, 0.0, math.sin(math.pi / 8), math.cos(math.pi / 8)))
+    sim.obstacles.move_static(box, (4.0, 0.0, 0.0), (0.0, 0.0, math.sin(math.pi / 8), math.cos(math.pi / 8)))
     assert cast(sim)[0][middle, middle] == pytest.approx(4.0 - math.sqrt(0.5), abs=1e-12)
-    sim.remove_body(box)
+    sim.obstacles.remove_body(box)
     assert not cast(sim)[0].any()
 
 
 def test_a_movable_body_is_drawn_where_the_physics_put_it(sim):
-    body = sim.add_movable_box((0.5, 0.5, 0.5), (0.5, 0.5, 0.5, 1.0))
-    sim.move_static(body, (3.0, 0.0, 2.0), (0.0, 0.0, 0.0, 1.0))
-    sim.set_mass(body, 1.0, (0.1, 0.1, 0.1))
+    body = sim.obstacles.add_movable_box((0.5, 0.5, 0.5), (0.5, 0.5, 0.5, 1.0))
+    sim.obstacles.move_static(body, (3.0, 0.0, 2.0), (0.0, 0.0, 0.0, 1.0))
+    sim.obstacles.set_mass(body, 1.0, (0.1, 0.1, 0.1))
     sim.step(30)  # falling: drawn where body_poses last read it
-    (position,), _ = sim.body_poses([body])
+    (position,), _ = sim.obstacles.body_poses([body])
     assert position[2] < 2.0
     depth, ids = cast(sim, eye=(0.0, 0.0, position[2]))
     assert depth[SIZE // 2, SIZE // 2] == pytest.approx(2.5, abs=1e-9)
@@ -153,11 +153,12 @@ def test_agrees_with_tiny_renderer_on_generated_scenes():
             state = u.robot.state()
             row = state.link(c.link)
             eye, rotation = state.links.position[row], state.links.rotation[row]
-            _, buffer, tiny_ids = sim.camera_image(c.width, c.height, _view_matrix(eye, rotation), camera.projection,
-                                                   True, behind=state.body)
+            _, buffer, tiny_ids = sim.rendering.camera_image(c.width, c.height, _view_matrix(eye, rotation),
+                                                             camera.projection, True, behind=state.body)
             tiny = c.far * c.near / (c.far - (c.far - c.near) * buffer)
             axes = np.array([rotation[:, 0], -rotation[:, 1], -rotation[:, 2]])
-            rays, ids = sim.ray_cast_image(c.width, c.height, eye, axes, (i.fx, i.fy, i.cx, i.cy), c.near, c.far)
+            rays, ids = sim.rendering.ray_cast_image(c.width, c.height, eye, axes, (i.fx, i.fy, i.cx, i.cy), c.near,
+                                                     c.far)
             same = (ndimage.minimum_filter(ids, 3) == ids) & (ndimage.maximum_filter(ids, 3) == ids)
             same &= (ndimage.minimum_filter(tiny_ids, 3) == ids) & (ndimage.maximum_filter(tiny_ids, 3) == ids)
             faces = same & np.isin(ids, boxes)

@@ -28,7 +28,7 @@ def sim():
 
 
 def fractions(sim: Sim, starts, ends) -> np.ndarray:
-    return sim.ray_hit_fractions(np.array(starts, dtype=float), np.array(ends, dtype=float), caster="exact")
+    return sim.rays.ray_hit_fractions(np.array(starts, dtype=float), np.array(ends, dtype=float), caster="exact")
 
 
 def test_the_ground_plane_from_above_and_below(sim):
@@ -37,7 +37,7 @@ def test_the_ground_plane_from_above_and_below(sim):
     sim.add_ground(visual_size=2.0)
     starts = [[0.3, 0.2, 1.0], [500.0, -40.0, 2.0], [1.0, 1.0, -0.5], [0.0, 0.0, 3.0], [0.0, 0.0, 0.5]]
     ends = [[0.7, -0.2, -3.0], [503.0, -40.0, -6.0], [1.0, 1.0, 1.5], [0.0, 0.0, 1.0], [4.0, 0.0, 0.5]]
-    assert sim.exact_rays_model_world()
+    assert sim.rays.exact_rays_model_world()
     np.testing.assert_allclose(fractions(sim, starts, ends), [0.25, 0.25, 0.25, 1.0, 1.0], rtol=0, atol=TOL)
 
 
@@ -48,8 +48,8 @@ def test_a_turned_box_is_met_on_the_face_the_ray_aims_at(sim):
     half = np.array([0.3, 0.1, 0.25])
     centre = np.array([2.0, -1.0, 0.6])
     quaternion = Rotation.from_euler("xyz", [0.2, -0.3, 1.1]).as_quat()
-    (box,) = sim.add_static_boxes(half, (1, 1, 1, 1), [centre])
-    sim.move_static(box, centre, quaternion)
+    (box,) = sim.obstacles.add_static_boxes(half, (1, 1, 1, 1), [centre])
+    sim.obstacles.move_static(box, centre, quaternion)
     axes = Rotation.from_quat(quaternion).as_matrix()
     starts, ends, expected = [], [], []
     for _ in range(200):
@@ -75,7 +75,7 @@ def test_a_cylinder_side_and_caps(sim):
     """An upright cylinder (radius r, height 2h) at c: a level ray at height z offset by b from the axis meets the side
     at d - sqrt(r^2 - b^2); a vertical ray within the radius meets a cap; one starting inside misses it."""
     r, height, c = 0.4, 1.0, np.array([3.0, 0.0, 0.5])
-    sim.add_static_cylinders(r, height, (1, 1, 1, 1), [c])
+    sim.obstacles.add_static_cylinders(r, height, (1, 1, 1, 1), [c])
     offsets = np.linspace(-0.39, 0.39, 41)
     starts = np.stack([np.zeros_like(offsets), offsets, np.full_like(offsets, 0.7)], axis=1)
     ends = starts + [5.0, 0.0, 0.0]
@@ -111,21 +111,44 @@ def test_a_world_the_caster_does_not_model_is_cast_by_pybullet(sim, tmp_path):
     """A URDF that rays can see, or a body made with raw pybullet calls, puts the exact caster out of play; hiding the
     URDF from rays brings it back."""
     sim.add_ground(visual_size=4.0)
-    sim.add_static_boxes((0.5, 0.5, 0.5), (1, 1, 1, 1), [(2.0, 0.0, 0.5)])
+    sim.obstacles.add_static_boxes((0.5, 0.5, 0.5), (1, 1, 1, 1), [(2.0, 0.0, 0.5)])
     sim.add_marker("goal", 0.2, (0, 1, 0, 1))
-    assert sim.exact_rays_model_world()
+    assert sim.rays.exact_rays_model_world()
     urdf = tmp_path / "post.urdf"
     urdf.write_text('<robot name="post"><link name="base"><collision><geometry><sphere radius="0.3"/></geometry>'
                     '</collision></link></robot>')
     body = sim.load_urdf("post", urdf, position=(-2.0, 0.0, 0.5), fixed_base=True)
-    assert not sim.exact_rays_model_world()
-    away = sim.ray_hit_fractions([[0.0, 0.0, 0.5]], [[-4.0, 0.0, 0.5]], caster="exact")
+    assert not sim.rays.exact_rays_model_world()
+    away = sim.rays.ray_hit_fractions([[0.0, 0.0, 0.5]], [[-4.0, 0.0, 0.5]], caster="exact")
     assert away[0] == pytest.approx(1.7 / 4.0, abs=1e-3)  # pybullet's sphere, which the caster has no row for
-    sim.hide_from_rays(body)
-    assert sim.exact_rays_model_world()
+    sim.rays.hide_from_rays(body)
+    assert sim.rays.exact_rays_model_world()
     shape = pb.createCollisionShape(pb.GEOM_SPHERE, radius=0.2, physicsClientId=sim.client_id)
     pb.createMultiBody(0, shape, -1, [0.0, 3.0, 0.5], physicsClientId=sim.client_id)
-    assert not sim.exact_rays_model_world()
+    assert not sim.rays.exact_rays_model_world()
+
+
+def test_the_verdict_is_asked_again_after_the_world_is_cleared(tmp_path):
+    """The verdict is cached on (the record's version, pybullet's body count). After a clear the world is built
+    again to the same count and as many changes as before, now with the post seen by rays: a version counted from 0
+    again would hand back the cached verdict of the world before."""
+    urdf = tmp_path / "post.urdf"
+    urdf.write_text('<robot name="post"><link name="base"><collision><geometry><sphere radius="0.3"/></geometry>'
+                    '</collision></link></robot>')
+    sim = Sim()
+    try:
+        ground = sim.add_ground(visual_size=4.0)
+        sim.rays.hide_from_rays(sim.load_urdf("post", urdf, position=(-2.0, 0.0, 0.5), fixed_base=True))
+        assert sim.rays.exact_rays_model_world()
+        version = sim.record.version
+        sim.clear()
+        assert sim.record.version > version
+        ground = sim.add_ground(visual_size=4.0)
+        sim.load_urdf("post", urdf, position=(-2.0, 0.0, 0.5), fixed_base=True)
+        sim.rays.hide_from_rays(ground)  # a third change, as before; the post is not hidden this time
+        assert not sim.rays.exact_rays_model_world()
+    finally:
+        sim.close()
 
 
 def test_a_bad_caster_is_named():
@@ -134,7 +157,7 @@ def test_a_bad_caster_is_named():
     s = Sim()
     try:
         with pytest.raises(ValueError, match="caster must be one of"):
-            s.ray_hit_fractions([[0, 0, 0]], [[1, 0, 0]], caster="fast")
+            s.rays.ray_hit_fractions([[0, 0, 0]], [[1, 0, 0]], caster="fast")
     finally:
         s.close()
     with pytest.raises(ValueError, match="lidar_caster"):
@@ -155,14 +178,14 @@ def test_a_movable_cylinder_is_seen_by_every_beam_that_crosses_it(sim):
     """A movable cylinder (r 0.2 m) 2 m ahead, level beams across it: the exact caster meets the circle at the closed
     form on every beam; pybullet's convex cast through the prism's hull (margin 0) lets most of them through, which
     is why the exact caster is the default."""
-    body = sim.add_movable_cylinder(0.2, 0.5, (1, 1, 1, 1))
-    sim.move_static(body, (2.0, 0.0, 0.25), (0.0, 0.0, 0.0, 1.0))
+    body = sim.obstacles.add_movable_cylinder(0.2, 0.5, (1, 1, 1, 1))
+    sim.obstacles.move_static(body, (2.0, 0.0, 0.25), (0.0, 0.0, 0.0, 1.0))
     offsets = np.linspace(-0.19, 0.19, 39)
     starts = np.stack([np.zeros_like(offsets), offsets, np.full_like(offsets, 0.2)], axis=1)
     ends = starts + [4.0, 0.0, 0.0]
     exact = fractions(sim, starts, ends) * 4.0
     np.testing.assert_allclose(exact, 2.0 - np.sqrt(0.04 - offsets**2), rtol=0, atol=TOL)
-    missed = sim.ray_hit_fractions(starts, ends, caster="pybullet") == 1.0
+    missed = sim.rays.ray_hit_fractions(starts, ends, caster="pybullet") == 1.0
     assert missed.sum() > 10  # pybullet 3.2.7: 22 of 39; the day this fails, pybullet's cast was fixed
 
 
@@ -187,7 +210,7 @@ def test_exact_scans_agree_with_pybullet_within_its_surface_error():
             grown, shrunk = sandwich(u.sim, exact, state, 1e-3), sandwich(u.sim, exact, state, -1e-3)
             assert (grown <= theirs + 1e-9).all() and (theirs <= shrunk + 1e-9).all()
             errors.append(np.abs(ours - theirs))
-        assert u.sim.exact_rays_model_world()
+        assert u.sim.rays.exact_rays_model_world()
     finally:
         env.close()
     errors = np.concatenate(errors)

@@ -105,9 +105,9 @@ def test_hit_distances_near_mid_and_far_hold_at_large_offsets(sim, offset, caste
     lanes = np.array([[0.0, 1.0 * i, 0.0] for i in range(6)])
     starts = np.array([offset, offset, 0.25]) + lanes
     along = np.column_stack([distances, np.zeros(3), np.zeros(3)])
-    sim.add_static_boxes(half, (1, 1, 1, 1), list(starts[:3] + along + [half[0], 0.0, 0.0]))
-    sim.add_static_cylinders(radius, 0.5, (1, 1, 1, 1), list(starts[3:] + along + [radius, 0.0, 0.0]))
-    got = reach * sim.ray_hit_fractions(starts, starts + [reach, 0.0, 0.0], caster=caster)
+    sim.obstacles.add_static_boxes(half, (1, 1, 1, 1), list(starts[:3] + along + [half[0], 0.0, 0.0]))
+    sim.obstacles.add_static_cylinders(radius, 0.5, (1, 1, 1, 1), list(starts[3:] + along + [radius, 0.0, 0.0]))
+    got = reach * sim.rays.ray_hit_fractions(starts, starts + [reach, 0.0, 0.0], caster=caster)
     np.testing.assert_allclose(got[:3], distances, rtol=0, atol=1e-9)
     inner, outer = (0.0, 0.0) if caster == "exact" else (radius * (1.0 - math.cos(math.pi / 64)),
                                                          radius * (1.0 / math.cos(math.pi / 64) - 1.0))

@@ -82,11 +82,11 @@ def test_accelerometer_integrates_to_the_speed_gained(make_env):
 def test_ray_batches_of_any_size_answer_every_ray(n):
     """pybullet answers 16,384 rays in one call with an empty list; the Sim splits batches so none is lost."""
     sim = Sim()
-    sim.add_static_boxes([0.5, 0.5, 0.5], (1.0, 1.0, 1.0, 1.0), [(2.0, 0.0, 0.5)])
+    sim.obstacles.add_static_boxes([0.5, 0.5, 0.5], (1.0, 1.0, 1.0, 1.0), [(2.0, 0.0, 0.5)])
     starts = np.zeros((n, 3)) + [0.0, 0.0, 0.5]
     ends = starts + [4.0, 0.0, 0.0]
     ends[1::2, 0] = -4.0  # every other ray points away and hits nothing
-    fractions = sim.ray_hit_fractions(starts, ends)
+    fractions = sim.rays.ray_hit_fractions(starts, ends)
     sim.close()
     assert fractions.shape == (n,)
     np.testing.assert_allclose(fractions[0::2], 1.5 / 4.0, atol=1e-6)

@@ -54,8 +54,8 @@ def test_projected_points_land_on_the_pixels_pybullet_draws_them_on():
         for eye, target in CAMERAS:
             view = CameraView(eye, target, 320, 240)
             for point in points:
-                sim.move_static(marker, point, (0.0, 0.0, 0.0, 1.0))
-                seg = sim.render_segmentation(320, 240, eye, target)
+                sim.obstacles.move_static(marker, point, (0.0, 0.0, 0.0, 1.0))
+                seg = sim.rendering.render_segmentation(320, 240, eye, target)
                 rows, cols = np.nonzero(seg == marker)
                 (pixel,), (in_front,) = view.project([point])
                 assert in_front

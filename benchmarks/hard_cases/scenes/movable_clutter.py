@@ -22,7 +22,7 @@ MASS = 2.0  # a stacked box's default mass, kg
 def movable_poses(env: gym.Env) -> tuple[np.ndarray, np.ndarray]:
     """Positions (k, 3) in metres and rotation matrices (k, 3, 3) of the env's movable bodies."""
     unwrapped = env.unwrapped
-    return unwrapped.sim.body_poses(unwrapped.movable_bodies)
+    return unwrapped.sim.obstacles.body_poses(unwrapped.movable_bodies)
 
 
 def tilt_degrees(start: np.ndarray, end: np.ndarray) -> np.ndarray:

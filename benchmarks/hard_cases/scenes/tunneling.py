@@ -170,7 +170,7 @@ def free_body_run(settings: Settings, shape: str, speed: float, thickness: float
     try:
         cid = sim.client_id
         wall = Obstacle("box", (thickness, WALL_SPAN, WALL_HEIGHT), (0.0, 0.0))
-        (wall_body,) = sim.add_static_boxes([0.5 * s for s in wall.size], (0.5, 0.5, 0.5, 1.0), [wall.centre])
+        (wall_body,) = sim.obstacles.add_static_boxes([0.5 * s for s in wall.size], (0.5, 0.5, 0.5, 1.0), [wall.centre])
         if shape == "cube":
             collision = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=[0.5 * EDGE] * 3, physicsClientId=cid)
         else:

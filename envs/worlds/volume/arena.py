@@ -91,6 +91,6 @@ class VolumeArena(PooledArena[VolumeScene]):
         robot is never hidden behind a wall, the ceiling or clutter."""
         robot = np.asarray(robot, dtype=float)
         eye = chase_eye(robot, goal, CHASE_BACK, CHASE_UP)
-        (free,) = sim.ray_hit_fractions([robot.tolist()], [eye.tolist()])
+        (free,) = sim.rays.ray_hit_fractions([robot.tolist()], [eye.tolist()])
         eye = pull_in(robot, eye, float(free), CHASE_MARGIN, CHASE_SHORTEST)
         return eye, between(robot, goal, eye, CHASE_GOAL_WEIGHT)
