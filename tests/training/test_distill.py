@@ -265,3 +265,27 @@ def test_the_waypoint_diagnosis_compares_a_students_waypoint_with_its_teachers_e
     rows = re.findall(r"^\| 100000\d \| (success|timeout|collision) \| \d+ \| [\d.]+ \| \d+% \| \d+ deg, \d+ deg \|$",
                       done.stdout, re.M)
     assert len(rows) == 2, done.stdout
+
+
+def test_on_clutterfly_the_waypoint_diagnosis_adds_the_elevation_gap_and_whether_it_ended_at_a_wall():
+    from helpers import run_benchmark
+
+    done = run_benchmark("benchmarks.learning.waypoint_diagnosis", "--run", "pretrained/ClutterFly-v1-student",
+                         "--episodes", "1")
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert re.search(r"^\| 1000000 \| (success|timeout|collision) \| \d+ \| [\d.]+ \| \d+% \| \d+ deg, \d+ deg \| "
+                     r"\d+ deg \| (yes|no) \|$", done.stdout, re.M), done.stdout
+
+
+def test_labels_sent_astray_are_the_teachers_rounded_to_the_bins_and_move_at_most_the_spread():
+    from benchmarks.learning.teacher_realisability import Astray
+
+    class Fixed(Teacher):
+        def __call__(self, obs, info):
+            return np.array([0.26, -1.0], dtype=np.float32)
+
+    rounded = Astray(Fixed(), 5, share=0.0, spread=2)({}, {})
+    np.testing.assert_array_equal(rounded, [0.5, -1.0])  # bins at -1, -0.5, 0, 0.5, 1
+    astray = Astray(Fixed(), 5, share=1.0, spread=1)
+    moved = np.array([astray({}, {}) for _ in range(200)])
+    assert set(np.round(moved[:, 0], 6)) == {0.0, 0.5, 1.0} and set(np.round(moved[:, 1], 6)) == {-1.0, -0.5}
