@@ -100,14 +100,17 @@ def test_stages_hold_no_reference_cycle_through_the_env():
     import weakref
 
     import gymnasium as gym
+    import pybullet as pb
 
     for kwargs in ({}, {"render_mode": "rgb_array", "safety_horizon": 0.3, "noise": "nominal", "reverse": False}):
         env = gym.make("ClutterNav-v1", **SMALL, **kwargs)
         env.reset(seed=0)
-        unwrapped = weakref.ref(env.unwrapped)
+        unwrapped, sim = weakref.ref(env.unwrapped), weakref.ref(env.unwrapped.sim)
+        client = env.unwrapped.sim.client_id
         gc.disable()  # only reference counting may free it
         try:
             del env
-            assert unwrapped() is None, kwargs
+            assert unwrapped() is None and sim() is None, kwargs  # the Sim's parts hold its record, not the Sim
+            assert not pb.isConnected(physicsClientId=client)
         finally:
             gc.enable()

@@ -20,7 +20,7 @@ from clutter_gym.datatypes import LinkStates
 from clutter_gym.sim.actuation import Actuation
 from clutter_gym.sim.obstacles import ObstacleBodies
 from clutter_gym.sim.primitives import PrimitiveTable
-from clutter_gym.sim.rays import Rays
+from clutter_gym.sim.rays import Rays, link_frame
 from clutter_gym.sim.rendering import Rendering
 from clutter_gym.sim.world_record import WorldRecord
 from clutter_gym.util.quiet import quiet_c_output
@@ -88,7 +88,7 @@ class Sim:
         self.record = WorldRecord(self._cid, visuals)
         self.actuation = Actuation(self.record)
         self.obstacles = ObstacleBodies(self.record)
-        self.rays = Rays(self.record, self.link_frame)
+        self.rays = Rays(self.record)
         self.rendering = Rendering(self.record)
         self._empty_world()
         if gui:
@@ -304,13 +304,8 @@ class Sim:
         ]
 
     def link_frame(self, body: int, link: int) -> tuple[np.ndarray, np.ndarray]:
-        """(origin (3,), rotation (3, 3)) of a link's URDF frame in world coordinates, rebuilt from the link's centre
-        of mass and its inertial offset as :meth:`link_states` does: pybullet's own link frame is rounded to float32."""
-        com, com_quat, offset, offset_quat = pb.getLinkState(body, link, physicsClientId=self._cid)[:4]
-        rotation = np.array(pb.getMatrixFromQuaternion(com_quat, physicsClientId=self._cid)).reshape(3, 3)
-        if offset_quat != (0.0, 0.0, 0.0, 1.0):  # the inertial frame's axes in the link frame
-            rotation = rotation @ np.array(pb.getMatrixFromQuaternion(offset_quat)).reshape(3, 3).T
-        return np.array(com) - rotation @ np.array(offset), rotation
+        """(origin (3,), rotation (3, 3)) of a link's URDF frame in world coordinates (:func:`.rays.link_frame`)."""
+        return link_frame(self._cid, body, link)
 
     def body_ids(self) -> list[int]:
         """Ids of every body in the world, in increasing order (kept by the record: pybullet's client does not list

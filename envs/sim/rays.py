@@ -10,7 +10,6 @@ rays, a mesh, a body made with raw pybullet calls) is cast by pybullet.
 from __future__ import annotations
 
 import operator
-from collections.abc import Callable
 
 import numpy as np
 import pybullet as pb
@@ -29,16 +28,23 @@ RAY_CASTERS = ("exact", "pybullet")
 _ORIGIN, _AXES = np.zeros(3), np.eye(3)
 
 
+def link_frame(cid: int, body: int, link: int) -> tuple[np.ndarray, np.ndarray]:
+    """(origin (3,), rotation (3, 3)) of a link's URDF frame in world coordinates, in client ``cid``, rebuilt from the
+    link's centre of mass and its inertial offset as ``Sim.link_states`` does: pybullet's own link frame is rounded
+    to float32. Rays given in a link's frame are cast from it; the Sim's ``link_frame`` is this."""
+    com, com_quat, offset, offset_quat = pb.getLinkState(body, link, physicsClientId=cid)[:4]
+    rotation = np.array(pb.getMatrixFromQuaternion(com_quat, physicsClientId=cid)).reshape(3, 3)
+    if offset_quat != (0.0, 0.0, 0.0, 1.0):  # the inertial frame's axes in the link frame
+        rotation = rotation @ np.array(pb.getMatrixFromQuaternion(offset_quat)).reshape(3, 3).T
+    return np.array(com) - rotation @ np.array(offset), rotation
+
+
 class Rays:
-    """Batched ray casts of one Sim's world.
+    """Batched ray casts of one Sim's world, on the Sim's world record (it holds no reference to the Sim, so a
+    dropped Sim is freed, and its client disconnected, by reference counting)."""
 
-    Args:
-        record: the Sim's world record.
-        link_frame: the Sim's ``link_frame(body, link)`` -> (origin, rotation) of a link's URDF frame, world frame.
-    """
-
-    def __init__(self, record: WorldRecord, link_frame: Callable[[int, int], tuple[np.ndarray, np.ndarray]]) -> None:
-        self._record, self._link_frame = record, link_frame
+    def __init__(self, record: WorldRecord) -> None:
+        self._record = record
         self._exact_rays_key: tuple[int, int] | None = None  # (record version, pybullet's body count) last checked
         self._exact_rays = False
 
@@ -71,7 +77,7 @@ class Rays:
         if caster not in RAY_CASTERS:
             raise ValueError(f"caster must be one of {RAY_CASTERS}, got {caster!r}")
         if caster == "exact" and (body < 0 or link >= 0) and self.exact_rays_model_world():
-            origin, axes = self._link_frame(body, link) if body >= 0 else (_ORIGIN, _AXES)
+            origin, axes = link_frame(self._record.cid, body, link) if body >= 0 else (_ORIGIN, _AXES)
             return self.cast_exact(starts, ends, origin, axes)
         if self._record.primitives.backdrop_shown:
             raise RuntimeError("pybullet cannot cast these rays: a large scene keeps its far obstacles out of the "
