@@ -13,7 +13,6 @@ map's; how the drone heads there is now a function of where the obstacles are.
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import gymnasium as gym
@@ -81,13 +80,3 @@ class TautFlyer(PlannerFlyer):
         subgoal = offset * (lookahead / length) if length > lookahead else offset  # its direction, as the planner's
         return super().__call__({**obs, "subgoal": subgoal.astype(np.float32)}, info)
 
-
-def direction_spread(labels: np.ndarray) -> float:
-    """Radians: the mean angle between each of ``labels`` ((n, 2) azimuth / pi, elevation / (pi / 2)) and their
-    mean direction, a measure of how much the label of one state moves with the drone's place in its cell."""
-    azimuth, elevation = labels[:, 0] * math.pi, labels[:, 1] * math.pi / 2
-    vectors = np.stack([np.cos(elevation) * np.cos(azimuth), np.cos(elevation) * np.sin(azimuth),
-                        np.sin(elevation)], axis=1)
-    mean = vectors.mean(axis=0)
-    mean /= max(float(np.linalg.norm(mean)), 1e-12)
-    return float(np.mean(np.arccos(np.clip(vectors @ mean, -1.0, 1.0))))

@@ -10,8 +10,19 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from clutter_gym.training.taut_path import REACH, direction_spread, taut_point
+from clutter_gym.training.taut_path import REACH, taut_point
 from clutter_gym.training.teachers import make_teacher
+
+
+def direction_spread(labels: np.ndarray) -> float:
+    """Radians: the mean angle between each of ``labels`` ((n, 2) azimuth / pi, elevation / (pi / 2)) and their
+    mean direction, a measure of how much the label of one state moves with the drone's place in its cell."""
+    azimuth, elevation = labels[:, 0] * math.pi, labels[:, 1] * math.pi / 2
+    vectors = np.stack([np.cos(elevation) * np.cos(azimuth), np.cos(elevation) * np.sin(azimuth),
+                        np.sin(elevation)], axis=1)
+    mean = vectors.mean(axis=0)
+    mean /= max(float(np.linalg.norm(mean)), 1e-12)
+    return float(np.mean(np.arccos(np.clip(vectors @ mean, -1.0, 1.0))))
 
 
 def _open(points: np.ndarray) -> np.ndarray:
