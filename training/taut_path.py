@@ -2,9 +2,9 @@
 grid cell the drone is.
 
 The planner teacher's waypoint is the point ``subgoal_lookahead`` along the path behind the progress field. That
-path runs from the drone to the centre of a grid cell near it, then from cell centre to cell centre (0.2 m cells,
-moves in a few fixed directions), so its first half metre turns by up to tens of degrees as the drone moves a few
-centimetres inside a cell: the same LIDAR scan is labelled with different directions, and a student cannot tell
+path runs from the drone to the centre of a grid cell near it, then from cell centre to cell centre (moves in a
+few fixed directions), so its first half metre turns by up to tens of degrees as the drone moves a few centimetres
+inside a cell: the same LIDAR scan is labelled with different directions, and a student cannot tell
 which. The taut teacher looks along the same path for the farthest of its points (up to :data:`REACH` metres along
 it) that the drone sees in a straight line with :data:`MARGIN` to spare beyond its radius, and points at that:
 the corner of the obstacle the path rounds, or the goal. Which way round an obstacle the path goes is still the
@@ -13,6 +13,7 @@ map's; how the drone heads there is now a function of where the obstacles are.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import gymnasium as gym
@@ -29,7 +30,7 @@ MARGIN = 0.05
 SAMPLE = 0.05
 
 
-def taut_point(path: np.ndarray, clearance: Any, reach: float = REACH) -> np.ndarray:
+def taut_point(path: np.ndarray, clearance: Callable[[np.ndarray], np.ndarray], reach: float = REACH) -> np.ndarray:
     """The farthest point of ``path`` ((k, 3): the drone's position, then the path's points), up to ``reach``
     metres along it, whose straight line from the first point keeps ``clearance`` (points (n, 3) -> metres) above 0
     at every :data:`SAMPLE`; the path's second point when none does."""
