@@ -9,6 +9,8 @@ it is made with the teacher's env arguments (:data:`TEACHERS`) on top of the stu
 obstacles the LIDAR has hit this episode, or hits in its current scan (:mod:`clutter_gym.training.known_map`):
 what a student with a memory, or without one, could in principle match. They measure how much of the
 student-teacher gap the map explains (docs/learning.md, "How much of the teacher a student can see").
+ClutterFly-v1's ``"taut"`` points at the farthest point of the planner's path in sight
+(:mod:`clutter_gym.training.taut_path`), a label that does not turn with the drone's place in a grid cell.
 ClutterReach-v1's ``"line-up"`` reaches into a shelf's compartment the same way on every layout
 (:mod:`clutter_gym.training.line_up_teachers`), in joint velocities or, for a student acting through the hand
 controller, in its space.
