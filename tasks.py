@@ -32,7 +32,7 @@ SOURCES = ("pyproject.toml", "constraints.txt", "envs", "training", "assets")
 TYPED_MODULES = ("clutter_gym.datatypes", "clutter_gym.interfaces", "clutter_gym.core", "clutter_gym.sensors.suite",
                  "clutter_gym.clutter_nav", "clutter_gym.clutter_reach", "clutter_gym.clutter_fly",
                  "clutter_gym.collision.checker", "clutter_gym.collision.nearest", "clutter_gym.collision.swept_audit",
-                 "clutter_gym.worlds.near_field", "clutter_gym.worlds.pool", "clutter_gym.sim.primitives",
+                 "clutter_gym.worlds.near_field", "clutter_gym.worlds.pool",
                  "clutter_gym.urdf.checks", "clutter_gym.urdf.geometry", "clutter_gym.urdf.kinematics",
                  "clutter_gym.collision.build", "clutter_gym.sensors",
                  "clutter_gym.sensors.odometry", "clutter_gym.sensors.settings", "clutter_gym.noise.profiles",
