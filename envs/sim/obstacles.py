@@ -234,22 +234,13 @@ class ObstacleBodies:
     def remove_body(self, body: int) -> None:
         """Delete a body from the world (its collision and visual shapes stay cached for reuse)."""
         pb.removeBody(body, physicsClientId=self._record.cid)
-        self._record.culler.remove(body)
-        self._record.primitives.remove(body)
-        record = self._record
-        record.colours.pop(body, None)
-        record.body_ids.discard(body)
-        record.version += 1
-        if body == record.ground:
-            record.ground = -1
-        record.freed.add(body)
-        record.removed_bodies += 1
+        self._record.removed(body)
 
     def set_visible(self, body: int, visible: bool, rgba: Sequence[float]) -> None:
         """Show a single-shape body in colour ``rgba`` (channels in [0, 1]), or hide it from every renderer (fully
         transparent shapes are skipped by TinyRenderer: a parked obstacle then costs a camera frame nothing).
 
-        Only the ray-cast camera's the record's primitives are told in a Sim without :attr:`visuals`."""
+        Only the ray-cast camera's primitives are told in a Sim without visuals."""
         self._record.primitives.show(body, visible)
         if not self._record.visuals:
             return

@@ -62,6 +62,18 @@ class WorldRecord:
         self.freed.difference_update(bodies)
         self.version += 1
 
+    def removed(self, body: int) -> None:
+        """Forget a body just removed from the world; pybullet may give its id out again."""
+        self.culler.remove(body)
+        self.primitives.remove(body)
+        self.colours.pop(body, None)
+        self.body_ids.discard(body)
+        if body == self.ground:
+            self.ground = -1
+        self.freed.add(body)
+        self.removed_bodies += 1
+        self.version += 1
+
     def forget_contacts(self, body: int) -> None:
         """Drop Bullet's cached contact manifolds of ``body`` (call after teleporting it).
 
