@@ -115,6 +115,13 @@ class PlannerReacher(Teacher):
         return np.clip(REACH_PURSUIT_GAIN * np.asarray(obs["subgoal"], dtype=np.float32), -1.0, 1.0)
 
 
+def flyer_waypoint(subgoal: np.ndarray) -> np.ndarray:
+    """A ClutterFly-v1 ``subgoal`` (x, y, z, body frame) as the waypoint a student picks: its azimuth and elevation
+    in units of pi and pi / 2."""
+    x, y, z = (float(v) for v in subgoal[:3])
+    return np.array([math.atan2(y, x) / math.pi, math.atan2(z, math.hypot(x, y)) / (math.pi / 2)], dtype=np.float32)
+
+
 class PlannerFlyer(Teacher):
     """ClutterFly-v1's planner reference: the cascaded position controller's velocity towards the subgoal on the
     shortest path through the known layout, in units of its top speed (the student's velocity commands); or, for a
@@ -128,9 +135,7 @@ class PlannerFlyer(Teacher):
 
     def __call__(self, obs: dict[str, np.ndarray], info: dict[str, Any]) -> np.ndarray:
         if self.waypoint:
-            x, y, z = (float(v) for v in obs["subgoal"][:3])
-            return np.array([math.atan2(y, x) / math.pi, math.atan2(z, math.hypot(x, y)) / (math.pi / 2)],
-                            dtype=np.float32)
+            return flyer_waypoint(obs["subgoal"])
         return (self.flyer.velocity(obs) / self.flyer.max_speed).astype(np.float32)
 
 

@@ -23,6 +23,7 @@ import numpy as np
 
 from clutter_gym.training import load
 from clutter_gym.training.config import EVAL_SEED
+from clutter_gym.training.teachers import flyer_waypoint
 
 #: m/s: a speed under this is "nearly still"
 STILL = 0.1
@@ -36,7 +37,7 @@ def teacher_azimuth(env_id: str, subgoal: np.ndarray) -> float:
     """The planner's waypoint azimuth, radians: ClutterNav's subgoal is (distance, sin, cos), ClutterFly's (x, y, z)."""
     if env_id == "ClutterNav-v1":
         return math.atan2(float(subgoal[1]), float(subgoal[2]))
-    return math.atan2(float(subgoal[1]), float(subgoal[0]))
+    return float(flyer_waypoint(subgoal)[0]) * math.pi
 
 
 def speed(env_id: str, velocity: np.ndarray) -> float:
@@ -46,7 +47,7 @@ def speed(env_id: str, velocity: np.ndarray) -> float:
 
 def teacher_elevation(subgoal: np.ndarray) -> float:
     """ClutterFly's planner waypoint elevation, radians."""
-    return math.atan2(float(subgoal[2]), math.hypot(float(subgoal[0]), float(subgoal[1])))
+    return float(flyer_waypoint(subgoal)[1]) * math.pi / 2
 
 
 def at_wall(env: gym.Env) -> bool:
