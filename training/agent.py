@@ -15,10 +15,10 @@ while not done:
 
 The run folder's ``config.yaml`` is the recipe: env id, env arguments, noise profile and the PPO settings, which
 say which observation processing the policy was trained behind (normalisation, and a frame stack whose frames
-the agent keeps in ``state``) and whether its actions are residuals on a base controller
-(:mod:`clutter_gym.training.residual`), which ``predict`` then adds. The model folder holds SB3's ``model.zip``
-and, when observations were normalised, the ``VecNormalize`` statistics (``vecnormalize.npz``); loading either
-runs no code from the files.
+the agent keeps in ``state``, as it keeps a recurrent policy's LSTM state) and whether its actions are residuals on
+a base controller (:mod:`clutter_gym.training.residual`), which ``predict`` then adds. The model folder holds SB3's
+``model.zip`` and, when observations were normalised, the ``VecNormalize`` statistics (``vecnormalize.npz``);
+loading either runs no code from the files.
 """
 
 from __future__ import annotations
@@ -43,7 +43,7 @@ from clutter_gym.training.run_dir import MODEL_FILE, IncompatibleRunError, RunDi
 from clutter_gym.training.scan_memory import ScanMemory, memory_for
 
 if TYPE_CHECKING:
-    from stable_baselines3 import PPO
+    from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
 
 
 class Agent:
@@ -52,14 +52,14 @@ class Agent:
     Attributes:
         run: the run folder.
         config: the run's settings (env id, env arguments, training noise profile, PPO settings).
-        model: the stable-baselines3 PPO model.
+        model: the stable-baselines3 PPO model (sb3-contrib's RecurrentPPO for a recurrent policy).
         folder: the model folder that was loaded (``model/``, or a checkpoint's; None for a model in training).
         step: env steps the model was trained for.
         observation_space: the space of one env observation (the policy's own is a stack of them with
             ``config.frame_stack`` above 1).
     """
 
-    def __init__(self, run: RunDir, config: TrainConfig, model: PPO, normalizer: Any | None,
+    def __init__(self, run: RunDir, config: TrainConfig, model: OnPolicyAlgorithm, normalizer: Any | None,
                  folder: Path | None) -> None:
         self.run, self.config, self.model, self.folder = run, config, model, folder
         self.step = int(model.num_timesteps)
@@ -80,9 +80,10 @@ class Agent:
         Args:
             obs: an observation as the env returns it.
             state: the agent's memory; None at the start of an episode, then what the previous call returned.
-                It holds the frame stack of a run trained with ``frame_stack`` above 1 and the LIDAR's memory of a
-                run trained with a ``scan_memory`` (for a batch, one per row; the rows start their episodes
-                together), and is None for a memoryless policy.
+                It holds the frame stack of a run trained with ``frame_stack`` above 1, the LSTM's state of a
+                recurrent policy (``ppo.lstm_hidden_size``) and the LIDAR's memory of a run trained with a
+                ``scan_memory`` (for a batch, one per row; the rows start their episodes together), and is None
+                for a memoryless policy.
             deterministic: the mean action (True) or a sample from the policy's distribution.
 
         Returns:
@@ -100,6 +101,10 @@ class Agent:
             stacked, state = push_frame(batch, state, self.config.frame_stack, self._policy_space)
             action, _ = self.model.predict(stacked, deterministic=deterministic)
             action = action[0] if single else action
+        elif self.config.recurrent:  # the LSTM's (hidden, cell) state; zeros at an episode's start
+            rows = 1 if single else len(next(iter(obs.values())) if isinstance(obs, dict) else obs)
+            action, state = self.model.predict(obs, state, episode_start=np.full(rows, state is None),
+                                               deterministic=deterministic)
         else:
             action, _ = self.model.predict(obs, deterministic=deterministic)
         if self.config.action_bins:

@@ -52,6 +52,9 @@ class PPOHyperparams:
         vf_coef: value loss weight.
         max_grad_norm: gradient norm clipping.
         net_arch: hidden layer sizes of both the policy and the value network.
+        lstm_hidden_size: 0: a memoryless policy (SB3's PPO); n > 0: a recurrent one, sb3-contrib's
+            ``RecurrentPPO`` with an LSTM of n units between the observation and the hidden layers, whose state an
+            agent carries through its episode.
         log_std_init: initial log standard deviation of the Gaussian actions (0: std 1, i.e. actions in [-1, 1]
             start as mostly noise).
         normalize_obs: normalise the float observation entries by running mean and std (SB3 VecNormalize).
@@ -69,6 +72,7 @@ class PPOHyperparams:
     vf_coef: float = 0.5
     max_grad_norm: float = 0.5
     net_arch: tuple[int, ...] = (64, 64)
+    lstm_hidden_size: int = 0
     log_std_init: float = 0.0
     normalize_obs: bool = True
     normalize_reward: bool = True
@@ -85,6 +89,7 @@ class PPOHyperparams:
         _check_range("ppo.vf_coef", self.vf_coef, 0.0, 10.0)
         _check_range("ppo.max_grad_norm", self.max_grad_norm, 0.0, 100.0, low_open=True)
         _check_range("ppo.log_std_init", self.log_std_init, -5.0, 2.0)
+        _check_range("ppo.lstm_hidden_size", self.lstm_hidden_size, 0, 4096)
         if not self.net_arch or any(not isinstance(n, int) or not 1 <= n <= 4096 for n in self.net_arch):
             raise ValueError("ppo.net_arch must be 1 or more layer sizes in [1, 4096], got "
                              f"{short_repr(self.net_arch)}")
@@ -92,9 +97,11 @@ class PPOHyperparams:
     def sb3_kwargs(self) -> dict[str, Any]:
         """Keyword arguments for ``stable_baselines3.PPO`` (normalisation is applied to the env, not here)."""
         kwargs = asdict(self)
-        for key in ("net_arch", "log_std_init", "normalize_obs", "normalize_reward"):
+        for key in ("net_arch", "lstm_hidden_size", "log_std_init", "normalize_obs", "normalize_reward"):
             kwargs.pop(key)
         kwargs["policy_kwargs"] = {"net_arch": list(self.net_arch), "log_std_init": self.log_std_init}
+        if self.lstm_hidden_size:
+            kwargs["policy_kwargs"]["lstm_hidden_size"] = self.lstm_hidden_size
         return kwargs
 
 
@@ -245,9 +252,29 @@ class TrainConfig:
             raise ValueError("residual_base needs residual_gain > 0 (it sets the gains of a residual's base)")
         check_env_kwargs(self.env_id, self.noise, self.env_kwargs)
         check_mix(self.env_id, self.train_env_mix)
+        if self.ppo.lstm_hidden_size:
+            self._check_recurrent()
         if self.ppo.batch_size > self.ppo.n_steps * self.n_envs:
             raise ValueError(f"ppo.batch_size must be in [2, n_steps * n_envs = {self.ppo.n_steps * self.n_envs}], "
                              f"got {self.ppo.batch_size}")
+
+    def _check_recurrent(self) -> None:
+        """A recurrent policy's limits: its LSTM is its memory (no frame stack), its critic reads what its actor
+        reads, and a distilled recurrent student is not fine-tuned with PPO."""
+        if self.frame_stack > 1:
+            raise ValueError(f"frame_stack must be 1 with ppo.lstm_hidden_size > 0 (the LSTM is the policy's memory), "
+                             f"got {self.frame_stack}")
+        if self.critic_inputs:
+            raise ValueError("critic_inputs needs ppo.lstm_hidden_size 0: the privileged critic is an MLP policy's")
+        if self.teacher.name and self.timesteps > self.distill.steps:
+            raise ValueError(f"timesteps must be at most the distillation's {self.distill.steps} steps (warmup_steps + "
+                             f"rounds x round_steps) for a recurrent student: PPO fine-tuning after DAgger is "
+                             f"built for memoryless students only, got {self.timesteps}")
+
+    @property
+    def recurrent(self) -> bool:
+        """The policy is recurrent (``ppo.lstm_hidden_size`` > 0)."""
+        return self.ppo.lstm_hidden_size > 0
 
     def train_kwargs(self, index: int) -> dict[str, Any]:
         """``gym.make`` keyword arguments of training env ``index``: :meth:`make_kwargs` with its share of

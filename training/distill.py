@@ -7,7 +7,8 @@ round the envs run ``round_steps`` steps: the student's deterministic policy dri
 the episodes, all of the first round's by default), the teacher's action at every visited state is its label
 (:class:`~clutter_gym.training.teachers.TeacherLabels`), the round's samples join the aggregated data set, and the
 actor is fitted to the whole set (regression of its mean action on the labels, or for binned actions the
-cross-entropy of its bins: :mod:`clutter_gym.training.binned_actions`). A sample where the student's own action was
+cross-entropy of its bins: :mod:`clutter_gym.training.binned_actions`; a recurrent student's on whole sequences of
+its steps: :mod:`clutter_gym.training.sequences`). A sample where the student's own action was
 further than ``disagreement_threshold`` from its label may weigh more in the fit (``disagreement_weight``): the
 states where the student goes wrong are few among the many where it already follows. After each round the student
 is validated on held-out layouts (the best kept in ``best/``), checkpointed, and the round is a row of
@@ -24,14 +25,16 @@ from typing import Any
 import numpy as np
 import torch as th
 from stable_baselines3 import PPO
+from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
 from stable_baselines3.common.vec_env import VecEnv, VecNormalize
 
 from clutter_gym.training.binned_actions import decode
 from clutter_gym.training.callbacks import BestPolicyKeeper, RunMonitor
 from clutter_gym.training.config import TrainConfig
 from clutter_gym.training.distill_config import DistillSettings
-from clutter_gym.training.privileged import acted, imitation_loss
+from clutter_gym.training.privileged import imitation_loss
 from clutter_gym.training.run_dir import RunDir
+from clutter_gym.training.sequences import SequenceDataset, fit_sequences
 
 
 class Dataset:
@@ -70,12 +73,6 @@ def disagreement(student: np.ndarray, labels: np.ndarray, threshold: float) -> n
     """Whether the student's action at each state is further than ``threshold`` from the teacher's in some entry
     (normalised units, so 2 / (bins - 1) is one bin)."""
     return np.abs(np.asarray(student, dtype=float) - labels).max(axis=1) > threshold
-
-
-def error(model: PPO, obs: dict[str, np.ndarray], labels: np.ndarray, bins: int) -> float:
-    """Mean squared error of the actions the student takes (deterministically) against ``labels``."""
-    actions = acted(model.policy, {key: th.as_tensor(value) for key, value in obs.items()}, bins)
-    return float(((actions - th.as_tensor(labels)) ** 2).mean())
 
 
 def fit(model: PPO, dataset: Dataset, settings: DistillSettings, optimizer: th.optim.Optimizer, bins: int) -> float:
@@ -117,19 +114,26 @@ class Distiller:
     Args:
         run: the run folder.
         config: its settings (``teacher`` and ``distill``).
-        model: the PPO model whose actor is the student, on ``venv``.
+        model: the PPO model (a RecurrentPPO for a recurrent student) whose actor is the student, on ``venv``.
         venv: the run's training envs, behind :class:`TeacherLabels`, normalisation and frame stack.
         progress: show a progress bar.
     """
 
-    def __init__(self, run: RunDir, config: TrainConfig, model: PPO, venv: VecEnv, progress: bool) -> None:
+    def __init__(self, run: RunDir, config: TrainConfig, model: OnPolicyAlgorithm, venv: VecEnv,
+                 progress: bool) -> None:
         self.run, self.config, self.model, self.venv = run, config, model, venv
         self.settings = config.distill
         self.monitor = RunMonitor(run, config, progress)
         self.keeper = BestPolicyKeeper(run, config) if config.validate_episodes else None
-        self.dataset = Dataset(self.settings.max_samples)
+        self.recurrent = config.recurrent
+        self.dataset: Dataset | SequenceDataset = (
+            SequenceDataset(self.settings.max_samples, self.settings.sequence_length, config.ppo.lstm_hidden_size)
+            if self.recurrent else Dataset(self.settings.max_samples))
         self.optimizer = th.optim.Adam(model.policy.parameters(), lr=self.settings.learning_rate)
         self._disagreed = self._visited = 0  # the last collection's states where the student disagreed, of all
+        self._squared = 0.0  # the last collection's summed squared error of the student's actions against labels
+        self._state: Any = None  # a recurrent student's LSTM state, carried from step to step
+        self._starts = np.ones(venv.num_envs, dtype=bool)  # the envs whose episode starts at the next step
 
     def run_rounds(self) -> None:
         """The rounds not done yet (a resumed run's newest student continues)."""
@@ -162,12 +166,13 @@ class Distiller:
         share = self.settings.share(index)
         self.venv.env_method("set_teacher_share", share)
         episodes = self._collect(self.settings.round_steps, store=True)
-        obs, labels = self.dataset.arrays()
-        n = self.venv.num_envs
-        fresh = min(-(-self.settings.round_steps // n) * n, len(labels))  # the states it has not been fitted on
+        # the student's error at the states it has not been fitted on: its own actions there (deterministic)
+        unseen = self._squared / (self._visited * self.venv.action_space.shape[-1]) if index else nan
         bins = self.config.action_bins
-        unseen = error(self.model, {k: v[-fresh:] for k, v in obs.items()}, labels[-fresh:], bins) if index else nan
-        loss = fit(self.model, self.dataset, self.settings, self.optimizer, bins)
+        if isinstance(self.dataset, SequenceDataset):
+            loss = fit_sequences(self.model.policy, self.dataset, self.settings, self.optimizer, bins)
+        else:
+            loss = fit(self.model, self.dataset, self.settings, self.optimizer, bins)
         row: dict[str, float] = {"round": float(index), "step": float(self.model.num_timesteps),
                                  "samples": float(self.dataset.size), "teacher_share": share,
                                  "unseen_loss": unseen, "disagreement": self._disagreed / max(self._visited, 1),
@@ -189,20 +194,28 @@ class Distiller:
         bins = self.config.action_bins
         episodes: list[dict[str, float]] = []
         self._disagreed = self._visited = 0
+        self._squared = 0.0
         for _ in range(-(-steps // n)):
-            actions, _ = self.model.predict(self.obs, deterministic=True)
-            obs, _, _, infos = self.venv.step(actions)
+            before = self._state
+            actions, self._state = self.model.predict(self.obs, self._state, episode_start=self._starts,
+                                                      deterministic=True)
+            obs, _, dones, infos = self.venv.step(actions)
             if store:
                 labels = np.stack([info["teacher_action"] for info in infos])
-                disagreed = disagreement(decode(actions, bins) if bins else actions, labels,
-                                         self.settings.disagreement_threshold)
+                acted = decode(actions, bins) if bins else actions
+                disagreed = disagreement(acted, labels, self.settings.disagreement_threshold)
                 self._disagreed += int(disagreed.sum())
                 self._visited += n
-                self.dataset.add(self.obs, labels, np.where(disagreed, self.settings.disagreement_weight, 1.0))
+                self._squared += float(((np.asarray(acted, dtype=float) - labels) ** 2).sum())
+                weights = np.where(disagreed, self.settings.disagreement_weight, 1.0)
+                if isinstance(self.dataset, SequenceDataset):
+                    self.dataset.add(self.obs, labels, weights, self._starts, before)
+                else:
+                    self.dataset.add(self.obs, labels, weights)
             self.model.num_timesteps += n
             self.monitor.record(infos, self.model.num_timesteps)
             episodes += [info["episode_stats"] for info in infos if "episode_stats" in info]
-            self.obs = obs
+            self.obs, self._starts = obs, dones
         return episodes
 
 

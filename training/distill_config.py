@@ -58,7 +58,10 @@ class DistillSettings:
         share_decay: each later round's share is the one before times this, in [0, 1] (0: the student drives
             every episode after the first round).
         epochs: passes over the aggregated data set after each round.
-        batch_size: samples per gradient step.
+        batch_size: samples per gradient step (a recurrent student's: ``batch_size // sequence_length`` whole
+            sequences, at least one).
+        sequence_length: a recurrent student's data set is cut into sequences of this many consecutive steps of one
+            env, over which the fit unrolls its LSTM (:mod:`clutter_gym.training.sequences`).
         learning_rate: Adam step size of the fit.
         max_samples: the aggregated data set keeps the newest this many samples.
         bc_weight: weight, at the start of the PPO fine-tuning, of the squared distance between the policy's mean
@@ -77,6 +80,7 @@ class DistillSettings:
     share_decay: float = 0.0
     epochs: int = 4
     batch_size: int = 512
+    sequence_length: int = 128
     learning_rate: float = 1e-3
     max_samples: int = 1_000_000
     bc_weight: float = 0.0
@@ -92,6 +96,7 @@ class DistillSettings:
         _check("distill.share_decay", self.share_decay, 0.0, 1.0)
         _check("distill.epochs", self.epochs, 1, 1000)
         _check("distill.batch_size", self.batch_size, 1, 1 << 20)
+        _check("distill.sequence_length", self.sequence_length, 1, 100_000)
         _check("distill.learning_rate", self.learning_rate, 1e-8, 1.0)
         _check("distill.max_samples", self.max_samples, 1, 10**9)
         _check("distill.bc_weight", self.bc_weight, 0.0, 1e4)

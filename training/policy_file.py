@@ -26,7 +26,9 @@ from typing import Any
 
 import torch
 from gymnasium import spaces
+from sb3_contrib import RecurrentPPO
 from stable_baselines3 import PPO
+from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
 from stable_baselines3.common.vec_env import VecEnv
 
 from clutter_gym.training.config import TrainConfig
@@ -98,8 +100,9 @@ def saved_step(path: Path) -> int:
 
 
 def load_ppo(path: Path, config: TrainConfig, observation_space: spaces.Space, action_space: spaces.Space,
-             env: VecEnv | None = None, **distilled: Any) -> PPO:
-    """The PPO model in ``path`` for the run of ``config``, with nothing unpickled.
+             env: VecEnv | None = None, **distilled: Any) -> OnPolicyAlgorithm:
+    """The PPO model in ``path`` for the run of ``config`` (a RecurrentPPO for a recurrent policy), with nothing
+    unpickled.
 
     Args:
         path: the model.zip.
@@ -118,7 +121,14 @@ def load_ppo(path: Path, config: TrainConfig, observation_space: spaces.Space, a
     from clutter_gym.training.privileged import DistilledPPO, PrivilegedCriticPolicy
     from clutter_gym.training.vec_env import policy_name
 
-    policy_class = PrivilegedCriticPolicy if config.teacher.name else PPO.policy_aliases[policy_name(observation_space)]
+    algorithm: type[OnPolicyAlgorithm]
+    if config.recurrent:  # a student too: its DAgger rounds need no DistilledPPO (it is not fine-tuned)
+        algorithm, distilled = RecurrentPPO, {}
+        policy_class = RecurrentPPO.policy_aliases[policy_name(observation_space, recurrent=True)]
+    elif config.teacher.name:
+        algorithm, policy_class = DistilledPPO, PrivilegedCriticPolicy
+    else:
+        algorithm, policy_class = PPO, PPO.policy_aliases[policy_name(observation_space)]
     replacements: dict[str, Any] = {
         "policy_class": policy_class,
         "observation_space": observation_space,
@@ -127,7 +137,6 @@ def load_ppo(path: Path, config: TrainConfig, observation_space: spaces.Space, a
     }
     pickled = [key for key, item in read_attributes(path).items() if isinstance(item, dict) and ":serialized:" in item]
     custom = {key: replacements.get(key) for key in pickled}
-    algorithm = DistilledPPO if config.teacher.name else PPO
     try:
         model = algorithm.load(path, env=env, device="cpu", custom_objects=custom)
     except Exception as exc:  # torch's size mismatches and SB3's checks: many kinds, many lines

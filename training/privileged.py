@@ -23,12 +23,13 @@ import torch as th
 from gymnasium import spaces
 from stable_baselines3 import PPO
 from stable_baselines3.common.callbacks import BaseCallback
+from stable_baselines3.common.distributions import Distribution
 from stable_baselines3.common.policies import MultiInputActorCriticPolicy
 from stable_baselines3.common.preprocessing import get_flattened_obs_dim
 from stable_baselines3.common.torch_layers import BaseFeaturesExtractor
 from torch import nn
 
-from clutter_gym.training.binned_actions import decode, soft_targets
+from clutter_gym.training.binned_actions import soft_targets
 
 
 class SelectKeys(BaseFeaturesExtractor):
@@ -110,21 +111,21 @@ def imitation_loss(policy: MultiInputActorCriticPolicy, obs: dict[str, th.Tensor
     """How far the policy is from the teacher's ``labels`` on a batch of observations: the squared error of its mean
     action, or for binned actions (:mod:`clutter_gym.training.binned_actions`) the cross-entropy of its bins against
     the two bins either side of each label."""
-    distribution = policy.get_distribution(obs)
+    return distribution_loss(policy.get_distribution(obs), labels, bins)
+
+
+def distribution_loss(distribution: Distribution, labels: th.Tensor, bins: int = 0,
+                      weights: th.Tensor | None = None) -> th.Tensor:
+    """:func:`imitation_loss` of the policy's action ``distribution`` over a batch; with ``weights``, each sample's
+    share of the mean in proportion to its weight."""
     if not bins:
-        return ((distribution.distribution.mean - labels) ** 2).mean()
-    log_probs = th.stack([d.logits for d in distribution.distribution], dim=1)  # (batch, entries, bins), normalised
-    return -(soft_targets(labels, bins) * log_probs).sum(-1).mean()
-
-
-def acted(policy: MultiInputActorCriticPolicy, obs: dict[str, th.Tensor], bins: int = 0) -> th.Tensor:
-    """The actions the policy takes deterministically, as the env's continuous actions (no gradient)."""
-    with th.no_grad():
-        distribution = policy.get_distribution(obs)
-        if bins:
-            return th.as_tensor(decode(distribution.mode().numpy(), bins))
-        low, high = (th.as_tensor(b, dtype=th.float32) for b in (policy.action_space.low, policy.action_space.high))
-        return th.clamp(distribution.distribution.mean, low, high)
+        errors = (distribution.distribution.mean - labels) ** 2
+    else:
+        log_probs = th.stack([d.logits for d in distribution.distribution], dim=1)  # (batch, entries, bins)
+        errors = -(soft_targets(labels, bins) * log_probs).sum(-1)
+    if weights is None:
+        return errors.mean()
+    return (errors.mean(dim=1) * weights).sum() / weights.sum()
 
 
 class LabelRecorder(BaseCallback):

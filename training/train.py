@@ -12,9 +12,11 @@ from typing import Any
 
 import gymnasium as gym
 import torch
+from sb3_contrib import RecurrentPPO
 from stable_baselines3 import PPO
 from stable_baselines3.common.callbacks import CallbackList
 from stable_baselines3.common.logger import configure
+from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
 from stable_baselines3.common.vec_env import VecEnv
 
 from clutter_gym.training.agent import env_spaces
@@ -69,10 +71,14 @@ def start(config: TrainConfig, out: str | Path) -> RunDir:
     return run
 
 
-def build_model(config: TrainConfig, venv: VecEnv) -> PPO:
-    """A fresh PPO on ``venv`` with the config's hyperparameters and seed (on the CPU); with a teacher, the
-    :class:`DistilledPPO` whose actor the distillation fits (and whose critic reads ``critic_inputs``)."""
+def build_model(config: TrainConfig, venv: VecEnv) -> OnPolicyAlgorithm:
+    """A fresh PPO on ``venv`` with the config's hyperparameters and seed (on the CPU): sb3-contrib's RecurrentPPO
+    for a recurrent policy; with a teacher, the :class:`DistilledPPO` whose actor the distillation fits (and whose
+    critic reads ``critic_inputs``)."""
     kwargs = config.ppo.sb3_kwargs()
+    if config.recurrent:  # a student's DAgger rounds fit its actor; the LSTM critic serves PPO without a teacher
+        return RecurrentPPO(policy_name(venv.observation_space, recurrent=True), venv, seed=config.seed, device="cpu",
+                            verbose=0, **kwargs)
     if not config.teacher.name:
         return PPO(policy_name(venv.observation_space), venv, seed=config.seed, device="cpu", verbose=0, **kwargs)
     kwargs["policy_kwargs"]["critic_inputs"] = config.critic_inputs
@@ -139,7 +145,7 @@ def train(run: RunDir, progress: bool = True, timesteps: int | None = None, trus
         else:
             try:
                 model = load_ppo(point[1] / MODEL_FILE, config, venv.observation_space, venv.action_space, env=venv,
-                                 **(distilled_kwargs(config) if config.teacher.name else {}))
+                                 **(distilled_kwargs(config) if config.teacher.name and not config.recurrent else {}))
             except ValueError as exc:
                 raise IncompatibleRunError(f"{point[1]} cannot be continued from: {exc}") from None
             model.set_random_seed(config.seed + done)
