@@ -125,10 +125,9 @@ class Distiller:
         self.settings = config.distill
         self.monitor = RunMonitor(run, config, progress)
         self.keeper = BestPolicyKeeper(run, config) if config.validate_episodes else None
-        self.recurrent = config.recurrent
         self.dataset: Dataset | SequenceDataset = (
             SequenceDataset(self.settings.max_samples, self.settings.sequence_length, config.ppo.lstm_hidden_size)
-            if self.recurrent else Dataset(self.settings.max_samples))
+            if config.recurrent else Dataset(self.settings.max_samples))
         self.optimizer = th.optim.Adam(model.policy.parameters(), lr=self.settings.learning_rate)
         self._disagreed = self._visited = 0  # the last collection's states where the student disagreed, of all
         self._squared = 0.0  # the last collection's summed squared error of the student's actions against labels
