@@ -119,12 +119,13 @@ def load_ppo(path: Path, config: TrainConfig, observation_space: spaces.Space, a
             the spaces make, in one line.
     """
     from clutter_gym.training.privileged import DistilledPPO, PrivilegedCriticPolicy
+    from clutter_gym.training.recurrent_policy import recurrent_policy
     from clutter_gym.training.vec_env import policy_name
 
     algorithm: type[OnPolicyAlgorithm]
     if config.recurrent:  # a student too: its DAgger rounds need no DistilledPPO (it is not fine-tuned)
         algorithm, distilled = RecurrentPPO, {}
-        policy_class = RecurrentPPO.policy_aliases[policy_name(observation_space, recurrent=True)]
+        policy_class = recurrent_policy(isinstance(observation_space, spaces.Dict))
     elif config.teacher.name:
         algorithm, policy_class = DistilledPPO, PrivilegedCriticPolicy
     else:

@@ -12,6 +12,7 @@ from typing import Any
 
 import gymnasium as gym
 import torch
+from gymnasium import spaces
 from sb3_contrib import RecurrentPPO
 from stable_baselines3 import PPO
 from stable_baselines3.common.callbacks import CallbackList
@@ -27,6 +28,7 @@ from clutter_gym.training.evaluate import evaluate
 from clutter_gym.training.normalizer import NORMALIZER_FILE, normalizer_path, read_statistics
 from clutter_gym.training.policy_file import load_ppo, saved_step
 from clutter_gym.training.privileged import DistilledPPO, LabelRecorder, PrivilegedCriticPolicy
+from clutter_gym.training.recurrent_policy import recurrent_policy
 from clutter_gym.training.run_dir import MODEL_FILE, IncompatibleRunError, RunDir
 from clutter_gym.training.vec_env import policy_name, training_env
 from clutter_gym.util.atomic import write_text_atomically
@@ -77,8 +79,8 @@ def build_model(config: TrainConfig, venv: VecEnv) -> OnPolicyAlgorithm:
     critic reads ``critic_inputs``)."""
     kwargs = config.ppo.sb3_kwargs()
     if config.recurrent:  # a student's DAgger rounds fit its actor; the LSTM critic serves PPO without a teacher
-        return RecurrentPPO(policy_name(venv.observation_space, recurrent=True), venv, seed=config.seed, device="cpu",
-                            verbose=0, **kwargs)
+        policy = recurrent_policy(isinstance(venv.observation_space, spaces.Dict))
+        return RecurrentPPO(policy, venv, seed=config.seed, device="cpu", verbose=0, **kwargs)
     if not config.teacher.name:
         return PPO(policy_name(venv.observation_space), venv, seed=config.seed, device="cpu", verbose=0, **kwargs)
     kwargs["policy_kwargs"]["critic_inputs"] = config.critic_inputs

@@ -110,7 +110,5 @@ def training_env(config: TrainConfig, seed: int, normalizer_file: Path | None = 
     return stack_frames(venv, config.frame_stack)
 
 
-def policy_name(space: spaces.Space, recurrent: bool = False) -> str:
-    """SB3's (or, ``recurrent``, sb3-contrib's RecurrentPPO's) policy alias for observations of ``space``."""
-    name = "MultiInput" if isinstance(space, spaces.Dict) else "Mlp"
-    return f"{name}LstmPolicy" if recurrent else f"{name}Policy"
+def policy_name(space: spaces.Space) -> str:
+    return "MultiInputPolicy" if isinstance(space, spaces.Dict) else "MlpPolicy"

@@ -8,13 +8,13 @@ import pytest
 import torch as th
 from gymnasium import spaces
 from sb3_contrib import RecurrentPPO
-from sb3_contrib.common.recurrent.policies import RecurrentMultiInputActorCriticPolicy
 
 from clutter_gym.training import load
 from clutter_gym.training.config import config_for
 from clutter_gym.training.distill_config import DistillSettings
 from clutter_gym.training.evaluate import evaluate
 from clutter_gym.training.policy_file import load_ppo
+from clutter_gym.training.recurrent_policy import MultiInputLstmBesidePolicy
 from clutter_gym.training.run_dir import MODEL_FILE
 from clutter_gym.training.sequences import SequenceDataset, fit_sequences
 from clutter_gym.training.train import resume_point, start, train
@@ -62,7 +62,7 @@ def test_a_recurrent_fit_remembers_a_cue_that_a_memoryless_policy_cannot_see():
     """After the first step the observation is 0 whatever the cue, so a memoryless policy can only answer 0 there;
     the LSTM, fitted on sequences of two episodes each (reset at each start), must answer the cue."""
     space = spaces.Dict({"x": spaces.Box(-1, 1, (1,))})
-    policy = RecurrentMultiInputActorCriticPolicy(space, spaces.Box(-1, 1, (1,)), lambda _: 1e-2, net_arch=[16],
+    policy = MultiInputLstmBesidePolicy(space, spaces.Box(-1, 1, (1,)), lambda _: 1e-2, net_arch=[16],
                                                   lstm_hidden_size=16)
     th.manual_seed(0)
     data = SequenceDataset(max_samples=10_000, length=12, hidden_size=16)
@@ -104,7 +104,7 @@ def test_a_recurrent_student_is_a_run_that_loads_acts_with_its_state_evaluates_a
     assert rows[0]["samples"] <= 256 < rows[1]["samples"] <= 512  # complete sequences only: tails wait
     assert np.isfinite(rows[1]["unseen_loss"])
     agent = load(run.root)
-    assert isinstance(agent.model, RecurrentPPO)
+    assert isinstance(agent.model, RecurrentPPO) and isinstance(agent.model.policy, MultiInputLstmBesidePolicy)
     env = agent.make_env()
     obs, _ = env.reset(seed=0)
     action, state = agent.predict(obs)
