@@ -35,7 +35,7 @@ TYPED_MODULES = ("clutter_gym.datatypes", "clutter_gym.interfaces", "clutter_gym
                  "clutter_gym.worlds.near_field", "clutter_gym.worlds.pool",
                  "clutter_gym.urdf.checks", "clutter_gym.urdf.geometry", "clutter_gym.urdf.kinematics",
                  "clutter_gym.collision.build", "clutter_gym.sensors",
-                 "clutter_gym.sensors.odometry", "clutter_gym.sensors.settings", "clutter_gym.noise.profiles",
+                 "clutter_gym.sensors.odometry", "clutter_gym.builder", "clutter_gym.noise.profiles",
                  "clutter_gym.noise.odometry",
                  "clutter_gym.robots.omni", "clutter_gym.robots.registry")
 #: and these packages, every module in them: the step stages, the dynamics parts and the Sim with its parts

@@ -4,21 +4,20 @@ touching anything."""
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
+from clutter_gym.builder import EnvSettings, sensor_configs
 from clutter_gym.collision import RobotCollisionModel, collision_checker
 from clutter_gym.core import ClutterEnv
-from clutter_gym.make_checks import check_env_settings, check_flags, check_numbers
-from clutter_gym.noise.profiles import NoiseProfile, resolve_noise
+from clutter_gym.noise.profiles import resolve_noise
 from clutter_gym.robots import Multirotor, MultirotorConfig
 from clutter_gym.robots.multirotor_model import IMU_LINK, SENSOR_LINK
 from clutter_gym.robots.registry import resolve_robot
 from clutter_gym.robots.rigid_body import RigidBody
 from clutter_gym.sensors import LidarConfig, build_sensors
-from clutter_gym.sensors.settings import sensor_configs
 from clutter_gym.sim import GRAVITY
 from clutter_gym.tasks import FlyRewardWeights, FlyTask
 from clutter_gym.util.checks import is_number
@@ -34,6 +33,24 @@ MIN_PHYSICS_HZ = 60.0
 #: needs only the margin, and resolving the whole volume asked FCL about every shape and obstacle pair each step
 #: (docs/quadrotor.md, "Throughput").
 CLEARANCE_RANGE = 1.0
+
+
+#: Every setting of ClutterFly-v1 by its flat name (its gym.make argument) with its default, in the order of its page;
+#: clutter_gym.builder.ALIASES gives each its place in the nested form.
+SETTINGS = EnvSettings("ClutterFly-v1", MIN_PHYSICS_HZ, {
+    "render_mode": None, "sensors": ("imu",), "noise": "none",
+    "volume_size": (10.0, 10.0, 4.0), "obstacle_density": 0.05, "ceiling": True,
+    "n_rays": 36, "lidar_fov": 2 * math.pi, "lidar_range": LidarConfig.max_range, "lidar_channels": 8,
+    "lidar_vertical_fov": math.radians(60.0), "lidar_caster": "exact",
+    "camera_size": (64, 64), "camera_modes": ("depth",), "camera_fov": math.radians(58.0), "camera_far": 10.0,
+    "camera_renderer": None,
+    "physics_hz": 240.0, "control_hz": 30.0, "solver_iterations": 10, "aero": (),
+    "success_radius": 0.3, "clearance_margin": 0.1, "max_tilt": math.pi / 2, "terminate_on_collision": False,
+    "contact_tolerance": 1e-3, "collision_fidelity": "primitive", "collision_padding": 0.0, "swept_speed": 0.2,
+    "progress_weight": 10.0, "success_weight": 10.0, "crash_weight": 10.0, "contact_weight": 1.0,
+    "clearance_weight": 0.5, "control_weight": 0.01, "attitude_weight": 0.1, "rate_weight": 0.01,
+    "subgoal_lookahead": 0.0, "observe_thrust_ratio": False, "robot": "quadrotor",
+})
 
 
 class ClutterFlyEnv(ClutterEnv):
@@ -150,7 +167,11 @@ class ClutterFlyEnv(ClutterEnv):
     Self-collision is not checked: every link of the airframe is fixed to the base, so no pair can move into
     another.
 
-    Defaults are in the signature.
+    Settings also nest, by the part they set, as ClutterNav-v1's: ``sensors`` (a mapping from each sensor to its
+    settings, ``{"imu": {}, "lidar": {"n_channels": 16}}``), ``world``, ``reward`` and ``collision``; the table of
+    defaults gives each argument's place.
+
+    Defaults are in the signature (the module's ``SETTINGS``).
 
     ## Version history
 
@@ -160,94 +181,38 @@ class ClutterFlyEnv(ClutterEnv):
     * v0 (clutter-gym 0.1.0-0.2.0): initial release.
     """
 
-    def __init__(
-        self,
-        render_mode: str | None = None,
-        sensors: Sequence[str] = ("imu",),
-        noise: str | Mapping[str, Any] | NoiseProfile | None = "none",
-        volume_size: Sequence[float] = (10.0, 10.0, 4.0),
-        obstacle_density: float = 0.05,
-        ceiling: bool = True,
-        n_rays: int = 36,
-        lidar_fov: float = 2 * math.pi,
-        lidar_range: float = LidarConfig.max_range,
-        lidar_channels: int = 8,
-        lidar_vertical_fov: float = math.radians(60.0),
-        lidar_caster: str = "exact",
-        camera_size: tuple[int, int] = (64, 64),
-        camera_modes: Sequence[str] = ("depth",),
-        camera_fov: float = math.radians(58.0),
-        camera_far: float = 10.0,
-        camera_renderer: str | None = None,
-        physics_hz: float = 240.0,
-        control_hz: float = 30.0,
-        solver_iterations: int = 10,
-        aero: Sequence[str] = (),
-        success_radius: float = 0.3,
-        clearance_margin: float = 0.1,
-        max_tilt: float = math.pi / 2,
-        terminate_on_collision: bool = False,
-        contact_tolerance: float = 1e-3,
-        collision_fidelity: str = "primitive",
-        collision_padding: float = 0.0,
-        swept_speed: float = 0.2,
-        progress_weight: float = 10.0,
-        success_weight: float = 10.0,
-        crash_weight: float = 10.0,
-        contact_weight: float = 1.0,
-        clearance_weight: float = 0.5,
-        control_weight: float = 0.01,
-        attitude_weight: float = 0.1,
-        rate_weight: float = 0.01,
-        subgoal_lookahead: float = 0.0,
-        observe_thrust_ratio: bool = False,
-        robot: str | Mapping[str, Any] = "quadrotor",
-    ) -> None:
-        check_numbers(ClutterFlyEnv.__init__, locals())
-        check_env_settings(render_mode, physics_hz, control_hz, solver_iterations, contact_tolerance,
-                           env_id="ClutterFly-v1", min_physics_hz=MIN_PHYSICS_HZ)
-        check_flags(ceiling=ceiling, terminate_on_collision=terminate_on_collision,
-                    observe_thrust_ratio=observe_thrust_ratio)
-        if not (swept_speed > 0.0):  # inf allowed: no swept checks
-            raise ValueError(f"swept_speed must be > 0 m/s (inf disables swept checks), got {swept_speed!r}")
-        if isinstance(aero, str) or not isinstance(aero, Sequence):
-            raise ValueError(f"aero must be a tuple of names from ('drag', 'ground_effect'), got {aero!r}")
-        make_flyer = resolve_robot(robot, "multirotor", "ClutterFly-v1")
-        flyer: Multirotor = make_flyer(MultirotorConfig(aero=tuple(aero), observe_thrust_ratio=observe_thrust_ratio))
-        spec = _volume_spec(volume_size, obstacle_density, ceiling)
+    @SETTINGS.sign
+    def __init__(self, **settings: Any) -> None:
+        s = SETTINGS.resolve(settings)
+        if isinstance(s.aero, str) or not isinstance(s.aero, Sequence):
+            raise ValueError(f"aero must be a tuple of names from ('drag', 'ground_effect'), got {s.aero!r}")
+        make_flyer = resolve_robot(s.robot, "multirotor", SETTINGS.env_id)
+        flyer: Multirotor = make_flyer(MultirotorConfig(aero=tuple(s.aero), observe_thrust_ratio=s.observe_thrust_ratio))
+        spec = _volume_spec(**s.group("world"))
         # the airframe is rigid (fixed joints only), so self-collision is off and no allowed-collision matrix is
         # needed; the task reads only the robot's clearance, so no link's own is resolved
-        checker = collision_checker(flyer, flyer.model.tracked_links, collision_fidelity, collision_padding,
-                                    contact_tolerance, max(CLEARANCE_RANGE, clearance_margin), control_hz,
-                                    self_collision=False, swept_speed=swept_speed, per_link=False)
+        checker = collision_checker(flyer, flyer.model.tracked_links,
+                                    clearance_range=max(CLEARANCE_RANGE, s.clearance_margin), control_hz=s.control_hz,
+                                    self_collision=False, per_link=False, **s.group("collision"))
         radius = bounding_radius(checker.model, flyer.mass_properties)
-        configs = sensor_configs(locals(), control_hz, sensor_link=SENSOR_LINK, imu_link=IMU_LINK)
-        profile = resolve_noise(noise)
-        sensor_objects = build_sensors(sensors, profile, configs, flyer)
-        task = FlyTask(
-            FlyRewardWeights(progress=progress_weight, success=success_weight, crash=crash_weight,
-                             contact=contact_weight, clearance=clearance_weight, control=control_weight,
-                             attitude=attitude_weight, rate=rate_weight),
-            spec=spec,
-            robot_radius=radius,
-            success_radius=success_radius,
-            clearance_margin=clearance_margin,
-            max_tilt=max_tilt,
-            terminate_on_collision=terminate_on_collision,
-            hover_action=flyer.hover_action(GRAVITY),
-            subgoal_lookahead=subgoal_lookahead,
-        )
+        configs = sensor_configs(s, sensor_link=SENSOR_LINK, imu_link=IMU_LINK)
+        profile = resolve_noise(s.noise)
+        sensors = build_sensors(s.sensors, profile, configs, flyer)
+        task = FlyTask(FlyRewardWeights(**s.group("reward")), spec=spec, robot_radius=radius,
+                       success_radius=s.success_radius, clearance_margin=s.clearance_margin, max_tilt=s.max_tilt,
+                       terminate_on_collision=s.terminate_on_collision, hover_action=flyer.hover_action(GRAVITY),
+                       subgoal_lookahead=s.subgoal_lookahead)
         super().__init__(
-            physics_hz=physics_hz,
-            solver_iterations=solver_iterations,
+            physics_hz=s.physics_hz,
+            solver_iterations=s.solver_iterations,
             robot=flyer,
             arena=VolumeArena(spec, radius, floor_obstacle=True),
-            sensors=sensor_objects,
+            sensors=sensors,
             checker=checker,
             task=task,
-            control_hz=control_hz,
+            control_hz=s.control_hz,
             noise=profile,
-            render_mode=render_mode,
+            render_mode=s.render_mode,
         )
 
 
@@ -263,7 +228,7 @@ def bounding_radius(model: RobotCollisionModel, body: RigidBody) -> float:
     return reach
 
 
-def _volume_spec(size: Any, density: float, ceiling: bool) -> VolumeSpec:
+def _volume_spec(size: Any, obstacle_density: float, ceiling: bool) -> VolumeSpec:
     """The generated volume of the env's arguments; errors name ``volume_size`` where the spec says ``size``. In a
     volume lower than 2 m the wall openings shrink with the height (:data:`OPENING_SHARE`), so every height the spec
     allows can be generated."""
@@ -273,7 +238,7 @@ def _volume_spec(size: Any, density: float, ceiling: bool) -> VolumeSpec:
         (width, tall), (width_share, tall_share) = OPENING_SIZE, OPENING_SHARE
         opening = (min(width, width_share * float(height)), min(tall, tall_share * float(height)))
     try:
-        return VolumeSpec(size=size, obstacle_density=density, ceiling=ceiling, opening_size=opening)
+        return VolumeSpec(size=size, obstacle_density=obstacle_density, ceiling=ceiling, opening_size=opening)
     except ValueError as exc:
         message = str(exc)
         raise ValueError("volume_" + message if message.startswith("size") else message) from None

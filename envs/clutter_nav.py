@@ -3,21 +3,20 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
+from clutter_gym.builder import EnvSettings, sensor_configs
 from clutter_gym.collision import collision_checker
 from clutter_gym.core import ClutterEnv
-from clutter_gym.dynamics import check_dynamics_mode, ground_dynamics
-from clutter_gym.make_checks import check_env_settings, check_flags, check_numbers, check_physics_mode
-from clutter_gym.noise.profiles import NoiseProfile, resolve_noise
+from clutter_gym.dynamics import ground_dynamics
+from clutter_gym.noise.profiles import resolve_noise
 from clutter_gym.robots import DiffDriveRobot
 from clutter_gym.robots.registry import ground_robot
 from clutter_gym.robots.safety import SafetyConfig, SafetyFilter
 from clutter_gym.sensors import LidarConfig, build_sensors, sensor_links
-from clutter_gym.sensors.settings import sensor_configs
 from clutter_gym.stages import ForwardOnly, SafetyMonitor
 from clutter_gym.tasks import NavigateTask, NavRewardWeights
 from clutter_gym.urdf.kinematics import UrdfKinematics
@@ -26,6 +25,26 @@ from clutter_gym.worlds import ClutterArena, ClutterSpec
 #: Hz, the lowest physics rate: below it the wheels' contact with the floor does not settle, and a stopped robot creeps
 #: and bounces on (docs/envs.md, "Physics rate").
 MIN_PHYSICS_HZ = 60.0
+
+
+#: Every setting of ClutterNav-v1 by its flat name (its gym.make argument) with its default, in the order of its page;
+#: clutter_gym.builder.ALIASES gives each its place in the nested form.
+SETTINGS = EnvSettings("ClutterNav-v1", MIN_PHYSICS_HZ, {
+    "render_mode": None, "sensors": ("lidar", "imu"), "noise": "none",
+    "arena_size": 6.0, "obstacle_density": 0.12, "movable_obstacles": 0.0,
+    "n_rays": 64, "lidar_fov": 2 * math.pi, "lidar_range": LidarConfig.max_range, "lidar_mount_height": 0.0,
+    "lidar_channels": 1, "lidar_vertical_fov": 0.0, "lidar_caster": "exact",
+    "camera_size": (84, 84), "camera_modes": ("rgb", "depth"), "camera_fov": math.radians(58.0), "camera_far": 10.0,
+    "camera_renderer": "tiny",
+    "physics_hz": 120.0, "control_hz": 20.0, "solver_iterations": 10,
+    "max_linear_speed": 0.5, "max_angular_speed": 2.0, "success_radius": 0.3, "clearance_margin": 0.1,
+    "terminate_on_collision": False, "contact_tolerance": 1e-3, "collision_fidelity": "primitive",
+    "collision_padding": 0.0,
+    "progress_weight": 10.0, "success_weight": 10.0, "contact_weight": 1.0, "clearance_weight": 0.5,
+    "control_weight": 0.01, "time_weight": 0.01, "subgoal_lookahead": 0.0, "reverse_weight": 0.0,
+    "safety_horizon": 0.0, "safety_margin": 0.02, "safety_recovery": 0.0, "reverse": True, "observe_bearing": False,
+    "robot": "diffbot", "physics": "auto", "dynamics": "physics",
+})
 
 
 class ClutterNavEnv(ClutterEnv):
@@ -148,7 +167,13 @@ class ClutterNavEnv(ClutterEnv):
     ``worlds/floor/path.py``), as a global planner on a map hands waypoints to a local controller. The default
     env is mapless: it knows only the goal's relative position.
 
-    Defaults are in the signature.
+    Settings also nest, by the part they set: ``sensors`` takes a mapping from each sensor the env carries to its
+    settings (``{"lidar": {"n_rays": 128}, "imu": {}}``: the LIDAR and the IMU, in that order), and ``world``,
+    ``reward``, ``safety`` and ``collision`` each take a mapping of theirs (``reward={"progress": 5.0}``). A nested
+    name is the field of the part's own settings object; the table of defaults gives each argument's place. A
+    setting given both flat and nested is refused; a bad value is named by its flat argument.
+
+    Defaults are in the signature (the module's ``SETTINGS``).
 
     ## Dynamics
 
@@ -187,102 +212,41 @@ class ClutterNavEnv(ClutterEnv):
       (``reverse=False``) and the bearing angle in the goal entry (``observe_bearing``) added, off by default.
     """
 
-    def __init__(
-        self,
-        render_mode: str | None = None,
-        sensors: Sequence[str] = ("lidar", "imu"),
-        noise: str | Mapping[str, Any] | NoiseProfile | None = "none",
-        arena_size: float = 6.0,
-        obstacle_density: float = 0.12,
-        movable_obstacles: float = 0.0,
-        n_rays: int = 64,
-        lidar_fov: float = 2 * math.pi,
-        lidar_range: float = LidarConfig.max_range,
-        lidar_mount_height: float = 0.0,
-        lidar_channels: int = 1,
-        lidar_vertical_fov: float = 0.0,
-        lidar_caster: str = "exact",
-        camera_size: tuple[int, int] = (84, 84),
-        camera_modes: Sequence[str] = ("rgb", "depth"),
-        camera_fov: float = math.radians(58.0),
-        camera_far: float = 10.0,
-        camera_renderer: str = "tiny",
-        physics_hz: float = 120.0,
-        control_hz: float = 20.0,
-        solver_iterations: int = 10,
-        max_linear_speed: float = 0.5,
-        max_angular_speed: float = 2.0,
-        success_radius: float = 0.3,
-        clearance_margin: float = 0.1,
-        terminate_on_collision: bool = False,
-        contact_tolerance: float = 1e-3,
-        collision_fidelity: str = "primitive",
-        collision_padding: float = 0.0,
-        progress_weight: float = 10.0,
-        success_weight: float = 10.0,
-        contact_weight: float = 1.0,
-        clearance_weight: float = 0.5,
-        control_weight: float = 0.01,
-        time_weight: float = 0.01,
-        subgoal_lookahead: float = 0.0,
-        reverse_weight: float = 0.0,
-        safety_horizon: float = 0.0,
-        safety_margin: float = 0.02,
-        safety_recovery: float = 0.0,
-        reverse: bool = True,
-        observe_bearing: bool = False,
-        robot: str | Mapping[str, Any] = "diffbot",
-        physics: str = "auto",
-        dynamics: str = "physics",
-    ) -> None:
-        check_numbers(ClutterNavEnv.__init__, locals())
-        check_env_settings(render_mode, physics_hz, control_hz, solver_iterations, contact_tolerance,
-                           env_id="ClutterNav-v1", min_physics_hz=MIN_PHYSICS_HZ)
-        check_physics_mode(physics)
-        check_dynamics_mode(dynamics)
-        check_flags(terminate_on_collision=terminate_on_collision, reverse=reverse, observe_bearing=observe_bearing)
-        self.forward_only = not reverse  # the linear action maps onto stand..full speed (stages.ForwardOnly)
-        drive = ground_robot(robot, "ClutterNav-v1", max_linear_speed, max_angular_speed)
+    @SETTINGS.sign
+    def __init__(self, **settings: Any) -> None:
+        s = SETTINGS.resolve(settings)
+        self.forward_only = not s.reverse  # the linear action maps onto stand..full speed (stages.ForwardOnly)
+        drive = ground_robot(s.robot, SETTINGS.env_id, s.max_linear_speed, s.max_angular_speed)
         base = drive.base
-        spec = ClutterSpec(arena_size=arena_size, obstacle_density=obstacle_density,
-                           movable_fraction=movable_obstacles)
-        configs = sensor_configs(locals(), control_hz)
-        lidar = configs["lidar"]
-        profile = resolve_noise(noise)
-        sensor_objects = build_sensors(sensors, profile, configs, drive)
-        _check_sensor_links(sensors, base)
-        task = NavigateTask(
-            NavRewardWeights(progress=progress_weight, success=success_weight, contact=contact_weight,
-                             clearance=clearance_weight, control=control_weight, time=time_weight,
-                             reverse=reverse_weight),
-            success_radius=success_radius,
-            clearance_margin=clearance_margin,
-            terminate_on_collision=terminate_on_collision,
-            max_goal_distance=math.sqrt(2.0) * arena_size,
-            spec=spec,
-            robot_radius=base.footprint_radius,
-            subgoal_lookahead=subgoal_lookahead,
-            observe_bearing=observe_bearing,
-        )
+        spec = ClutterSpec(**s.group("world"))
+        configs = sensor_configs(s)
+        profile = resolve_noise(s.noise)
+        sensors = build_sensors(s.sensors, profile, configs, drive)
+        _check_sensor_links(s.sensors, base)
+        task = NavigateTask(NavRewardWeights(**s.group("reward")), success_radius=s.success_radius,
+                            clearance_margin=s.clearance_margin, terminate_on_collision=s.terminate_on_collision,
+                            max_goal_distance=math.sqrt(2.0) * s.arena_size, spec=spec,
+                            robot_radius=base.footprint_radius, subgoal_lookahead=s.subgoal_lookahead,
+                            observe_bearing=s.observe_bearing)
         # the whole arena is in range: every step reports the distance to the nearest obstacle
-        checker = collision_checker(drive, base.tracked_links, collision_fidelity, collision_padding, contact_tolerance,
-                                    math.sqrt(2.0) * arena_size, control_hz)
-        safety = _safety_filter(SafetyConfig(safety_horizon, safety_margin, safety_recovery), sensors, lidar, drive,
-                                control_hz)
+        checker = collision_checker(drive, base.tracked_links, clearance_range=math.sqrt(2.0) * s.arena_size,
+                                    control_hz=s.control_hz, **s.group("collision"))
+        safety = _safety_filter(SafetyConfig(**s.group("safety")), s.sensors, configs["lidar"], drive, s.control_hz)
         super().__init__(
-            physics_hz=physics_hz,
-            solver_iterations=solver_iterations,
+            physics_hz=s.physics_hz,
+            solver_iterations=s.solver_iterations,
             robot=drive,
             arena=ClutterArena(spec, base.footprint_radius),
-            sensors=sensor_objects,
+            sensors=sensors,
             checker=checker,
             task=task,
-            control_hz=control_hz,
+            control_hz=s.control_hz,
             noise=profile,
-            render_mode=render_mode,
+            render_mode=s.render_mode,
             stages=[*([ForwardOnly()] if self.forward_only else []), *([SafetyMonitor(safety)] if safety else [])],
-            physics=physics,
-            dynamics=ground_dynamics(dynamics, drive, physics_hz, solver_iterations, control_hz, contact_tolerance),
+            physics=s.physics,
+            dynamics=ground_dynamics(s.dynamics, drive, s.physics_hz, s.solver_iterations, s.control_hz,
+                                     s.contact_tolerance),
         )
 
 

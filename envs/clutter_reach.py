@@ -3,13 +3,12 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
 from typing import Any
 
+from clutter_gym.builder import EnvSettings
 from clutter_gym.collision import collision_checker
 from clutter_gym.core import ClutterEnv
-from clutter_gym.make_checks import check_env_settings, check_flags, check_numbers, check_physics_mode
-from clutter_gym.noise.profiles import NoiseProfile, resolve_noise
+from clutter_gym.noise.profiles import resolve_noise
 from clutter_gym.planning.joint_space import ArmPlanner
 from clutter_gym.robots.arm import Arm, ArmConfig
 from clutter_gym.robots.registry import resolve_robot
@@ -26,6 +25,23 @@ SUBGOAL_MARGIN = 0.02
 #: The wrist camera's frame in the end effector's (roll, pitch, yaw): it looks along the hand's z axis (its approach
 #: axis), its image's up along the hand's x axis.
 WRIST_CAMERA_RPY = (math.pi, -math.pi / 2, 0.0)
+
+
+#: Every setting of ClutterReach-v1 by its flat name (its gym.make argument) with its default, in the order of its
+#: page; clutter_gym.builder.ALIASES gives each its place in the nested form.
+SETTINGS = EnvSettings("ClutterReach-v1", MIN_PHYSICS_HZ, {
+    "render_mode": None, "control": "joint_velocity", "max_joint_speed": 0.5, "max_ee_step": 0.05,
+    "collision_fidelity": "convex", "collision_padding": 0.0, "self_collision": True,
+    "n_obstacles": 6, "movable_obstacles": 0.0, "shelf": True, "noise": "none",
+    "physics_hz": 240.0, "control_hz": 20.0, "solver_iterations": 10,
+    "success_radius": 0.05, "clearance_margin": 0.05, "clearance_range": 0.3,
+    "observe_directions": False, "observe_target_offset": False, "terminate_on_collision": False,
+    "contact_tolerance": 1e-3, "swept_speed": 0.2,
+    "progress_weight": 10.0, "success_weight": 10.0, "contact_weight": 1.0, "self_contact_weight": 1.0,
+    "clearance_weight": 0.2, "tunneling_weight": 1.0, "control_weight": 0.005, "subgoal_lookahead": 0.0,
+    "robot": "panda", "physics": "auto", "sensors": (),
+    "camera_size": (32, 32), "camera_modes": ("depth",), "camera_fov": math.radians(58.0), "camera_far": 2.0,
+})
 
 
 class ClutterReachEnv(ClutterEnv):
@@ -118,6 +134,10 @@ class ClutterReachEnv(ClutterEnv):
     ``contact_tolerance`` m; ``swept_speed`` m/s (``inf`` turns swept checks off); ``*_weight`` reward weights;
     ``subgoal_lookahead`` rad [0, 3] (0: off).
 
+    Settings also nest, by the part they set, as ClutterNav-v1's: ``sensors`` (``{"camera": {"size": (64, 64)}}``),
+    ``world`` (``{"n_obstacles": 3, "shelf": False}``), ``reward`` and ``collision``; the table of defaults gives each
+    argument's place.
+
     ``subgoal_lookahead > 0`` makes the env map-based: at every reset a joint-space planner
     (``clutter_gym.planning.joint_space``: IK goals, RRT-Connect, shortcutting, 2 cm clearance plus
     ``collision_padding`` at ``collision_fidelity``) plans on the known layout, as a global planner hands a local
@@ -132,93 +152,40 @@ class ClutterReachEnv(ClutterEnv):
       added, off by default.
     """
 
-    def __init__(
-        self,
-        render_mode: str | None = None,
-        control: str = "joint_velocity",
-        max_joint_speed: float = 0.5,
-        max_ee_step: float = 0.05,
-        collision_fidelity: str = "convex",
-        collision_padding: float = 0.0,
-        self_collision: bool = True,
-        n_obstacles: int = 6,
-        movable_obstacles: float = 0.0,
-        shelf: bool = True,
-        noise: str | Mapping[str, Any] | NoiseProfile | None = "none",
-        physics_hz: float = 240.0,
-        control_hz: float = 20.0,
-        solver_iterations: int = 10,
-        success_radius: float = 0.05,
-        clearance_margin: float = 0.05,
-        clearance_range: float = 0.3,
-        observe_directions: bool = False,
-        observe_target_offset: bool = False,
-        terminate_on_collision: bool = False,
-        contact_tolerance: float = 1e-3,
-        swept_speed: float = 0.2,
-        progress_weight: float = 10.0,
-        success_weight: float = 10.0,
-        contact_weight: float = 1.0,
-        self_contact_weight: float = 1.0,
-        clearance_weight: float = 0.2,
-        tunneling_weight: float = 1.0,
-        control_weight: float = 0.005,
-        subgoal_lookahead: float = 0.0,
-        robot: str = "panda",
-        physics: str = "auto",
-        sensors: Sequence[str] = (),
-        camera_size: tuple[int, int] = (32, 32),
-        camera_modes: Sequence[str] = ("depth",),
-        camera_fov: float = math.radians(58.0),
-        camera_far: float = 2.0,
-    ) -> None:
-        check_numbers(ClutterReachEnv.__init__, locals())
-        check_env_settings(render_mode, physics_hz, control_hz, solver_iterations, contact_tolerance,
-                           env_id="ClutterReach-v1", min_physics_hz=MIN_PHYSICS_HZ)
-        check_physics_mode(physics)
-        check_flags(self_collision=self_collision, shelf=shelf, observe_directions=observe_directions,
-                    observe_target_offset=observe_target_offset, terminate_on_collision=terminate_on_collision)
-        if not (math.isfinite(clearance_range) and 0.01 <= clearance_range <= 2.0):
-            raise ValueError(f"clearance_range must be in [0.01, 2] metres, got {clearance_range!r}")
-        if not (swept_speed > 0.0):  # inf allowed: no swept checks
-            raise ValueError(f"swept_speed must be > 0 m/s (inf disables swept checks), got {swept_speed!r}")
-        if tuple(sensors) not in ((), ("camera",)):
-            raise ValueError(f"sensors must be () or ('camera',) (a wrist camera), got {sensors!r}")
-        make_arm = resolve_robot(robot, "arm", "ClutterReach-v1")
-        arm: Arm = make_arm(ArmConfig(control, max_joint_speed, max_ee_step), control_dt=1.0 / control_hz)
+    @SETTINGS.sign
+    def __init__(self, **settings: Any) -> None:
+        s = SETTINGS.resolve(settings)
+        if not (math.isfinite(s.clearance_range) and 0.01 <= s.clearance_range <= 2.0):
+            raise ValueError(f"clearance_range must be in [0.01, 2] metres, got {s.clearance_range!r}")
+        if tuple(s.sensors) not in ((), ("camera",)):
+            raise ValueError(f"sensors must be () or ('camera',) (a wrist camera), got {s.sensors!r}")
+        make_arm = resolve_robot(s.robot, "arm", SETTINGS.env_id)
+        arm: Arm = make_arm(ArmConfig(s.control, s.max_joint_speed, s.max_ee_step), control_dt=1.0 / s.control_hz)
         model = arm.model
-        profile = resolve_noise(noise)
-        camera = camera_config(camera_size, camera_modes, camera_fov, camera_far, "rays", model.ee_link,
+        profile = resolve_noise(s.noise)
+        camera = camera_config(**s.group("sensors", "camera"), renderer="rays", link=model.ee_link,
                                mount_rpy=WRIST_CAMERA_RPY)
-        checker = collision_checker(arm, model.tracked_links, collision_fidelity, collision_padding,
-                                    contact_tolerance, clearance_range, control_hz, self_collision=self_collision,
-                                    swept_speed=swept_speed, fixed_links=(arm.base_link, *model.fixed_links))
-        task = ReachTask(
-            ReachRewardWeights(progress=progress_weight, success=success_weight, contact=contact_weight,
-                               self_contact=self_contact_weight, clearance=clearance_weight,
-                               tunneling=tunneling_weight, control=control_weight),
-            ee_row=model.ee_row,
-            links=checker.links,
-            success_radius=success_radius,
-            clearance_margin=clearance_margin,
-            clearance_range=clearance_range,
-            terminate_on_collision=terminate_on_collision,
-            observe_directions=observe_directions,
-            observe_offset=observe_target_offset,
-            subgoal_lookahead=subgoal_lookahead,
-            make_planner=lambda: ArmPlanner(SUBGOAL_MARGIN + collision_padding, collision_fidelity, model),
-        )
+        checker = collision_checker(arm, model.tracked_links, clearance_range=s.clearance_range,
+                                    control_hz=s.control_hz, fixed_links=(arm.base_link, *model.fixed_links),
+                                    **s.group("collision"))
+        task = ReachTask(ReachRewardWeights(**s.group("reward")), ee_row=model.ee_row, links=checker.links,
+                         success_radius=s.success_radius, clearance_margin=s.clearance_margin,
+                         clearance_range=s.clearance_range, terminate_on_collision=s.terminate_on_collision,
+                         observe_directions=s.observe_directions, observe_offset=s.observe_target_offset,
+                         subgoal_lookahead=s.subgoal_lookahead,
+                         make_planner=lambda: ArmPlanner(SUBGOAL_MARGIN + s.collision_padding, s.collision_fidelity,
+                                                         model))
         super().__init__(
-            physics_hz=physics_hz,
-            solver_iterations=solver_iterations,
+            physics_hz=s.physics_hz,
+            solver_iterations=s.solver_iterations,
             robot=arm,
-            arena=TabletopArena(TableSpec(n_obstacles=n_obstacles, shelf=bool(shelf), movable_fraction=movable_obstacles),
-                                model.ready, model.lower, model.upper, model.shoulder, model.reach),
-            sensors=build_sensors(sensors, profile, {"camera": camera}, arm),
+            arena=TabletopArena(TableSpec(**s.group("world")), model.ready, model.lower, model.upper, model.shoulder,
+                                model.reach),
+            sensors=build_sensors(s.sensors, profile, {"camera": camera}, arm),
             checker=checker,
             task=task,
-            control_hz=control_hz,
+            control_hz=s.control_hz,
             noise=profile,
-            render_mode=render_mode,
-            physics=physics,
+            render_mode=s.render_mode,
+            physics=s.physics,
         )

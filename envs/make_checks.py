@@ -8,7 +8,7 @@ import inspect
 import math
 import os
 import sys
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -32,10 +32,14 @@ def check_keywords(cls: type, kwargs: Mapping[str, Any]) -> None:
                if name != "self" and p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
     unknown = [name for name in kwargs if name not in allowed]
     if unknown:
-        hints = [f"{name!r}" + "".join(f" (did you mean {m!r}?)" for m in difflib.get_close_matches(name, allowed, 1))
-                 for name in unknown]
+        hints = [f"{name!r}{did_you_mean(name, allowed)}" for name in unknown]
         raise TypeError(f"{cls.__name__} got unknown keyword argument(s) {', '.join(hints)}; it takes "
                         f"{sorted(allowed)}")
+
+
+def did_you_mean(name: Any, allowed: Sequence[str]) -> str:
+    """`` (did you mean 'x'?)`` with the allowed name closest to ``name``, or "" when none is close."""
+    return "".join(f" (did you mean {m!r}?)" for m in difflib.get_close_matches(str(name), allowed, 1))
 
 
 def check_env_settings(render_mode: str | None, physics_hz: float, control_hz: float, solver_iterations: int,
@@ -54,14 +58,20 @@ def check_physics_mode(physics: Any) -> None:
         raise ValueError(f"physics must be one of {PHYSICS_MODES}, got {physics!r}")
 
 
-def check_numbers(init: Callable[..., None], arguments: Mapping[str, Any]) -> None:
-    """Raise at make time, naming the argument, for a number argument of ``init`` (annotated ``float`` or ``int``)
-    given something else, such as a string or None: the range checks after this would fail with Python's or
-    numpy's message, which names no argument. numpy scalars are numbers."""
-    for name, parameter in inspect.signature(init).parameters.items():
-        if parameter.annotation in ("float", "int") and name in arguments:
-            if not is_number(arguments[name]):
-                raise ValueError(f"{name} must be a number, got {arguments[name]!r}")
+def check_numbers(**numbers: Any) -> None:
+    """Raise at make time, naming the argument, for a number argument given something else, such as a string or
+    None: the range checks after this would fail with Python's or numpy's message, which names no argument. numpy
+    scalars are numbers."""
+    for name, value in numbers.items():
+        if not is_number(value):
+            raise ValueError(f"{name} must be a number, got {value!r}")
+
+
+def check_swept_speed(swept_speed: float) -> None:
+    """Raise at make time for a ``swept_speed`` (m/s, above which a link is swept between two checks) that is not
+    positive; ``inf`` turns swept checks off."""
+    if not (swept_speed > 0.0):
+        raise ValueError(f"swept_speed must be > 0 m/s (inf disables swept checks), got {swept_speed!r}")
 
 
 def check_flags(**flags: Any) -> None:
