@@ -10,7 +10,6 @@ env is built, naming the field.
 from __future__ import annotations
 
 import itertools
-import math
 from dataclasses import asdict, dataclass, field, fields
 from importlib import resources
 from pathlib import Path
@@ -20,6 +19,7 @@ import yaml
 
 from clutter_gym.training.distill_config import DistillSettings, TeacherSettings
 from clutter_gym.training.env_settings import check_env_kwargs, check_mix, reject_unknown
+from clutter_gym.training.ppo_settings import PPOHyperparams, check_range
 from clutter_gym.training.residual import MAPLESS_ENVS, PURSUIT_ENVS, check_residual_base, check_residual_space
 from clutter_gym.training.scan_memory import MEMORY_KINDS
 from clutter_gym.training.teachers import check_teacher
@@ -32,77 +32,6 @@ EVAL_SEED = 1_000_000
 #: First seed of the validation episodes run during training to pick the best model; apart from both the
 #: training seeds and the evaluation seeds, so the model is chosen on layouts the final evaluation never sees.
 VALIDATION_SEED = 2_000_000
-
-
-@dataclass(frozen=True)
-class PPOHyperparams:
-    """The stable-baselines3 PPO settings this project exposes (SB3's PPO docs give the algorithm's details).
-
-    Each attribute's line below is also its ``clutter-gym train --help`` text.
-
-    Attributes:
-        learning_rate: Adam step size.
-        n_steps: env steps per env in each rollout (a rollout holds n_steps x n_envs steps).
-        batch_size: minibatch size of the gradient steps.
-        n_epochs: passes over each rollout.
-        gamma: discount factor.
-        gae_lambda: GAE bias/variance trade-off (1 = Monte Carlo returns).
-        clip_range: PPO ratio clipping.
-        ent_coef: entropy bonus weight.
-        vf_coef: value loss weight.
-        max_grad_norm: gradient norm clipping.
-        net_arch: hidden layer sizes of both the policy and the value network.
-        lstm_hidden_size: 0: a memoryless policy (SB3's PPO); n > 0: a recurrent one, sb3-contrib's
-            ``RecurrentPPO`` with an LSTM of n units between the observation and the hidden layers, whose state an
-            agent carries through its episode.
-        log_std_init: initial log standard deviation of the Gaussian actions (0: std 1, i.e. actions in [-1, 1]
-            start as mostly noise).
-        normalize_obs: normalise the float observation entries by running mean and std (SB3 VecNormalize).
-        normalize_reward: scale rewards by the running std of the discounted return (SB3 VecNormalize).
-    """
-
-    learning_rate: float = 3e-4
-    n_steps: int = 512
-    batch_size: int = 256
-    n_epochs: int = 10
-    gamma: float = 0.99
-    gae_lambda: float = 0.95
-    clip_range: float = 0.2
-    ent_coef: float = 0.0
-    vf_coef: float = 0.5
-    max_grad_norm: float = 0.5
-    net_arch: tuple[int, ...] = (64, 64)
-    lstm_hidden_size: int = 0
-    log_std_init: float = 0.0
-    normalize_obs: bool = True
-    normalize_reward: bool = True
-
-    def __post_init__(self) -> None:
-        _check_range("ppo.learning_rate", self.learning_rate, 0.0, 1.0, low_open=True)
-        _check_range("ppo.n_steps", self.n_steps, 8, 1 << 20)
-        _check_range("ppo.batch_size", self.batch_size, 2, 1 << 20)
-        _check_range("ppo.n_epochs", self.n_epochs, 1, 100)
-        _check_range("ppo.gamma", self.gamma, 0.0, 1.0, low_open=True)
-        _check_range("ppo.gae_lambda", self.gae_lambda, 0.0, 1.0)
-        _check_range("ppo.clip_range", self.clip_range, 0.0, 1.0, low_open=True)
-        _check_range("ppo.ent_coef", self.ent_coef, 0.0, 1.0)
-        _check_range("ppo.vf_coef", self.vf_coef, 0.0, 10.0)
-        _check_range("ppo.max_grad_norm", self.max_grad_norm, 0.0, 100.0, low_open=True)
-        _check_range("ppo.log_std_init", self.log_std_init, -5.0, 2.0)
-        _check_range("ppo.lstm_hidden_size", self.lstm_hidden_size, 0, 4096)
-        if not self.net_arch or any(not isinstance(n, int) or not 1 <= n <= 4096 for n in self.net_arch):
-            raise ValueError("ppo.net_arch must be 1 or more layer sizes in [1, 4096], got "
-                             f"{short_repr(self.net_arch)}")
-
-    def sb3_kwargs(self) -> dict[str, Any]:
-        """Keyword arguments for ``stable_baselines3.PPO`` (normalisation is applied to the env, not here)."""
-        kwargs = asdict(self)
-        for key in ("net_arch", "lstm_hidden_size", "log_std_init", "normalize_obs", "normalize_reward"):
-            kwargs.pop(key)
-        kwargs["policy_kwargs"] = {"net_arch": list(self.net_arch), "log_std_init": self.log_std_init}
-        if self.lstm_hidden_size:
-            kwargs["policy_kwargs"]["lstm_hidden_size"] = self.lstm_hidden_size
-        return kwargs
 
 
 @dataclass(frozen=True)
@@ -198,23 +127,23 @@ class TrainConfig:
             raise ValueError(f"env_id must be one of {ENV_IDS}, got {short_repr(self.env_id)}")
         if self.noise not in PROFILE_NAMES:
             raise ValueError(f"noise must be one of {PROFILE_NAMES}, got {short_repr(self.noise)}")
-        _check_range("seed", self.seed, 0, 2**31 - 1)
-        _check_range("timesteps", self.timesteps, 1, 10**10)
-        _check_range("n_envs", self.n_envs, 1, 256)
-        _check_range("env_workers", self.env_workers, 0, self.n_envs)
-        _check_range("checkpoint_every", self.checkpoint_every, 1, 10**10)
-        _check_range("keep_checkpoints", self.keep_checkpoints, 1, 1000)
-        _check_range("final_eval_episodes", self.final_eval_episodes, 0, 100_000)
-        _check_range("validate_every", self.validate_every, 0, 10**10)
-        _check_range("validate_episodes", self.validate_episodes, 1, 100_000)
-        _check_range("frame_stack", self.frame_stack, 1, 32)
+        check_range("seed", self.seed, 0, 2**31 - 1)
+        check_range("timesteps", self.timesteps, 1, 10**10)
+        check_range("n_envs", self.n_envs, 1, 256)
+        check_range("env_workers", self.env_workers, 0, self.n_envs)
+        check_range("checkpoint_every", self.checkpoint_every, 1, 10**10)
+        check_range("keep_checkpoints", self.keep_checkpoints, 1, 1000)
+        check_range("final_eval_episodes", self.final_eval_episodes, 0, 100_000)
+        check_range("validate_every", self.validate_every, 0, 10**10)
+        check_range("validate_episodes", self.validate_episodes, 1, 100_000)
+        check_range("frame_stack", self.frame_stack, 1, 32)
         if self.action_bins and not 2 <= self.action_bins <= 101 or isinstance(self.action_bins, bool):
             raise ValueError(f"action_bins must be 0 (continuous actions) or an integer in [2, 101], got "
                              f"{short_repr(self.action_bins)}")
         if self.scan_memory not in ("", *MEMORY_KINDS):
             raise ValueError(f"scan_memory must be one of {MEMORY_KINDS} or empty (none), got {self.scan_memory!r}")
-        _check_range("train_layouts", self.train_layouts, 0, 10**7)
-        _check_range("residual_gain", self.residual_gain, 0.0, 1000.0)
+        check_range("train_layouts", self.train_layouts, 0, 10**7)
+        check_range("residual_gain", self.residual_gain, 0.0, 1000.0)
         self.teacher.check(self.env_id)
         if self.teacher.name and self.env_kwargs.get("subgoal_lookahead"):
             raise ValueError("env_kwargs.subgoal_lookahead must be 0 for a student distilled from a teacher: its "
@@ -332,15 +261,6 @@ class TrainConfig:
         data["distill"] = DistillSettings.from_dict(data.pop("distill", None) or {})
         data["critic_inputs"] = tuple(data.pop("critic_inputs", None) or ())
         return cls(**data, ppo=PPOHyperparams(**ppo))
-
-
-def _check_range(name: str, value: Any, low: float, high: float, low_open: bool = False) -> None:
-    number = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
-    if isinstance(low, int) and isinstance(high, int) and not isinstance(value, int):
-        number = False
-    if not number or not (low < value <= high if low_open else low <= value <= high):
-        bracket = "(" if low_open else "["
-        raise ValueError(f"{name} must be a number in {bracket}{low}, {high}], got {short_repr(value)}")
 
 
 def deep_merge(base: dict[str, Any], top: dict[str, Any]) -> dict[str, Any]:
