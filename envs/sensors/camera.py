@@ -29,6 +29,7 @@ from clutter_gym.noise.camera import (
     start_rgb_episode,
 )
 from clutter_gym.noise.distortion import Intrinsics
+from clutter_gym.sensors.suite import Observed
 from clutter_gym.sim import Sim
 from clutter_gym.sim.primitives import BACKDROP_ID
 from clutter_gym.util.transforms import quat_to_matrix, rpy_quat
@@ -129,6 +130,14 @@ class Camera:
 
     name = "camera"
     read_every_step = False
+    observation = (
+        Observed("camera_rgb", "(h, w, 3) uint8, (w, h) = `size`", 'colour image (with "rgb" in `modes`)',
+                 "-; looking along its link's +x, +z up", "[0, 255]"),
+        Observed("camera_depth", "(h, w)", 'depth along the optical axis, 0 = no data (with "depth")', "m",
+                 "[0, `far`]"),
+        Observed("camera_segmentation", "(h, w) uint8",
+                 'class per pixel: nothing, ground, obstacle, robot, goal (with "segmentation")', "-", "[0, 4]"),
+    )
 
     def __init__(self, config: CameraConfig | None = None, rgb_noise: RgbNoise | None = None,
                  depth_noise: DepthNoise | None = None) -> None:
