@@ -185,6 +185,7 @@ class Camera:
         if self._mount is not None:
             eye, rotation = eye + rotation @ self._mount[0], rotation @ self._mount[1]
         images: dict[str, np.ndarray] = {}
+        ids: np.ndarray | None  # None: no segmentation was asked of the rasteriser
         if c.renderer == "rays":
             i = self.intrinsics
             axes = np.array([rotation[:, 0], -rotation[:, 1], -rotation[:, 2]])  # forward, right, down
@@ -201,6 +202,7 @@ class Camera:
                 z = c.far * c.near / (c.far - (c.far - c.near) * buffer)
                 images["depth"] = np.where(z < c.far - 1e-3, z, 0.0)
         if "segmentation" in c.modes:
+            assert ids is not None
             table = self._classes
             # bodies made after the reset (a large scene's near obstacles) and obstacles without a body
             # (Sim.ray_cast_image's BACKDROP_ID) are obstacles
