@@ -34,7 +34,7 @@ TYPED_MODULES = ("clutter_gym.datatypes", "clutter_gym.interfaces", "clutter_gym
                  "clutter_gym.collision.checker", "clutter_gym.collision.nearest", "clutter_gym.collision.swept_audit",
                  "clutter_gym.worlds.near_field", "clutter_gym.worlds.pool",
                  "clutter_gym.urdf.checks", "clutter_gym.urdf.geometry", "clutter_gym.urdf.kinematics",
-                 "clutter_gym.collision.build", "clutter_gym.builder",
+                 "clutter_gym.collision.build", "clutter_gym.builder", "clutter_gym.make_checks",
                  "clutter_gym.robots.omni", "clutter_gym.robots.registry")
 #: and these packages, every module in them: the step stages, the dynamics parts, the Sim with its parts, and the
 #: sensors with their noise models (so a new sensor's two modules are checked with no edit here)
