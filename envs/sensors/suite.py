@@ -5,10 +5,9 @@ A sensor registers once (:func:`register_sensor`, in ``sensors/__init__.py``) wi
 from its config, the profile and the robot it is mounted on, the config it takes when an env gives none, and the
 URDF link it is mounted on, and the observation entries it adds (:class:`Observed`, the rows of its section in
 docs/sensors.md, which is generated from this registry). Callers pass configs by sensor name, so a new sensor changes
-no caller. The fields of its
-default config are its settings (:meth:`SensorEntry.settings`): an env takes them nested,
-``sensors={"<name>": {<field>: value}}``, with no edit of the builder or the env. A sensor's noise section lives in
-its noise module (:mod:`clutter_gym.noise.profiles` finds it there).
+no caller. The fields of its default config are its settings (:meth:`SensorEntry.settings`): an env takes them
+nested, ``sensors={"<name>": {<field>: value}}``, with no edit of the builder or the env. A sensor's noise section
+lives in its noise module (:mod:`clutter_gym.noise.profiles` finds it there).
 """
 
 from __future__ import annotations
