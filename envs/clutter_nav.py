@@ -87,9 +87,10 @@ class ClutterNavEnv(ClutterEnv):
     | ``velocity`` | (2,), an omnidirectional base's (3,) | forward speed (and leftward speed), yaw rate | m/s, rad/s; base frame | +-2x the commanded maxima |
 
     ``subgoal`` is present only when ``subgoal_lookahead > 0``. The LIDAR sits on the robot's ``lidar_link``, the
-    IMU on its ``imu_link`` and the camera on its ``camera_link`` (the diffbot's: on its front edge), looking along
-    the link's +x; the LIDAR's beams start at the robot's +x. With a noise profile the sensor entries carry that
-    profile's noise, update rate (held between updates) and latency.
+    IMU on its ``imu_link`` and the camera on its ``camera_link`` (the diffbot's: on its front edge); the diffbot's
+    LIDAR and camera links face its +x, so the LIDAR's beams are centred on the robot's forward axis and the camera
+    looks along it. With a noise profile the sensor entries carry that profile's noise, update rate (held between
+    updates) and latency.
 
     ## Rewards
 
