@@ -29,17 +29,17 @@ PY = BIN / "python"
 SOURCES = ("pyproject.toml", "constraints.txt", "envs", "training", "assets")
 #: mypy checks these, as installed: the contracts (datatypes.py, interfaces.py), the env core, and the modules that
 #: build each env's parts, so every robot, arena, task and sensor an env is made of is held to its protocol.
-TYPED_MODULES = ("clutter_gym.datatypes", "clutter_gym.interfaces", "clutter_gym.core", "clutter_gym.sensors.suite",
+TYPED_MODULES = ("clutter_gym.datatypes", "clutter_gym.interfaces", "clutter_gym.core",
                  "clutter_gym.clutter_nav", "clutter_gym.clutter_reach", "clutter_gym.clutter_fly",
                  "clutter_gym.collision.checker", "clutter_gym.collision.nearest", "clutter_gym.collision.swept_audit",
                  "clutter_gym.worlds.near_field", "clutter_gym.worlds.pool",
                  "clutter_gym.urdf.checks", "clutter_gym.urdf.geometry", "clutter_gym.urdf.kinematics",
-                 "clutter_gym.collision.build", "clutter_gym.sensors",
-                 "clutter_gym.sensors.odometry", "clutter_gym.builder", "clutter_gym.noise.profiles",
-                 "clutter_gym.noise.odometry",
+                 "clutter_gym.collision.build", "clutter_gym.builder", "clutter_gym.make_checks",
                  "clutter_gym.robots.omni", "clutter_gym.robots.registry")
-#: and these packages, every module in them: the step stages, the dynamics parts and the Sim with its parts
-TYPED_PACKAGES = ("clutter_gym.stages", "clutter_gym.dynamics", "clutter_gym.sim")
+#: and these packages, every module in them: the step stages, the dynamics parts, the Sim with its parts, and the
+#: sensors with their noise models (so a new sensor's two modules are checked with no edit here)
+TYPED_PACKAGES = ("clutter_gym.stages", "clutter_gym.dynamics", "clutter_gym.sim", "clutter_gym.sensors",
+                  "clutter_gym.noise")
 #: The Pythons pybullet 3.2.7 has wheels for, newest first.
 WHEEL_PYTHONS = ((3, 11), (3, 10))
 

@@ -5,7 +5,10 @@ place in the nested form, which groups the settings of one part by the names of 
 (``sensors={"lidar": {"n_rays": 64}, "imu": {}}``, ``reward={"progress": 5.0}``). :data:`ALIASES` is the one table
 from flat names to nested places; a ``<term>_weight`` is the reward's ``term``, and a name in neither stays at the
 top under its own name (``robot``, ``noise``, ``control_hz``). The nested ``sensors`` is also the sensors' list: its
-keys are the sensors the env carries, in order, each with its settings (``{}`` for its defaults).
+keys are the sensors the env carries, in order, each with its settings (``{}`` for its defaults). A registered sensor
+the env declares no settings for takes its own, the fields of its registered default config
+(:meth:`~clutter_gym.sensors.suite.SensorEntry.settings`), nested only: a new sensor's settings need no edit here or in
+an env module.
 
 An env module declares its settings once, as an :class:`EnvSettings` (each flat name with its default, in the order
 of the env's page), gives its constructor their signature (:meth:`EnvSettings.sign`) and starts it with
@@ -31,7 +34,7 @@ from clutter_gym.make_checks import (
     check_swept_speed,
     did_you_mean,
 )
-from clutter_gym.sensors import CameraConfig, ImuConfig, LidarConfig, camera_config, check_sensor_names
+from clutter_gym.sensors import SENSORS, CameraConfig, ImuConfig, LidarConfig, camera_config, check_sensor_names
 from clutter_gym.util.checks import is_number, short_repr
 
 #: flat name -> its place in the nested form, by the fields of the part's settings object: the sensors' configs
@@ -63,7 +66,10 @@ Init = TypeVar("Init", bound=Callable[..., None])
 
 
 def nested_path(name: str) -> tuple[str, ...]:
-    """The place of the flat setting ``name`` in the nested form (see :data:`ALIASES`)."""
+    """The place of the flat setting ``name`` in the nested form (see :data:`ALIASES`); a sensor's own setting, which
+    has no flat name, is kept under its nested one (``"sensors.odometry.<field>"``)."""
+    if "." in name:
+        return tuple(name.split("."))
     if name in ALIASES:
         return ALIASES[name]
     if name.endswith("_weight"):
@@ -162,11 +168,16 @@ class EnvSettings:
         if not isinstance(node, Mapping):
             raise ValueError(f"{where} must be a mapping of settings by name, got {short_repr(node)}")
         below = list(dict.fromkeys(p[len(path)] for p in self.places if len(p) > len(path) and p[:len(path)] == path))
+        # a sensor this env declares no settings for takes its own
+        own = SENSORS[path[1]].settings() if not below and len(path) == 2 and path[0] == "sensors" else {}
+        below = below or list(own)
         for key, value in node.items():
             place = (*path, key)
             if place in self.places:
                 found[self.places[place]] = (value, ".".join(map(str, place)))
-            elif key in below or path == ("sensors",):  # a sub-group, or a sensor without settings
+            elif key in own:  # a sensor's own setting: no flat name, kept under its nested one
+                found[f"{where}.{key}"] = (value, f"{where}.{key}")
+            elif key in below or path == ("sensors",):  # a sub-group, or a sensor
                 self._walk(place, value, found)
             else:  # a flat name given nested is pointed to its nested one
                 flat = {self.places[p]: p[-1] for p in self.places if p[:-1] == path}
@@ -189,9 +200,10 @@ class EnvSettings:
 
 
 def sensor_configs(s: Settings, sensor_link: str | None = None, imu_link: str | None = None) -> dict[str, Any]:
-    """The LIDAR, IMU and camera configs by sensor name of an env's settings (ClutterNav's and ClutterFly's: every
-    LIDAR and camera setting); ``sensor_link`` mounts the LIDAR and the camera, ``imu_link`` the IMU, where the
-    robot's links differ from the configs' defaults.
+    """The sensors' configs by name of an env's settings: the LIDAR, IMU and camera configs (ClutterNav's and
+    ClutterFly's: every LIDAR and camera setting), and each other carried sensor's registered default config with the
+    settings given for it; ``sensor_link`` mounts the LIDAR and the camera, ``imu_link`` the IMU, where the robot's
+    links differ from the configs' defaults.
 
     Raises:
         ValueError: a value out of its config's range, naming the setting.
@@ -203,4 +215,9 @@ def sensor_configs(s: Settings, sensor_link: str | None = None, imu_link: str | 
         lidar, camera = replace(lidar, link=sensor_link), replace(camera, link=sensor_link)
     if imu_link is not None:
         imu = replace(imu, link=imu_link)
-    return {"lidar": lidar, "imu": imu, "camera": camera}
+    configs = {"lidar": lidar, "imu": imu, "camera": camera}
+    for name in s.sensors:
+        given = s.group("sensors", name)
+        if name not in configs and given:
+            configs[name] = SENSORS[name].configured(given)
+    return configs

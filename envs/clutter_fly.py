@@ -77,15 +77,11 @@ class ClutterFlyEnv(ClutterEnv):
 
     ## Observation space
 
-    ``Dict``, every entry float32:
+    ``Dict``: the entries of each sensor listed in ``sensors`` (docs/sensors.md gives every registered sensor's,
+    with their shapes, units and bounds), and these, every one float32:
 
     | key | shape | content | units, frame | bounds |
     |---|---|---|---|---|
-    | ``imu`` | (6,) | specific force (f_x, f_y, f_z), angular rate (w_x, w_y, w_z) | m/s^2, rad/s; IMU link (body axes, at the centre of mass) | +-156.9, +-34.9 |
-    | ``lidar`` | (lidar_channels, n_rays), or (n_rays,) with one channel | range / lidar_range, beams CCW from body +x, channels bottom up | -, sensor mount | [0, 1] |
-    | ``camera_depth`` | (h, w) | depth along the optical axis (body +x), 0 = no data | m | [0, camera_far] |
-    | ``camera_rgb`` | (h, w, 3) uint8 | colour image (only with "rgb" in ``camera_modes``) | - | [0, 255] |
-    | ``camera_segmentation`` | (h, w) uint8 | class per pixel: nothing, ground, obstacle, robot, goal (only with "segmentation") | - | [0, 4] |
     | ``goal`` | (4,) | goal minus the base origin (x, y, z), then its length | m; body frame | +-volume diagonal, [0, volume diagonal] |
     | ``subgoal`` | (3,) | the point ``subgoal_lookahead`` ahead on the shortest path through the known layout (the progress reward's path), minus the base origin; only with ``subgoal_lookahead > 0`` | m; body frame | +-subgoal_lookahead |
     | ``attitude`` | (3,) | the world's up axis in the body frame (z = cosine of the tilt) | -; body frame | [-1, 1] |
@@ -93,13 +89,13 @@ class ClutterFlyEnv(ClutterEnv):
     | ``rotor_speeds`` | (n rotors,) | rotor speed / max rotor speed, in the robot's ``rotor_links`` order (the quadrotor's: front right, rear right, rear left, front left) | - | [0, 1] |
     | ``thrust_ratio`` | (1,) | the flight controller's estimate of the thrust per unit mass the airframe gets over its nominal model's (motor strength / mass scale; 1 when nominal), filtered over 0.25 s; only with ``observe_thrust_ratio`` | - | [0.25, 4] |
 
-    Sensor entries are present only when listed in ``sensors`` (``("imu",)`` by default; camera entries only for
-    its ``camera_modes``, ``(w, h) = camera_size``). The LIDAR and the camera sit on the ``sensor_mount`` link
-    (the quadrotor's: 10 mm above the centre of mass), looking along its +x; rays and the camera see through the drone. The IMU reads
-    +9.81 m/s^2 on z in a level hover. With a noise profile the sensor entries carry that profile's noise, update
-    rate (held between updates) and latency; ``goal``, ``attitude``, ``velocity``, ``rotor_speeds`` and
-    ``thrust_ratio`` are the flight controller's state estimate, taken as exact (``thrust_ratio`` follows from the
-    velocity it differences and the rotor speeds, ``robots/thrust_estimate.py``).
+    ``sensors`` is ``("imu",)`` by default. The IMU sits on the ``imu_link`` (body axes, at the centre of mass); the
+    LIDAR and the camera on the ``sensor_mount`` link (the quadrotor's: 10 mm above the centre of mass), looking along
+    its +x (body +x); rays and the camera see through the drone. The IMU reads +9.81 m/s^2 on z in a level hover.
+    With a noise profile the sensor entries carry that profile's noise, update rate (held between updates) and
+    latency; ``goal``, ``attitude``, ``velocity``, ``rotor_speeds`` and ``thrust_ratio`` are the flight controller's
+    state estimate, taken as exact (``thrust_ratio`` follows from the velocity it differences and the rotor speeds,
+    ``robots/thrust_estimate.py``).
 
     ## Rewards
 
@@ -145,7 +141,8 @@ class ClutterFlyEnv(ClutterEnv):
 
     ``robot`` (a registered multirotor, ``"quadrotor"``, or a ``multirotor`` spec: a mapping or a YAML file;
     docs/robots.md);
-    ``render_mode`` (None, "rgb_array", "human"); ``sensors`` (subset of ("imu", "lidar", "camera"));
+    ``render_mode`` (None, "rgb_array", "human"); ``sensors`` (registered sensors' names, docs/sensors.md: those a
+    multirotor carries);
     ``noise`` (profile name, override mapping or NoiseProfile); ``volume_size`` (x, y, z) m, x and y in [2, 30],
     z in [1, 5]; ``obstacle_density`` volume fraction [0, 0.25]; ``ceiling``; ``n_rays`` [1, 4096];
     ``lidar_fov`` rad (0, 2 pi]; ``lidar_range`` m; ``lidar_channels`` [1, 128] and ``lidar_vertical_fov`` rad

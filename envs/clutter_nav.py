@@ -77,24 +77,20 @@ class ClutterNavEnv(ClutterEnv):
 
     ## Observation space
 
-    ``Dict``, every entry float32:
+    ``Dict``: the entries of each sensor listed in ``sensors`` (docs/sensors.md gives every registered sensor's,
+    with their shapes, units and bounds), and these, every one float32:
 
     | key | shape | content | units, frame | bounds |
     |---|---|---|---|---|
-    | ``lidar`` | (n_rays,) or (lidar_channels, n_rays) | range / lidar_range, beams CCW from the robot's +x, channels bottom up | -, lidar link | [0, 1] |
-    | ``imu`` | (6,) | specific force (f_x, f_y, f_z), angular rate (w_x, w_y, w_z) | m/s^2, rad/s; IMU link | +-156.9, +-34.9 |
-    | ``camera_rgb`` | (h, w, 3) uint8 | colour image | -, the robot's camera link (diffbot's: on its front edge) looking along its +x | [0, 255] |
-    | ``camera_depth`` | (h, w) | depth along the optical axis, 0 = no data | m | [0, camera_far] |
-    | ``camera_segmentation`` | (h, w) uint8 | class per pixel: nothing, ground, obstacle, robot, goal | - | [0, 4] |
-    | ``odometry`` | (6,) | wheel odometry: x, y, sin(yaw), cos(yaw) since the episode's start, the last step's travel and turn | m, -, -, m, rad; start frame | unbounded |
     | ``goal`` | (3,) or (4,) | distance, sin(bearing), cos(bearing) (and bearing / pi with ``observe_bearing``) | m, -, -, -; robot frame | [0, arena diagonal], [-1, 1] |
     | ``subgoal`` | (3,) | distance, sin(bearing), cos(bearing) of the waypoint ``subgoal_lookahead`` ahead on the planned path | m, -, -; robot frame | [0, subgoal_lookahead], [-1, 1] |
     | ``velocity`` | (2,), an omnidirectional base's (3,) | forward speed (and leftward speed), yaw rate | m/s, rad/s; base frame | +-2x the commanded maxima |
 
-    Sensor entries are present only when listed in ``sensors`` (camera entries only for its ``camera_modes``;
-    ``(w, h) = camera_size``); ``subgoal`` only when ``subgoal_lookahead > 0``. The IMU reads +9.81 m/s^2 on z
-    at rest. With a noise profile the entries carry that profile's noise, update rate (held between updates) and
-    latency; a LIDAR beam without a return reads 1.
+    ``subgoal`` is present only when ``subgoal_lookahead > 0``. The LIDAR sits on the robot's ``lidar_link``, the
+    IMU on its ``imu_link`` and the camera on its ``camera_link`` (the diffbot's: on its front edge); the diffbot's
+    LIDAR and camera links face its +x, so the LIDAR's beams are centred on the robot's forward axis and the camera
+    looks along it. With a noise profile the sensor entries carry that profile's noise, update rate (held between
+    updates) and latency.
 
     ## Rewards
 
@@ -138,7 +134,7 @@ class ClutterNavEnv(ClutterEnv):
 
     ## Arguments
 
-    ``render_mode`` (None, "rgb_array", "human"); ``sensors`` (subset of ("lidar", "imu", "camera", "odometry"));
+    ``render_mode`` (None, "rgb_array", "human"); ``sensors`` (registered sensors' names, docs/sensors.md);
     ``noise`` (profile name, override mapping or NoiseProfile); ``arena_size`` m [2, 30]; ``obstacle_density``
     floor fraction [0, 0.3]; ``movable_obstacles`` fraction [0, 1] of the generated obstacles that the robot can
     push (see "Movable obstacles"); ``n_rays`` [1, 4096]; ``lidar_fov`` rad (0, 2 pi]; ``lidar_range`` m;

@@ -9,13 +9,16 @@ import math
 import os
 import sys
 from collections.abc import Mapping, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from clutter_gym.auto_physics import PHYSICS_MODES
 from clutter_gym.datatypes import CollisionReport
 from clutter_gym.util.checks import check_integer, is_number
+
+if TYPE_CHECKING:  # core imports this module
+    from clutter_gym.core import ClutterEnv
 
 RENDER_MODES = ("human", "rgb_array")
 MAX_PHYSICS_HZ = 10000.0  # physics ticks per simulated second, at most
@@ -25,9 +28,9 @@ MAX_CONTROL_HZ = 1000.0  # actions per simulated second, at most
 MAX_TICKS_PER_STEP = 1000
 
 
-def check_keywords(cls: type, kwargs: Mapping[str, Any]) -> None:
-    """Raise a ``TypeError`` naming each keyword ``cls.__init__`` does not take, with the closest allowed name and
-    the list of them."""
+def check_keywords(cls: type[ClutterEnv], kwargs: Mapping[str, Any]) -> None:
+    """Raise a ``TypeError`` naming each keyword the env class ``cls``'s ``__init__`` does not take, with the closest
+    allowed name and the list of them."""
     allowed = [name for name, p in inspect.signature(cls.__init__).parameters.items()
                if name != "self" and p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
     unknown = [name for name in kwargs if name not in allowed]

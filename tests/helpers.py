@@ -10,7 +10,10 @@ import os
 import shutil
 import subprocess
 import sys
+from collections.abc import Sequence
 from pathlib import Path
+
+import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 CHASSIS_RADIUS = 0.17  # diffbot.urdf: the chassis cylinder encloses every other link seen from above
@@ -21,6 +24,12 @@ SHELF_SEED = 1_000_000  # the first ClutterReach evaluation layout: its target i
 def empty_scene(start=(0.0, 0.0, 0.0), goal=(2.5, 2.5), obstacles=()) -> dict:
     """A ClutterNav scene in the reset-options format: no obstacles unless given."""
     return {"obstacles": list(obstacles), "start": list(start), "goal": list(goal)}
+
+
+def ring_pixels(frame: np.ndarray, colour: Sequence[int]) -> np.ndarray:
+    """Mask (H, W) of the pixels of ``frame`` painted exactly ``colour`` (a ring's pixels: the rings of
+    ``clutter_gym.util.overlay`` are drawn opaque and without anti-aliasing)."""
+    return np.all(frame[:, :, :3] == np.asarray(colour, dtype=np.uint8), axis=2)
 
 
 def run_benchmark(module: str, *args: str, timeout: float = 300.0) -> subprocess.CompletedProcess:

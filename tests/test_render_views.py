@@ -5,11 +5,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from helpers import ring_pixels
 
 from clutter_gym import ENV_IDS
 from clutter_gym.cli import DEMOS
 from clutter_gym.util.camera_view import orbit_angles
-from clutter_gym.util.overlay import GOAL_COLOUR, ROBOT_COLOUR, ring_pixels
+from clutter_gym.util.overlay import GOAL_COLOUR, ROBOT_COLOUR
 
 #: Least robot pixels in a 320x240 frame, per env, over the frames the demo policy's episodes give at reset and
 #: every 25 steps, with margin under the measured counts (docs/envs.md, "What rgb_array shows").

@@ -20,11 +20,17 @@ import numpy as np
 import clutter_gym  # noqa: F401  (registers the envs)
 from benchmarks.harness import navigator_states, table_header
 from clutter_gym.sensors.camera import Camera, CameraConfig
-from clutter_gym.util.images import resample
 
 SIZES = (32, 48, 64, 84, 128)
 REFERENCE_SIZE = 256
 DEFAULT_SIZE = CameraConfig.width
+
+
+def resample(image: np.ndarray, size: int) -> np.ndarray:
+    """A square ``image`` at the pixel centres of a ``size`` x ``size`` grid over the same field of view (each the
+    nearest pixel's value)."""
+    index = ((np.arange(size) + 0.5) * image.shape[0] / size).astype(int)
+    return image[np.ix_(index, index)]
 
 
 def rows(steps: int = 200, seed: int = 0) -> list[dict]:

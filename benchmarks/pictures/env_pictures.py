@@ -14,16 +14,34 @@ from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
-from PIL import Image
+from PIL import Image, ImageDraw, ImageFont
 
 import clutter_gym  # noqa: F401  (registers the envs)
 from clutter_gym.cli import DEMOS
 from clutter_gym.util.atomic import atomic_path
-from clutter_gym.util.images import labelled_strip
 
 #: Each env's picture: the seed (an episode the demo policy finishes at the goal) and how far into the episode.
 SHOTS = {"ClutterNav-v1": (0, 0.75), "ClutterReach-v1": (1, 0.5), "ClutterFly-v1": (2, 0.6)}
 MAX_STEPS = 600
+LABEL_PX = 24  # height of the label bar under each frame
+
+
+def labelled_strip(frames: dict[str, np.ndarray]) -> Image.Image:
+    """The frames (H, W, 3 uint8, all one size) side by side, each above a bar :data:`LABEL_PX` high with its
+    label."""
+    height, width = next(iter(frames.values())).shape[:2]
+    strip = Image.new("RGB", (width * len(frames), height + LABEL_PX), (250, 250, 250))
+    draw = ImageDraw.Draw(strip)
+    try:
+        font = ImageFont.load_default(size=16)
+    except TypeError:  # pillow < 10.1: one bitmap size
+        font = ImageFont.load_default()
+    for i, (label, frame) in enumerate(frames.items()):
+        strip.paste(Image.fromarray(frame), (i * width, 0))
+        left, top, right, bottom = draw.textbbox((0, 0), label, font=font)
+        draw.text((i * width + (width - right + left) / 2, height + (LABEL_PX - bottom + top) / 2 - top), label,
+                  fill=(30, 30, 30), font=font)
+    return strip
 
 
 def _rollout(env: gym.Env, seed: int, make_policy, steps: int) -> int:

@@ -34,7 +34,7 @@ class ActionChannel:
     def reset(self) -> None:
         """Fill the delay line with zero commands (the robot starts at rest)."""
         self._line.clear()
-        self._line.extend([np.zeros(self._size)] * self._line.maxlen)
+        self._line.extend([np.zeros(self._size)] * (self.params.latency_steps + 1))
 
     def send(self, action: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         """The command that reaches the motors this step (unclipped; the caller clips)."""

@@ -185,6 +185,7 @@ class Resampler:
         if self.uses_fill:
             src = np.concatenate([src, np.full((1, src.shape[1]), fill, dtype=src.dtype)])
         if self.matrix is None:
+            assert self.index is not None  # nearest neighbour keeps the index
             out = np.take(src, self.index, axis=0)
         else:
             out = self.matrix @ (src if src.dtype in (np.float32, np.float64) else src.astype(np.float32))

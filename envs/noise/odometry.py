@@ -1,12 +1,14 @@
 """Wheel-encoder odometry noise: encoder quantisation and the two systematic errors of a differential drive's
 dead reckoning, an error in each wheel's radius and one in the effective track width.
 
-Pure functions on plain numbers, no simulator. Borenstein and Feng's UMBmark (docs/sensor-noise-reference.md, O7)
-names unequal wheel diameters and an uncertain wheelbase as the dominant systematic errors: the odometry divides
-encoder counts by the radii and the track it believes in, which differ from the robot's. Here they are drawn once
-per episode, a scale per wheel side ``1 + N(0, radius_sigma_frac)`` and for the track ``1 + N(0,
-track_sigma_frac)``. Wheel slip against the floor needs no parameter: the encoders read the simulated wheels'
-rotation, and the physics slips them. Encoders count whole ticks (``ticks_per_rev`` a revolution; 0 = exact).
+Pure functions on plain numbers, no simulator. Borenstein and Feng's UMBmark (O7, a row of
+``SENSOR_NOISE.references``) names unequal wheel diameters and an uncertain wheelbase as the dominant systematic
+errors: the odometry divides encoder counts by the radii and the track it believes in, which differ from the robot's.
+Here they are drawn once per episode, a scale per wheel side ``1 + N(0, radius_sigma_frac)`` and for the track
+``1 + N(0, track_sigma_frac)``. Wheel slip against the floor needs no parameter: the encoders read the simulated
+wheels' rotation, and the physics slips them. Encoders count whole ticks (``ticks_per_rev`` a revolution; 0 =
+exact). ``SENSOR_NOISE`` holds the values of each named profile with their sources, the model in words and the source
+rows, which docs/sensors.md shows.
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from clutter_gym.noise.params import NoiseParams, param
-from clutter_gym.noise.profiles import SensorNoiseSection
+from clutter_gym.noise.profiles import Reference, SensorNoiseSection
 
 
 @dataclass(frozen=True)
@@ -57,6 +59,27 @@ SENSOR_NOISE = SensorNoiseSection(
     name="odometry",
     params=OdometryNoise,
     timed=True,
+    model="Per episode, scales of the radius each wheel side is believed to have, `1 + N(0, radius_sigma_frac)`, "
+          "and of the track, `1 + N(0, track_sigma_frac)` (UMBmark's E_d and E_b, O7); encoder counts floored to "
+          "whole ticks (`ticks_per_rev`); wheel slip is the physics' own (the encoders read the simulated wheels).",
+    references={
+        "O4": Reference("TurtleBot3 wheel encoders (DYNAMIXEL XL430-W250 / XM430-W210)",
+                        "contactless absolute encoder, 12 bit over 360° → 4096 ticks per wheel revolution",
+                        "emanual.robotis.com/docs/en/platform/turtlebot3/appendix_dynamixel (specifications table, "
+                        "\"Position Sensor\")"),
+        "O5": Reference("Duckietown Duckiebot wheel encoders", "135 ticks per wheel revolution",
+                        "`duckietown/lx-kinematics-odometry:notebooks/03-Odometry/odometry.ipynb` (\"N_tot = 135 for "
+                        "the wheel encoders we will be using\")"),
+        "O6": Reference("SparkFun RedBot wheel encoders", "192 ticks per wheel revolution",
+                        "`MrYsLab/rb4s` wiki, \"Wheel Encoder Blocks\""),
+        "O7": Reference("Systematic odometry errors of a differential drive",
+                        "unequal wheel diameters (E_d) and an uncertain effective wheelbase (E_b) dominate; UMBmark "
+                        "measures both; sizes depend on the robot and are not given here",
+                        "J. Borenstein, L. Feng, \"Measurement and correction of systematic odometry errors in mobile "
+                        "robots\", IEEE Trans. Robotics and Automation 12(6), 1996; summarised in Martinelli et al. "
+                        "(EPFL), \"Simultaneous localization and odometry self calibration for mobile robot\", and "
+                        "solderspot.wordpress.com/2014/05/08/navbot-error-correction-using-umbmark"),
+    },
     profiles={
         "nominal": {
             "ticks_per_rev": (4096, "O4 TurtleBot3 DYNAMIXEL 12-bit absolute encoder"),

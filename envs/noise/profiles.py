@@ -11,9 +11,10 @@ sensor sections ``lidar``, ``imu``, ``camera`` and the declared timed ones also 
 ``latency_steps`` (:class:`~clutter_gym.noise.timing.SensorTiming`).
 
 A new sensor's noise needs no edit here: its module in this package declares ``SENSOR_NOISE``, a
-:class:`SensorNoiseSection` with its parameters and its values in each named profile, each with its source, and
-:func:`sensor_sections` finds it. Its parameters are then ``noise.section(name)``, overridable and listed like the
-others.
+:class:`SensorNoiseSection` with its parameters, its values in each named profile, each with its source, its model
+in words and the source rows it cites, and :func:`sensor_sections` finds it. Its parameters are then
+``noise.section(name)``, overridable and listed like the others, and docs/sensors.md (generated) shows its model,
+values and sources.
 """
 
 from __future__ import annotations
@@ -22,9 +23,9 @@ import dataclasses
 import functools
 import importlib
 import pkgutil
-from collections.abc import Mapping
+from collections.abc import Collection, Mapping
 from importlib import resources
-from typing import Any
+from typing import Any, NamedTuple
 
 import yaml
 
@@ -50,6 +51,14 @@ TIMED_SENSORS = ("lidar", "imu", "camera")
 _TIMING_KEYS = tuple(f.name for f in dataclasses.fields(SensorTiming))
 
 
+class Reference(NamedTuple):
+    """A row of a source table, as docs/sensor-noise-reference.md's are: what was looked up, what it says, where."""
+
+    item: str
+    value: str
+    source: str
+
+
 @dataclasses.dataclass(frozen=True)
 class SensorNoiseSection:
     """A sensor's noise section, declared in its noise module as ``SENSOR_NOISE``.
@@ -59,13 +68,18 @@ class SensorNoiseSection:
         params: its parameters (clean by default).
         timed: it also takes the timing keys (``rate_hz``, ``latency_steps``).
         profiles: ``{profile: {parameter: (value, source)}}`` for the named profiles that set any (timing keys
-            included); a source is a row of docs/sensor-noise-reference.md or says UNSOURCED and why.
+            included); a source cites a row by its ID (a row of docs/sensor-noise-reference.md or of
+            ``references``) or says UNSOURCED and why.
+        model: the noise model in words (markdown): what is drawn, when, and in what order.
+        references: the rows its sources cite that docs/sensor-noise-reference.md does not hold, by ID.
     """
 
     name: str
     params: type[NoiseParams]
     timed: bool
     profiles: Mapping[str, Mapping[str, tuple[float, str]]]
+    model: str
+    references: Mapping[str, Reference] = dataclasses.field(default_factory=dict)
 
 
 @functools.cache
@@ -204,15 +218,17 @@ def _build(name: str, values: Mapping[str, Mapping[str, Any]]) -> NoiseProfile:
     return NoiseProfile(name=name, timing=timing, sensors=sensors, **sections)
 
 
-def profile_table_markdown() -> str:
-    """The profile table of docs/noise.md: one row per parameter set by any profile, with value and source per
-    profile."""
+def profile_table_markdown(sections: Collection[str] | None = None) -> str:
+    """The profile table: one row per parameter set by any profile, with value and source per profile; only the
+    rows of ``sections`` when given (docs/noise.md's: those of profiles.yaml, :data:`NOISE_SECTIONS` and
+    :data:`TIMED_SENSORS`; docs/sensors.md's: a declared sensor's)."""
     names = [n for n in PROFILE_NAMES if n != "none"]
     rows: dict[tuple[str, str], dict[str, tuple[float, str]]] = {}
     for name in names:
         for section, values in profile_sources(name).items():
-            for key, entry in values.items():
-                rows.setdefault((section, key), {})[name] = entry
+            if sections is None or section in sections:
+                for key, entry in values.items():
+                    rows.setdefault((section, key), {})[name] = entry
     lines = ["| parameter | " + " | ".join(names) + " |", "|---|" + "---|" * len(names)]
     for (section, key), by_profile in rows.items():
         cells = [f"{by_profile[n][0]:g} ({by_profile[n][1]})" if n in by_profile else "-" for n in names]

@@ -8,12 +8,14 @@ from clutter_gym.sensors.lidar import Lidar, LidarConfig
 from clutter_gym.sensors.odometry import WheelOdometry
 from clutter_gym.sensors.suite import SENSORS, build_sensors, check_sensor_names, register_sensor, sensor_links
 
-register_sensor("lidar", lambda config, noise, robot: Lidar(config, noise.lidar), LidarConfig)
-register_sensor("imu", lambda config, noise, robot: Imu(config, noise.imu), None)  # its config needs the control rate
+register_sensor("lidar", lambda config, noise, robot: Lidar(config, noise.lidar), LidarConfig,
+                observation=Lidar.observation)
+register_sensor("imu", lambda config, noise, robot: Imu(config, noise.imu), None,  # its config needs the control rate
+                observation=Imu.observation)
 register_sensor("camera", lambda config, noise, robot: Camera(config, noise.camera_rgb, noise.camera_depth),
-                CameraConfig)
+                CameraConfig, observation=Camera.observation)
 register_sensor("odometry", lambda config, noise, robot: WheelOdometry(robot, noise.section("odometry")),
-                lambda: None, link=None)  # reads the wheels: no config, no mount
+                lambda: None, link=None, observation=WheelOdometry.observation)  # reads the wheels: no config, no mount
 
 #: The registered sensors' names, in registration order.
 SENSOR_NAMES = tuple(SENSORS)

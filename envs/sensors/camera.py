@@ -29,6 +29,7 @@ from clutter_gym.noise.camera import (
     start_rgb_episode,
 )
 from clutter_gym.noise.distortion import Intrinsics
+from clutter_gym.sensors.suite import Observed
 from clutter_gym.sim import Sim
 from clutter_gym.sim.primitives import BACKDROP_ID
 from clutter_gym.util.transforms import quat_to_matrix, rpy_quat
@@ -129,6 +130,14 @@ class Camera:
 
     name = "camera"
     read_every_step = False
+    observation = (
+        Observed("camera_rgb", "(h, w, 3) uint8, (w, h) = `size`", 'colour image (with "rgb" in `modes`)',
+                 "-; looking along its link's +x, +z up", "[0, 255]"),
+        Observed("camera_depth", "(h, w)", 'depth along the optical axis, 0 = no data (with "depth")', "m",
+                 "[0, `far`]"),
+        Observed("camera_segmentation", "(h, w) uint8",
+                 'class per pixel: nothing, ground, obstacle, robot, goal (with "segmentation")', "-", "[0, 4]"),
+    )
 
     def __init__(self, config: CameraConfig | None = None, rgb_noise: RgbNoise | None = None,
                  depth_noise: DepthNoise | None = None) -> None:
@@ -176,6 +185,7 @@ class Camera:
         if self._mount is not None:
             eye, rotation = eye + rotation @ self._mount[0], rotation @ self._mount[1]
         images: dict[str, np.ndarray] = {}
+        ids: np.ndarray | None  # None: no segmentation was asked of the rasteriser
         if c.renderer == "rays":
             i = self.intrinsics
             axes = np.array([rotation[:, 0], -rotation[:, 1], -rotation[:, 2]])  # forward, right, down
@@ -192,6 +202,7 @@ class Camera:
                 z = c.far * c.near / (c.far - (c.far - c.near) * buffer)
                 images["depth"] = np.where(z < c.far - 1e-3, z, 0.0)
         if "segmentation" in c.modes:
+            assert ids is not None
             table = self._classes
             # bodies made after the reset (a large scene's near obstacles) and obstacles without a body
             # (Sim.ray_cast_image's BACKDROP_ID) are obstacles

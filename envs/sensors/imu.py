@@ -18,6 +18,7 @@ from gymnasium import spaces
 
 from clutter_gym.datatypes import RobotState
 from clutter_gym.noise.imu import ACCEL_RANGE, GYRO_RANGE, ImuEpisode, ImuNoise, apply_imu_noise, start_imu_episode
+from clutter_gym.sensors.suite import Observed
 from clutter_gym.sim import GRAVITY, Sim
 
 
@@ -46,6 +47,9 @@ class Imu:
     read_every_step = True  # the finite difference needs every control step, even while the output is held
     renders = False
     needs_bodies = False
+    observation = (Observed(
+        "imu", "(6,)", "specific force (f_x, f_y, f_z), then angular rate (w_x, w_y, w_z), clipped at full scale; "
+        "+9.81 m/s^2 on z at rest", "m/s^2, rad/s; its link's axes", "+-156.9 (16 g), +-34.9 (2000 deg/s)"),)
 
     def __init__(self, config: ImuConfig, noise: ImuNoise | None = None) -> None:
         self.config = c = config

@@ -12,6 +12,7 @@ from gymnasium import spaces
 
 from clutter_gym.datatypes import RobotState
 from clutter_gym.noise.lidar import LidarEpisode, LidarNoise, angle_offsets, apply_lidar_noise, start_lidar_episode
+from clutter_gym.sensors.suite import Observed
 from clutter_gym.sim import RAY_CASTERS, Sim
 from clutter_gym.util.checks import check_integer
 
@@ -96,6 +97,10 @@ class Lidar:
     name = "lidar"
     read_every_step = False
     renders = False
+    observation = (Observed(
+        "lidar", "(`n_rays`,), or (`n_channels`, `n_rays`) with more than one channel",
+        "range / `max_range`, beams spread over `fov` counter-clockwise and centred on its link's +x, channels bottom "
+        "up; a beam without a return reads 1", "-; its link", "[0, 1]"),)
 
     def __init__(self, config: LidarConfig | None = None, noise: LidarNoise | None = None) -> None:
         self.config = c = config or LidarConfig()

@@ -20,6 +20,7 @@ from gymnasium import spaces
 
 from clutter_gym.datatypes import RobotState
 from clutter_gym.noise.odometry import OdometryNoise, encoder_angle, start_odometry_episode
+from clutter_gym.sensors.suite import Observed
 from clutter_gym.sim import Sim
 
 
@@ -39,6 +40,9 @@ class WheelOdometry:
     renders = False
     needs_bodies = False
     spaces = {"odometry": spaces.Box(-np.inf, np.inf, (6,), np.float32)}
+    observation = (Observed(
+        "odometry", "(6,)", "x, y, sin(yaw), cos(yaw) since the episode's start, then the last step's travel and turn",
+        "m, -, -, m, rad; the start's frame (x forward, y left)", "unbounded"),)
 
     def __init__(self, robot: Any, noise: OdometryNoise | None = None) -> None:
         if not hasattr(getattr(robot, "base", None), "left_wheels"):

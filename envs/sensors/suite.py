@@ -3,18 +3,32 @@
 
 A sensor registers once (:func:`register_sensor`, in ``sensors/__init__.py``) with the function that builds it
 from its config, the profile and the robot it is mounted on, the config it takes when an env gives none, and the
-URDF link it is mounted on. Callers pass configs by sensor name, so a new sensor changes no caller. A sensor's
-noise section lives in its noise module (:mod:`clutter_gym.noise.profiles` finds it there).
+URDF link it is mounted on, and the observation entries it adds (:class:`Observed`, the rows of its section in
+docs/sensors.md, which is generated from this registry). Callers pass configs by sensor name, so a new sensor changes
+no caller. The fields of its default config are its settings (:meth:`SensorEntry.settings`): an env takes them
+nested, ``sensors={"<name>": {<field>: value}}``, with no edit of the builder or the env. A sensor's noise section
+lives in its noise module (:mod:`clutter_gym.noise.profiles` finds it there).
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 from clutter_gym.interfaces import Sensor
 from clutter_gym.noise.profiles import NoiseProfile
+
+
+class Observed(NamedTuple):
+    """One observation entry a sensor adds, as a row of docs/sensors.md (markdown; settings by their nested names)."""
+
+    key: str
+    shape: str
+    content: str
+    units: str  # units and frame
+    bounds: str
 
 
 @dataclass(frozen=True)
@@ -28,12 +42,29 @@ class SensorEntry:
         default_config: the config used when an env passes none for it; None: an env must pass one (the IMU's
             depends on the env's control period).
         link: the URDF link it is mounted on (an env checks the robot has it); None: it is not mounted on a link.
+        observation: the observation entries it adds.
     """
 
     name: str
     build: Callable[[Any, NoiseProfile, Any], Sensor]
     default_config: Callable[[], Any] | None
     link: str | None
+    observation: tuple[Observed, ...] = ()
+
+    def settings(self) -> dict[str, Any]:
+        """The settings an env takes for this sensor nested (``sensors={name: {...}}``) where it declares none of its
+        own: each field of the default config (a dataclass) with its default, but the mount (``link``), which is the
+        robot's; none for a sensor whose default config is not a dataclass."""
+        config = self.default_config() if self.default_config is not None else None
+        if isinstance(config, type) or not dataclasses.is_dataclass(config):
+            return {}
+        return {f.name: getattr(config, f.name) for f in dataclasses.fields(config) if f.init and f.name != "link"}
+
+    def configured(self, settings: Mapping[str, Any]) -> Any:
+        """The default config with ``settings`` (some of :meth:`settings`) in place of their defaults; the config's
+        own checks run."""
+        assert self.default_config is not None, f"sensor {self.name!r} takes no settings"
+        return dataclasses.replace(self.default_config(), **settings)
 
 
 #: The registered sensors, by name, in registration order.
@@ -41,15 +72,17 @@ SENSORS: dict[str, SensorEntry] = {}
 
 
 def register_sensor(name: str, build: Callable[[Any, NoiseProfile, Any], Sensor],
-                    default_config: Callable[[], Any] | None, link: str | None = "") -> None:
-    """Make ``name`` a sensor an env can be given, mounted on ``link`` ("": the link called ``<name>_link``).
+                    default_config: Callable[[], Any] | None, link: str | None = "",
+                    observation: Sequence[Observed] = ()) -> None:
+    """Make ``name`` a sensor an env can be given, mounted on ``link`` ("": the link called ``<name>_link``), adding
+    the ``observation`` entries.
 
     Raises:
         ValueError: the name is taken.
     """
     if name in SENSORS:
         raise ValueError(f"sensor {name!r} is already registered")
-    SENSORS[name] = SensorEntry(name, build, default_config, f"{name}_link" if link == "" else link)
+    SENSORS[name] = SensorEntry(name, build, default_config, f"{name}_link" if link == "" else link, tuple(observation))
 
 
 def check_sensor_names(sensors: Sequence[str]) -> tuple[str, ...]:

@@ -57,7 +57,7 @@ class SampleHoldDelay:
         if reading is None:
             reading = self._line[-1]
         elif not self._line:
-            self._line.extend([reading] * self._line.maxlen)
+            self._line.extend([reading] * (self.timing.latency_steps + 1))
         self._line.append(reading)
         return self._line[0]
 

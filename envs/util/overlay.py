@@ -54,12 +54,6 @@ def draw_marks(frame: np.ndarray, view: CameraView, robot: tuple[np.ndarray | Se
     return np.asarray(image, dtype=np.uint8)
 
 
-def ring_pixels(frame: np.ndarray, colour: Sequence[int]) -> np.ndarray:
-    """Mask (H, W) of the pixels of ``frame`` painted exactly ``colour`` (a ring's pixels: rings are drawn opaque
-    and without anti-aliasing)."""
-    return np.all(frame[:, :, :3] == np.asarray(colour, dtype=np.uint8), axis=2)
-
-
 def _ring(draw: ImageDraw.ImageDraw, centre: np.ndarray, radius: float, colour: Sequence[int], width: int) -> None:
     """A ring with a thin dark border on either side, so that it reads on light and dark backgrounds."""
     c, r = float(centre[0]), float(centre[1])

@@ -20,6 +20,7 @@ from clutter_gym.noise.profiles import (
 from clutter_gym.sensors.lidar import LidarConfig
 
 NOISE_DOC = Path(__file__).resolve().parents[2] / "docs" / "noise.md"
+REFERENCE_DOC = NOISE_DOC.parent / "sensor-noise-reference.md"
 
 
 def test_the_four_profiles_exist_and_none_is_clean():
@@ -94,6 +95,24 @@ def test_bad_specs_name_what_is_wrong(spec, pattern):
 
 
 def test_docs_profile_table_is_the_generated_one():
-    assert profile_table_markdown() in NOISE_DOC.read_text(encoding="utf-8"), (
+    """docs/noise.md holds the sections of profiles.yaml; a section a sensor declares is on docs/sensors.md."""
+    table = profile_table_markdown((*NOISE_SECTIONS, *TIMED_SENSORS))
+    assert table in NOISE_DOC.read_text(encoding="utf-8"), (
         "docs/noise.md's profile table is stale: regenerate it with `clutter-gym profiles`"
     )
+    assert "`odometry." not in table and "`odometry.ticks_per_rev`" in profile_table_markdown()
+
+
+@pytest.mark.parametrize("name", sorted(sensor_sections()))
+def test_a_declared_sections_sources_cite_rows_that_exist(name):
+    """Each ID a declared section's source cites is a row of the survey or of the section's own references, which
+    repeat no survey ID, and the section describes its model."""
+    section = sensor_sections()[name]
+    survey = set(re.findall(r"^\| ([LTDIO]\d+) \|", REFERENCE_DOC.read_text(encoding="utf-8"), flags=re.M))
+    assert survey and not survey & set(section.references), survey & set(section.references)
+    for profile, values in section.profiles.items():
+        for key, (_, source) in values.items():
+            cited = re.findall(r"\b([LTDIO]\d+)\b", source)
+            assert cited or "UNSOURCED" in source, (profile, key, source)
+            assert set(cited) <= survey | set(section.references), (profile, key, source)
+    assert section.model.strip()

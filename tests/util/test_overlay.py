@@ -4,9 +4,10 @@ out of view, a trail that leaves out what is behind the camera."""
 from __future__ import annotations
 
 import numpy as np
+from helpers import ring_pixels
 
 from clutter_gym.util.camera_view import CameraView
-from clutter_gym.util.overlay import GOAL_COLOUR, LEAST_RING_PX, ROBOT_COLOUR, draw_marks, ring_pixels
+from clutter_gym.util.overlay import GOAL_COLOUR, LEAST_RING_PX, ROBOT_COLOUR, draw_marks
 
 VIEW = CameraView((0.0, -3.0, 3.0), (0.0, 0.0, 0.0), 320, 240)
 GREY = np.full((240, 320, 3), 128, dtype=np.uint8)
