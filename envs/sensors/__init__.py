@@ -17,13 +17,9 @@ register_sensor("camera", lambda config, noise, robot: Camera(config, noise.came
 register_sensor("odometry", lambda config, noise, robot: WheelOdometry(robot, noise.section("odometry")),
                 lambda: None, link=None, observation=WheelOdometry.observation)  # reads the wheels: no config, no mount
 
-#: The registered sensors' names, in registration order.
-SENSOR_NAMES = tuple(SENSORS)
-
 __all__ = [
     "SEGMENTATION_CLASSES",
     "SENSORS",
-    "SENSOR_NAMES",
     "Camera",
     "CameraConfig",
     "Imu",
