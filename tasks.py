@@ -36,10 +36,11 @@ TYPED_MODULES = ("clutter_gym.datatypes", "clutter_gym.interfaces", "clutter_gym
                  "clutter_gym.urdf.checks", "clutter_gym.urdf.geometry", "clutter_gym.urdf.kinematics",
                  "clutter_gym.collision.build", "clutter_gym.builder", "clutter_gym.make_checks",
                  "clutter_gym.robots.omni", "clutter_gym.robots.registry")
-#: and these packages, every module in them: the step stages, the dynamics parts, the Sim with its parts, and the
-#: sensors with their noise models (so a new sensor's two modules are checked with no edit here)
+#: and these packages, every module in them: the step stages, the dynamics parts, the Sim with its parts, the
+#: sensors with their noise models (so a new sensor's two modules are checked with no edit here), and the tasks
+#: with their reward terms (a task's Optional state, such as its path field before reset, must be narrowed)
 TYPED_PACKAGES = ("clutter_gym.stages", "clutter_gym.dynamics", "clutter_gym.sim", "clutter_gym.sensors",
-                  "clutter_gym.noise")
+                  "clutter_gym.noise", "clutter_gym.tasks")
 #: The Pythons pybullet 3.2.7 has wheels for, newest first.
 WHEEL_PYTHONS = ((3, 11), (3, 10))
 

@@ -114,21 +114,29 @@ class FlyTask:
         self._previous_path = 0.0
 
     def marker_position(self, scene: VolumeScene) -> tuple[float, float, float]:
-        return tuple(float(v) for v in scene.goal)
+        x, y, z = scene.goal
+        return (float(x), float(y), float(z))
 
     def reset(self, scene: VolumeScene, state: RobotState) -> None:
         self._goal = np.array(scene.goal, dtype=np.float64)
         self._path_distance = VolumePathDistance(scene, self.spec, self.robot_radius)
         self._previous_path = self.path_distance(state)
 
+    @property
+    def _field(self) -> VolumePathDistance:
+        """The episode's path-distance field, which :meth:`reset` makes from the scene."""
+        if self._path_distance is None:
+            raise RuntimeError("FlyTask has no path-distance field before reset(scene, state)")
+        return self._path_distance
+
     def path_distance(self, state: RobotState) -> float:
         """Metres to the goal along the shortest path a sphere of ``robot_radius`` fits through."""
         p = state.position
-        return self._path_distance(float(p[0]), float(p[1]), float(p[2]))
+        return self._field(float(p[0]), float(p[1]), float(p[2]))
 
     def planned_path(self, point: Sequence[float]) -> np.ndarray:
         """(k, 3) the path behind the progress field from ``point`` to the goal, metres."""
-        return self._path_distance.path(*point)
+        return self._field.path(*point)
 
     def observe(self, state: RobotState, report: CollisionReport) -> dict[str, np.ndarray]:
         """``goal``: the goal minus the base origin in the body frame (x, y, z, m; each clipped to the volume's
@@ -143,7 +151,7 @@ class FlyTask:
         out[3] = min(float(np.linalg.norm(offset)), d)
         if self.subgoal_lookahead <= 0.0:
             return {"goal": out}
-        point = self._path_distance.waypoint(*position.tolist(), lookahead=self.subgoal_lookahead)
+        point = self._field.waypoint(*position.tolist(), lookahead=self.subgoal_lookahead)
         sub = state.rotation.T @ (np.asarray(point) - position)
         bound = self.subgoal_lookahead
         return {"goal": out, "subgoal": np.clip(sub, -bound, bound).astype(np.float32)}

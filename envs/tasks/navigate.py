@@ -7,6 +7,7 @@ observations, and never calls pybullet.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -121,13 +122,20 @@ class NavigateTask:
         self._path_distance = PathDistance(scene, self.spec, self.robot_radius, plan_margin=margin)
         self._previous_path = self.path_distance(state)
 
+    @property
+    def _field(self) -> PathDistance:
+        """The episode's path-distance field, which :meth:`reset` makes from the scene."""
+        if self._path_distance is None:
+            raise RuntimeError("NavigateTask has no path-distance field before reset(scene, state)")
+        return self._path_distance
+
     def path_distance(self, state: RobotState) -> float:
         """Metres to the goal along the shortest path the footprint fits through."""
-        return self._path_distance(float(state.position[0]), float(state.position[1]))
+        return self._field(float(state.position[0]), float(state.position[1]))
 
     def planned_path(self, point: tuple[float, float]) -> np.ndarray:
         """(k, 2) the subgoal planner's path from ``point`` to the goal, metres (needs ``subgoal_lookahead > 0``)."""
-        return self._path_distance.path(*point)
+        return self._field.path(*point)
 
     def _distance(self, state: RobotState) -> float:
         return float(math.hypot(self._goal[0] - state.position[0], self._goal[1] - state.position[1]))
@@ -142,7 +150,7 @@ class NavigateTask:
             goal = np.append(goal, np.float32(math.atan2(goal[1], goal[2]) / math.pi))
         obs = {"goal": goal}
         if self.subgoal_lookahead > 0.0:
-            point = self._path_distance.waypoint(x, y, lookahead=self.subgoal_lookahead)
+            point = self._field.waypoint(x, y, lookahead=self.subgoal_lookahead)
             obs["subgoal"] = polar(point, x, y, state.yaw, self.subgoal_lookahead)
         return obs
 
@@ -174,7 +182,7 @@ def _forward_speed(state: RobotState) -> float:
     return vx * math.cos(state.yaw) + vy * math.sin(state.yaw)
 
 
-def polar(point: tuple[float, float], x: float, y: float, yaw: float, max_distance: float) -> np.ndarray:
+def polar(point: Sequence[float], x: float, y: float, yaw: float, max_distance: float) -> np.ndarray:
     """(distance, sin bearing, cos bearing) of ``point`` seen from a robot at (x, y) heading ``yaw``."""
     dx, dy = point[0] - x, point[1] - y
     bearing = math.atan2(dy, dx) - yaw

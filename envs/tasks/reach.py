@@ -135,7 +135,7 @@ class ReachTask:
         self._target = np.array(scene.target, dtype=float)
         self._path_scale = 0.0
         if self.planner is not None:
-            path = self._plan(scene, state.joint_position)
+            path = self._plan(self.planner, scene, state.joint_position)
             self.path = None if path is None else JointPath(path)
             if self.path is not None and self.path.length > 0.0:
                 self._path_scale = self.distance(state) / self.path.length
@@ -150,18 +150,19 @@ class ReachTask:
             return self.distance(state)
         self._follow(state)
         path, q = self.path, state.joint_position
+        assert path is not None, "reset sets a nonzero path scale only with a path"
         left = path.length - path.arc[path.index] + np.linalg.norm(q - path.points[path.index])
         return float(self._path_scale * left)
 
-    def _plan(self, scene: ReachScene, start: np.ndarray) -> np.ndarray | None:
-        """The subgoal planner's path on ``scene`` from ``start``. Its random stream comes from the layout itself
+    def _plan(self, planner: ArmPlanner, scene: ReachScene, start: np.ndarray) -> np.ndarray | None:
+        """The subgoal ``planner``'s path on ``scene`` from ``start``. Its random stream comes from the layout itself
         (the same scene and start give the same path), which also keys the cache."""
         digest = hashlib.sha256(repr((scene, start.tolist())).encode()).digest()
         if digest not in self._plans:
             if len(self._plans) >= PLAN_CACHE:
                 del self._plans[next(iter(self._plans))]
             rng = np.random.default_rng(int.from_bytes(digest[:8], "little"))
-            self._plans[digest] = self.planner.plan(scene.obstacles, start, self._target, rng)
+            self._plans[digest] = planner.plan(scene.obstacles, start, self._target, rng)
         return self._plans[digest]
 
     def distance(self, state: RobotState) -> float:
@@ -170,11 +171,13 @@ class ReachTask:
 
     def observe(self, state: RobotState, report: CollisionReport) -> dict[str, np.ndarray]:
         """Target (world frame, m), per-link clearance (m, clipped to +-clearance_range) and the optional entries."""
+        assert report.link_clearance is not None, "ReachTask needs a collision checker made with per_link=True"
         obs = {
             "target": self._target.astype(np.float32),
             "clearance": np.clip(report.link_clearance, -self._range, self._range).astype(np.float32),
         }
         if self.observe_directions:
+            assert report.directions is not None, "ReachTask needs a collision checker made with per_link=True"
             obs["clearance_direction"] = report.directions.astype(np.float32)
         if self.observe_offset:
             obs["target_offset"] = (self._target - state.links.position[self._ee_row]).astype(np.float32)
