@@ -45,8 +45,8 @@ class SequenceDataset:
         for env in range(len(labels)):
             if starts[env] and self._open[env]:
                 self._close(env)
-            row = {"obs": {key: np.asarray(value[env], np.float32) for key, value in obs.items()},
-                   "label": np.asarray(labels[env], np.float32), "weight": np.float32(weights[env])}
+            row = {"obs": {key: np.array(value[env], np.float32) for key, value in obs.items()},  # copies
+                   "label": np.array(labels[env], np.float32), "weight": np.float32(weights[env])}
             if not self._open[env]:  # a sequence's first step: the state the student starts it from
                 zeros = np.zeros(self.hidden_size, np.float32)
                 row["state"] = ((zeros, zeros) if starts[env] or state is None
