@@ -12,6 +12,7 @@ import numpy as np
 from clutter_gym.builder import EnvSettings, sensor_configs
 from clutter_gym.collision import RobotCollisionModel, collision_checker
 from clutter_gym.core import ClutterEnv
+from clutter_gym.dynamics import flight_dynamics
 from clutter_gym.noise.profiles import resolve_noise
 from clutter_gym.robots import Multirotor, MultirotorConfig
 from clutter_gym.robots.multirotor_model import IMU_LINK, SENSOR_LINK
@@ -44,7 +45,7 @@ SETTINGS = EnvSettings("ClutterFly-v1", MIN_PHYSICS_HZ, {
     "lidar_vertical_fov": math.radians(60.0), "lidar_caster": "exact",
     "camera_size": (64, 64), "camera_modes": ("depth",), "camera_fov": math.radians(58.0), "camera_far": 10.0,
     "camera_renderer": None,
-    "physics_hz": 240.0, "control_hz": 30.0, "solver_iterations": 10, "aero": (),
+    "physics_hz": 240.0, "control_hz": 30.0, "solver_iterations": 10, "aero": (), "dynamics": "physics",
     "success_radius": 0.3, "clearance_margin": 0.1, "max_tilt": math.pi / 2, "terminate_on_collision": False,
     "contact_tolerance": 1e-3, "collision_fidelity": "primitive", "collision_padding": 0.0, "swept_speed": 0.2,
     "progress_weight": 10.0, "success_weight": 10.0, "crash_weight": 10.0, "contact_weight": 1.0,
@@ -155,7 +156,8 @@ class ClutterFlyEnv(ClutterEnv):
     of ("drag", "ground_effect")); ``success_radius`` m (0, 2]; ``clearance_margin`` m [0, 1]; ``max_tilt`` rad (0, pi];
     ``terminate_on_collision``; ``contact_tolerance`` m [0, 0.05]; ``collision_fidelity``; ``collision_padding`` m
     [0, 1]; ``swept_speed`` m/s (``inf`` turns swept checks off); ``*_weight`` reward weights [0, 1e4];
-    ``subgoal_lookahead`` m [0, volume diagonal] (0: off); ``observe_thrust_ratio`` (the ``thrust_ratio`` entry).
+    ``subgoal_lookahead`` m [0, volume diagonal] (0: off); ``observe_thrust_ratio`` (the ``thrust_ratio`` entry);
+    ``dynamics`` (see "Dynamics").
 
     ``subgoal_lookahead > 0`` makes the env map-based, as ClutterNav's option of that name: the ``subgoal`` entry
     is a point that far ahead on the shortest path for the drone's bounding sphere through the known layout (the
@@ -170,11 +172,27 @@ class ClutterFlyEnv(ClutterEnv):
 
     Defaults are in the signature (the module's ``SETTINGS``).
 
+    ## Dynamics
+
+    ``dynamics="physics"`` (the default) flies the airframe in pybullet: the flight controller in Python and a
+    ``stepSimulation`` every tick. ``"reduced"`` flies it by its reduced model (:mod:`clutter_gym.dynamics.flight_model`:
+    the same rigid body, rotors, rate loop, mixer and aerodynamic effects, integrated per tick in compiled code as
+    Bullet integrates a floating base) wherever a step touches nothing: each step is flown by the model first, and
+    when the distance it moved any point of the airframe comes within the contact tolerance of the clearance FCL
+    measured before it, the step is undone and flown by pybullet from the same state
+    (:mod:`clutter_gym.dynamics.reduced_flight`). In free flight the two agree to rounding (micrometres after 20 s of
+    tumbling); where contacts begin, pybullet's contact solver keeps its own history, so trajectories that touch
+    something part at that step. ``"auto"`` takes the reduced model when it flies a fixed probe within 1 mm of
+    pybullet (every airframe a spec describes does; the check guards a model that drifts) and full physics otherwise.
+    The reset's ``info["dynamics"]`` says which model runs and why. Mass and motor-strength randomisation and the thrust
+    estimate act on the model as on pybullet's body. Its error and its speed: docs/speed-vs-error.md, "Reduced
+    dynamics (ClutterFly-v1)".
+
     ## Version history
 
     * v1 (clutter-gym 0.3.0): the exact LIDAR caster by default (readings differ from v0's by under a
       millimetre); the swept audit follows rotation (``info["tunneling"]``, and the rewards and costs of the steps
-      whose flag changed).
+      whose flag changed). ``dynamics`` added, its default (``"physics"``) the earlier behaviour.
     * v0 (clutter-gym 0.1.0-0.2.0): initial release.
     """
 
@@ -210,6 +228,8 @@ class ClutterFlyEnv(ClutterEnv):
             control_hz=s.control_hz,
             noise=profile,
             render_mode=s.render_mode,
+            dynamics=flight_dynamics(s.dynamics, flyer, radius + float(np.linalg.norm(flyer.mass_properties.com)),
+                                     s.physics_hz, s.solver_iterations, s.control_hz, s.contact_tolerance),
         )
 
 

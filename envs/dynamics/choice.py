@@ -2,9 +2,12 @@
 
 - ``"physics"``: pybullet's full simulation, always.
 - ``"reduced"``: the robot's reduced model while nothing is within a step's reach, full physics otherwise
-  (:class:`~clutter_gym.dynamics.reduced_drive.ReducedDrive`); a robot without a reduced model is refused.
-- ``"auto"``: the reduced model where one exists and its fit to the full-physics robot is within
-  :data:`AUTO_ERROR_BOUND`; full physics otherwise. The reset's ``info["dynamics"]`` says which and why.
+  (:class:`~clutter_gym.dynamics.reduced_drive.ReducedDrive` for a differential drive,
+  :class:`~clutter_gym.dynamics.reduced_flight.ReducedFlight` for a multirotor); a robot without a reduced model is
+  refused.
+- ``"auto"``: the reduced model where one exists and its error against the full-physics robot is within its bound
+  (:data:`AUTO_ERROR_BOUND`, :data:`AUTO_FLIGHT_BOUND`); full physics otherwise. The reset's ``info["dynamics"]``
+  says which and why.
 """
 
 from __future__ import annotations
@@ -14,13 +17,19 @@ from typing import Any
 
 from clutter_gym.dynamics.base import DynamicsFactory, FullPhysics
 from clutter_gym.dynamics.drive_fit import fit_drive
+from clutter_gym.dynamics.flight_check import flight_gap
 from clutter_gym.dynamics.reduced_drive import ReducedDrive
+from clutter_gym.dynamics.reduced_flight import ReducedFlight
 from clutter_gym.robots.diffdrive import DiffDriveRobot
+from clutter_gym.robots.multirotor import Multirotor
 
 DYNAMICS_MODES = ("physics", "reduced", "auto")
 #: the largest error of a reduced drive model that ``"auto"`` takes: the root-mean-square speed error over its fit's
 #: probe, as a share of the commanded maxima (docs/speed-vs-error.md, "Reduced dynamics")
 AUTO_ERROR_BOUND = 0.10
+#: m, the largest distance between pybullet's flight of a multirotor's probe and its reduced model's that ``"auto"``
+#: takes (:mod:`~clutter_gym.dynamics.flight_check`; the two run the same equations, so they agree to rounding)
+AUTO_FLIGHT_BOUND = 1e-3
 
 
 def check_dynamics_mode(dynamics: Any) -> None:
@@ -52,3 +61,21 @@ def ground_dynamics(mode: str, robot: Any, physics_hz: float, solver_iterations:
     reason = ("the env's settings (dynamics='reduced')" if mode == "reduced" else
               f"the reduced model of {robot.name!r} is within {fit.error:.1%} of its speeds (dynamics='auto')")
     return partial(ReducedDrive, fit=fit, control_hz=control_hz, contact_tolerance=contact_tolerance, reason=reason)
+
+
+def flight_dynamics(mode: str, robot: Multirotor, radius: float, physics_hz: float, solver_iterations: int,
+                    control_hz: float, contact_tolerance: float) -> DynamicsFactory:
+    """The dynamics part ``mode`` gives a multirotor whose collision shapes reach ``radius`` metres from its centre of
+    mass: a factory of it from the env's Sim and robot. ``"auto"`` takes the reduced model where it flies
+    :mod:`~clutter_gym.dynamics.flight_check`'s probe within :data:`AUTO_FLIGHT_BOUND` of pybullet."""
+    check_dynamics_mode(mode)
+    if mode == "physics":
+        return partial(FullPhysics, reason="the env's settings (dynamics='physics')")
+    reason = "the env's settings (dynamics='reduced')"
+    if mode == "auto":
+        gap = flight_gap(robot.model, robot.config, physics_hz, solver_iterations, control_hz)
+        if gap > AUTO_FLIGHT_BOUND:
+            why = f"flies {gap:.2g} m from pybullet over its probe, over the {AUTO_FLIGHT_BOUND:g} m bound"
+            return partial(FullPhysics, reason=f"the reduced model of {robot.name!r} {why} (dynamics='auto')")
+        reason = f"the reduced model of {robot.name!r} flies within {gap:.1g} m of pybullet (dynamics='auto')"
+    return partial(ReducedFlight, radius=radius, contact_tolerance=contact_tolerance, reason=reason)

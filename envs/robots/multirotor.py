@@ -10,8 +10,10 @@ engine, never from setting a pose. The quadrotor's coefficients, limits and thei
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 from gymnasium import spaces
@@ -100,6 +102,18 @@ class MultirotorConfig:
         rp, y = self.rate_kp_roll_pitch, self.rate_kp_yaw
         return RateGains((rp, rp, y), (self.rate_ki_roll_pitch, self.rate_ki_roll_pitch, self.rate_ki_yaw),
                          self.rate_integral_limit)
+
+
+class InnerState(NamedTuple):
+    """The flight controller's state between ticks: rotor speeds (rad/s), the rate loop's integral (rad), the
+    thrust-ratio estimate, the estimator's last velocity (m/s, None before its first tick) and the nominal thrust of
+    the last tick (N)."""
+
+    speeds: tuple[float, ...]
+    integral: tuple[float, float, float]
+    ratio: float
+    velocity: tuple[float, float, float] | None
+    nominal_thrust: float
 
 
 class Multirotor(UrdfRobot):
@@ -271,6 +285,28 @@ class Multirotor(UrdfRobot):
             command = m.min_rotor_speed + 0.5 * (a + 1.0) * (m.max_rotor_speed - m.min_rotor_speed)
             self._speed_command = command.tolist()
 
+    def held_command(self) -> np.ndarray:
+        """The command the coming ticks hold: (collective thrust N, body rates rad/s) with ``control="rates"``, one
+        speed command per rotor (rad/s) otherwise."""
+        if self._rates:
+            return np.array([self._thrust_command, *self._rate_command])
+        return np.array(self._speed_command)
+
+    def inner_state(self) -> InnerState:
+        """What the flight controller holds between ticks (a reduced model of the flight takes it over)."""
+        e = self._estimator
+        if e is None:
+            return InnerState(tuple(self._speeds), self._controller.integral, 1.0, None, self._nominal_thrust)
+        return InnerState(tuple(self._speeds), self._controller.integral, e.ratio, e.velocity, self._nominal_thrust)
+
+    def set_inner_state(self, inner: InnerState) -> None:
+        """Take over the flight controller's state from a reduced model of the flight."""
+        self._speeds = list(inner.speeds)
+        self._controller.integral = inner.integral
+        self._nominal_thrust = inner.nominal_thrust
+        if self._estimator is not None:
+            self._estimator.ratio, self._estimator.velocity = inner.ratio, inner.velocity
+
     def before_tick(self) -> None:
         """One physics tick of actuation: inner loop, motor lag, then rotor forces and the body torque for the
         next ``stepSimulation`` (which clears them). Rotor speeds advance first, so a tick's forces come from the
@@ -311,13 +347,18 @@ class Multirotor(UrdfRobot):
         """Ground-truth state from one pybullet read of the base: the airframe is rigid, so the tracked links'
         states follow from the base's (:class:`RigidFrames`)."""
         com, rot, lin, ang = self._sim.base_state(self._body)
-        rot = np.reshape(rot, (3, 3))
+        return self.state_at(com, np.reshape(rot, (3, 3)), lin, ang)
+
+    def state_at(self, com: Sequence[float], rotation: np.ndarray, linear_velocity: Sequence[float],
+                 angular_velocity: Sequence[float]) -> RobotState:
+        """The state of the airframe whose centre of mass is at ``com`` (world, m) with ``rotation`` (3, 3) and the
+        velocities of its centre of mass (world, m/s and rad/s): pybullet's, or a reduced model's."""
         return RobotState(
-            position=np.asarray(com) - rot @ self._com_offset,
-            rotation=rot,
-            linear_velocity=lin,
-            angular_velocity=ang,
-            links=self._frames.link_states(com, rot, lin, ang),
+            position=np.asarray(com) - rotation @ self._com_offset,
+            rotation=rotation,
+            linear_velocity=linear_velocity,
+            angular_velocity=angular_velocity,
+            links=self._frames.link_states(com, rotation, linear_velocity, angular_velocity),
             link_names=self.link_names,
             link_index=self.link_index,
             body=self._body,

@@ -120,12 +120,13 @@ class Mixer:
 
     Attributes:
         shares: each rotor's share of the collective thrust (they sum to 1).
+        torque_rows: per rotor, its thrust (N) per roll, pitch and yaw torque (N m).
     """
 
     def __init__(self, allocation_matrix: np.ndarray, min_thrust: float, max_thrust: float) -> None:
         inverse = mixing_matrix(allocation_matrix)
         self.shares = tuple(inverse[:, 0].tolist())
-        self._torque_rows = tuple(map(tuple, inverse[:, 1:].tolist()))  # per rotor: N per roll, pitch, yaw N m
+        self.torque_rows = tuple(map(tuple, inverse[:, 1:].tolist()))  # per rotor: N per roll, pitch, yaw N m
         self.min_thrust = min_thrust
         self.max_thrust = max_thrust
 
@@ -143,10 +144,10 @@ class Mixer:
         lo, hi = self.min_thrust, self.max_thrust
         span = hi - lo
         tx, ty, tz = torque
-        differential = [a * tx + b * ty + c * tz for a, b, c in self._torque_rows]  # roll and pitch, + yaw
+        differential = [a * tx + b * ty + c * tz for a, b, c in self.torque_rows]  # roll and pitch, + yaw
         if max(differential) - min(differential) > span:
-            rp = [a * tx + b * ty for a, b, _ in self._torque_rows]
-            yaw = [c * tz for _, _, c in self._torque_rows]
+            rp = [a * tx + b * ty for a, b, _ in self.torque_rows]
+            yaw = [c * tz for _, _, c in self.torque_rows]
             rp_spread = max(rp) - min(rp)
             if rp_spread > span:
                 scale = span / rp_spread

@@ -23,7 +23,8 @@ MIN_THRUST_SHARE = 0.1
 
 
 class ThrustRatioEstimator:
-    """``ratio``: the filtered estimate, 1.0 after :meth:`reset`.
+    """``ratio``: the filtered estimate, 1.0 after :meth:`reset`; ``velocity``: the last tick's velocity (m/s, world),
+    None after it.
 
     Args:
         nominal_mass: kg, the model's mass.
@@ -39,18 +40,18 @@ class ThrustRatioEstimator:
         self.gain = 1.0 - math.exp(-dt / time_constant)
         self._min_thrust = MIN_THRUST_SHARE * nominal_mass * gravity
         self.ratio = 1.0
-        self._velocity: tuple[float, float, float] | None = None
+        self.velocity: tuple[float, float, float] | None = None
 
     def reset(self) -> None:
         """Back to the nominal model (1.0), with no velocity to difference against."""
         self.ratio = 1.0
-        self._velocity = None
+        self.velocity = None
 
     def update(self, body_z: tuple[float, float, float], velocity: tuple[float, float, float],
                nominal_thrust: float) -> None:
         """One tick: ``velocity`` (m/s, world) now; ``nominal_thrust`` (N) the model's thrust over the tick that
         ended here, along ``body_z`` (the body's z axis in the world, a unit vector)."""
-        previous, self._velocity = self._velocity, velocity
+        previous, self.velocity = self.velocity, velocity
         if previous is None or nominal_thrust < self._min_thrust:
             return
         inv_dt = 1.0 / self.dt

@@ -257,6 +257,10 @@ class Sim:
         for _ in range(n):
             pb.stepSimulation(physicsClientId=self._cid)
 
+    def base_pose(self, body: int) -> tuple[tuple, tuple]:
+        """(centre-of-mass position, quaternion (x, y, z, w)), world frame, as pybullet's tuples of floats."""
+        return pb.getBasePositionAndOrientation(body, physicsClientId=self._cid)
+
     def base_state(self, body: int) -> tuple[tuple, tuple, tuple, tuple]:
         """(centre-of-mass position, rotation matrix, linear velocity, angular velocity), world frame, as pybullet's
         tuples of floats: the rotation matrix row by row (9 floats; ``np.reshape(rotation, (3, 3))`` makes the
