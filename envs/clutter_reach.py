@@ -8,6 +8,7 @@ from typing import Any
 from clutter_gym.builder import EnvSettings
 from clutter_gym.collision import collision_checker
 from clutter_gym.core import ClutterEnv
+from clutter_gym.dynamics import arm_dynamics
 from clutter_gym.noise.profiles import resolve_noise
 from clutter_gym.planning.joint_space import ArmPlanner
 from clutter_gym.robots.arm import Arm, ArmConfig
@@ -39,7 +40,7 @@ SETTINGS = EnvSettings("ClutterReach-v1", MIN_PHYSICS_HZ, {
     "contact_tolerance": 1e-3, "swept_speed": 0.2,
     "progress_weight": 10.0, "success_weight": 10.0, "contact_weight": 1.0, "self_contact_weight": 1.0,
     "clearance_weight": 0.2, "tunneling_weight": 1.0, "control_weight": 0.005, "subgoal_lookahead": 0.0,
-    "robot": "panda", "physics": "auto", "sensors": (),
+    "robot": "panda", "physics": "auto", "dynamics": "physics", "sensors": (),
     "camera_size": (32, 32), "camera_modes": ("depth",), "camera_fov": math.radians(58.0), "camera_far": 2.0,
 })
 
@@ -115,7 +116,7 @@ class ClutterReachEnv(ClutterEnv):
     ## Arguments
 
     ``robot`` (a registered arm, a spec mapping or a YAML spec file: docs/robots.md); ``physics`` ("auto" or
-    "fixed", as ClutterNav-v1's);
+    "fixed", as ClutterNav-v1's); ``dynamics`` (see "Dynamics");
     ``render_mode``; ``control`` ("joint_velocity", "ee_position"); ``max_joint_speed`` (0, 1];
     ``max_ee_step`` m; ``collision_fidelity`` (one of ``FIDELITY_LEVELS``: docs/collision.md);
     ``collision_padding`` m; ``self_collision``; ``n_obstacles`` [0, 20]; ``movable_obstacles`` fraction [0, 1]
@@ -144,9 +145,24 @@ class ClutterReachEnv(ClutterEnv):
     controller its path; the ``subgoal`` entry is the point that far ahead along it. Its random stream is drawn
     from the layout, so a seed still fixes the episode.
 
+    ## Dynamics
+
+    ``dynamics="physics"`` (the default) moves the arm by pybullet's joint motors and its constraint solver every
+    tick. ``"reduced"`` moves its joints by the motors' own law (:mod:`clutter_gym.dynamics.arm_model`: each joint gets
+    the velocity its position motor asks for, as if its force were unlimited) wherever a step touches nothing: the
+    model's step is taken when the farthest any point of the arm can have moved (each joint's turn times the reach of
+    the links beyond it) stays within the clearance FCL measured before it, less the contact tolerance, and pybullet's
+    joints are then set to the model's, so its forward kinematics place the links; otherwise the step runs under full
+    physics (:mod:`clutter_gym.dynamics.reduced_arm`). An episode with a movable obstacle runs under full physics
+    throughout. ``"auto"`` takes the reduced model when it keeps the hand within 2 cm of pybullet's over a fixed probe
+    (the Panda's is within about 1 cm: the model leaves out the force limits and the coupling of the joints that
+    pybullet's solver meets) and full physics otherwise. The reset's ``info["dynamics"]`` says which model runs and
+    why. Its error and its speed: docs/speed-vs-error.md, "Reduced dynamics (ClutterReach-v1)".
+
     ## Version history
 
-    * v1 (clutter-gym 0.3.0): ``physics="auto"`` by default; the swept audit follows rotation
+    * v1 (clutter-gym 0.3.0): ``physics="auto"`` by default; ``dynamics`` added, its default (``"physics"``) the
+      earlier behaviour; the swept audit follows rotation
       (``info["tunneling"]``, and the rewards and costs of the steps whose flag changed).
     * v0 (clutter-gym 0.1.0-0.2.0): initial release; movable obstacles (``movable_obstacles``, a scene's ``mass``)
       added, off by default.
@@ -168,6 +184,7 @@ class ClutterReachEnv(ClutterEnv):
         checker = collision_checker(arm, model.tracked_links, clearance_range=s.clearance_range,
                                     control_hz=s.control_hz, fixed_links=(arm.base_link, *model.fixed_links),
                                     **s.group("collision"))
+        radii = checker.model.link_radii()
         task = ReachTask(ReachRewardWeights(**s.group("reward")), ee_row=model.ee_row, links=checker.links,
                          success_radius=s.success_radius, clearance_margin=s.clearance_margin,
                          clearance_range=s.clearance_range, terminate_on_collision=s.terminate_on_collision,
@@ -188,4 +205,6 @@ class ClutterReachEnv(ClutterEnv):
             noise=profile,
             render_mode=s.render_mode,
             physics=s.physics,
+            dynamics=arm_dynamics(s.dynamics, arm, {link: radii[link] for link in checker.links}, s.physics_hz,
+                                  s.solver_iterations, s.control_hz, s.contact_tolerance),
         )

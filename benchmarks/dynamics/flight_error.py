@@ -17,6 +17,7 @@ import gymnasium as gym
 import numpy as np
 
 import clutter_gym  # noqa: F401  (registers the envs)
+from benchmarks.dynamics.reduced_error import HELD_OUT
 from benchmarks.harness import alternating_rounds
 from benchmarks.peers.hover import HoverKinPeer
 from benchmarks.speed.fly_throughput import run_block
@@ -26,8 +27,6 @@ from clutter_gym.training.config import config_for
 
 #: seconds after which a flight's divergence is read; s each random command is held
 MARKS, HOLD = (1.0, 5.0, 20.0), 0.25
-#: held-out layouts: the seeds evaluation uses (docs/learning.md)
-HELD_OUT = 1_000_000
 #: the planner reference of docs/baselines.md: the flyer on the subgoal, with the shipped block's gain
 FLY = config_for("ClutterFly-v1")
 

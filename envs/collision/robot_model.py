@@ -196,6 +196,17 @@ class RobotCollisionModel:
         gaps = centres - middle
         return middle, float((np.sqrt((gaps * gaps).sum(axis=1)) + self.ball_radius + self.padding).max())
 
+    def link_radii(self) -> dict[str, float]:
+        """Per link with geometry: the farthest point of its shapes (their enclosing balls, padding included) from the
+        link frame's origin, metres."""
+        offsets = self._ball_offset if self._ball_offset is not None else np.zeros_like(self._local_pos)
+        centres = self._local_pos + np.einsum("nij,nj->ni", self._local_rot, offsets)
+        reach = np.linalg.norm(centres, axis=1) + self.ball_radius + self.padding
+        radii: dict[str, float] = {}
+        for shape, value in zip(self.shapes, reach):
+            radii[shape.link] = max(radii.get(shape.link, 0.0), float(value))
+        return radii
+
     def ball_centres_at(self, position: np.ndarray, rotation: np.ndarray) -> np.ndarray:
         """(n, 3) world centres of the shapes' enclosing balls with the shapes at ``position`` (n, 3) and
         ``rotation`` (n, 3, 3)."""

@@ -3,23 +3,28 @@
 - ``"physics"``: pybullet's full simulation, always.
 - ``"reduced"``: the robot's reduced model while nothing is within a step's reach, full physics otherwise
   (:class:`~clutter_gym.dynamics.reduced_drive.ReducedDrive` for a differential drive,
-  :class:`~clutter_gym.dynamics.reduced_flight.ReducedFlight` for a multirotor); a robot without a reduced model is
+  :class:`~clutter_gym.dynamics.reduced_flight.ReducedFlight` for a multirotor,
+  :class:`~clutter_gym.dynamics.reduced_arm.ReducedArm` for a fixed-base arm); a robot without a reduced model is
   refused.
 - ``"auto"``: the reduced model where one exists and its error against the full-physics robot is within its bound
-  (:data:`AUTO_ERROR_BOUND`, :data:`AUTO_FLIGHT_BOUND`); full physics otherwise. The reset's ``info["dynamics"]``
-  says which and why.
+  (:data:`AUTO_ERROR_BOUND`, :data:`AUTO_FLIGHT_BOUND`, :data:`AUTO_ARM_BOUND`); full physics otherwise. The reset's
+  ``info["dynamics"]`` says which and why.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from functools import partial
 from typing import Any
 
+from clutter_gym.dynamics.arm_check import arm_gap
 from clutter_gym.dynamics.base import DynamicsFactory, FullPhysics
 from clutter_gym.dynamics.drive_fit import fit_drive
 from clutter_gym.dynamics.flight_check import flight_gap
+from clutter_gym.dynamics.reduced_arm import ReducedArm
 from clutter_gym.dynamics.reduced_drive import ReducedDrive
 from clutter_gym.dynamics.reduced_flight import ReducedFlight
+from clutter_gym.robots.arm import Arm
 from clutter_gym.robots.diffdrive import DiffDriveRobot
 from clutter_gym.robots.multirotor import Multirotor
 
@@ -30,6 +35,9 @@ AUTO_ERROR_BOUND = 0.10
 #: m, the largest distance between pybullet's flight of a multirotor's probe and its reduced model's that ``"auto"``
 #: takes (:mod:`~clutter_gym.dynamics.flight_check`; the two run the same equations, so they agree to rounding)
 AUTO_FLIGHT_BOUND = 1e-3
+#: m, the largest distance between the end effector as pybullet drives an arm's probe and as its reduced model does
+#: that ``"auto"`` takes: under half of ClutterReach's default clearance margin and success radius (0.05 m)
+AUTO_ARM_BOUND = 0.02
 
 
 def check_dynamics_mode(dynamics: Any) -> None:
@@ -79,3 +87,22 @@ def flight_dynamics(mode: str, robot: Multirotor, radius: float, physics_hz: flo
             return partial(FullPhysics, reason=f"the reduced model of {robot.name!r} {why} (dynamics='auto')")
         reason = f"the reduced model of {robot.name!r} flies within {gap:.1g} m of pybullet (dynamics='auto')"
     return partial(ReducedFlight, radius=radius, contact_tolerance=contact_tolerance, reason=reason)
+
+
+def arm_dynamics(mode: str, robot: Arm, radii: Mapping[str, float], physics_hz: float, solver_iterations: int,
+                 control_hz: float, contact_tolerance: float) -> DynamicsFactory:
+    """The dynamics part ``mode`` gives a fixed-base arm whose links' collision shapes reach ``radii`` (metres, by
+    link) from their frames: a factory of it from the env's Sim and robot. ``"auto"`` takes the reduced model where
+    it drives :mod:`~clutter_gym.dynamics.arm_check`'s probe within :data:`AUTO_ARM_BOUND` of pybullet."""
+    check_dynamics_mode(mode)
+    if mode == "physics":
+        return partial(FullPhysics, reason="the env's settings (dynamics='physics')")
+    reason = "the env's settings (dynamics='reduced')"
+    if mode == "auto":
+        gap = arm_gap(robot.model, robot.config, physics_hz, solver_iterations, control_hz)
+        if gap > AUTO_ARM_BOUND:
+            why = f"moves its hand {gap:.3f} m from pybullet's over its probe, over the {AUTO_ARM_BOUND:g} m bound"
+            return partial(FullPhysics, reason=f"the reduced model of {robot.name!r} {why} (dynamics='auto')")
+        reason = f"the reduced model of {robot.name!r} keeps its hand within {gap:.3f} m of pybullet's " \
+                 "(dynamics='auto')"
+    return partial(ReducedArm, radii=radii, contact_tolerance=contact_tolerance, reason=reason)

@@ -49,7 +49,7 @@ class ReducedFlight(Dynamics):
         contact_tolerance: metres, the env's: a clearance below it is a contact.
 
     Attributes:
-        full: whether the last step ran under full physics.
+        full: whether the last step ran under full physics (True at an episode's start).
         reduced_steps, full_steps: the steps run under each since the env was made.
     """
 
@@ -74,7 +74,8 @@ class ReducedFlight(Dynamics):
 
     def episode_start(self, obstacles: Sequence[Obstacle]) -> dict[str, object]:
         self._from_body()
-        self._episode_full = self.full = any(o.movable for o in obstacles)
+        self._episode_full = any(o.movable for o in obstacles)
+        self.full = True  # pybullet holds the drone at its start
         self._clearance = 0.0
         if self._episode_full:
             return {"model": "physics", "reason": "a movable obstacle in the scene: full physics for the episode"}

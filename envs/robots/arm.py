@@ -71,6 +71,7 @@ class Arm(UrdfRobot):
             "ee_position": spaces.Box(-1.5, 1.5, shape=(3,), dtype=f32),
         }
         self._target = np.array(m.ready)
+        self._velocity = np.zeros(len(m.arm_joints))
         self._forces = m.effort_limit.copy()
         self._ee_target = np.zeros(3)
         fingers = len(m.finger_joints)
@@ -116,8 +117,18 @@ class Arm(UrdfRobot):
         self._ee_target = self._sim.link_frame(self._body, self._ee)[0]
 
     def _hold(self, velocity: np.ndarray) -> None:
+        self._velocity = velocity
         self._sim.actuation.set_joint_positions(self._body, self._arm, self._target.tolist(), velocity.tolist(),
                                       self._forces.tolist())
+
+    def held_command(self) -> tuple[np.ndarray, np.ndarray]:
+        """The arm joints' motor targets the coming ticks hold: positions (rad) and velocities (rad/s)."""
+        return self._target, self._velocity
+
+    @property
+    def arm_joints(self) -> list[int]:
+        """pybullet indices of the arm's joints (each is its child link's index)."""
+        return self._arm
 
     def apply_action(self, action: np.ndarray) -> None:
         """Move the joint targets for one control period from a clipped, normalised action."""

@@ -352,3 +352,19 @@ def test_a_yaml_spec_that_is_not_a_mapping_is_refused(tmp_path):
     with pytest.raises(ValueError, match=r"kind 'diff_drive' does not fit; ClutterFly-v1 takes a multirotor: robot= "
                                          r"one of \['quadrotor'\], or a spec with kind 'multirotor'"):
         gym.make("ClutterFly-v1", robot=str(spec))
+
+
+def test_a_spec_hexarotor_gets_the_reduced_flight_model_and_flies_it_as_pybullet_does(make_env):
+    """Its reduced model comes from its spec and URDF (six rotors, its mixer's pseudo-inverse): ``"auto"`` takes it,
+    and 2 s of seeded commands in the open volume fly as full physics flies them, to a micrometre."""
+    runs = []
+    for mode in ("physics", "auto"):
+        env = make_env("ClutterFly-v1", robot=str(HEXAROTOR), volume_size=SIZE, dynamics=mode)
+        _, info = env.reset(seed=0, options={"scene": OPEN})
+        assert info["dynamics"]["model"] == ("physics" if mode == "physics" else "reduced")
+        hover = env.unwrapped.robot.hover_action(env.unwrapped.sim.gravity)
+        for offset in np.random.default_rng(0).uniform(-0.1, 0.1, (60, 4)):
+            env.step(hover + offset)
+        runs.append(env.unwrapped.dynamics.state().position)
+    assert env.unwrapped.dynamics.reduced_steps == 60
+    assert np.abs(runs[0] - runs[1]).max() < 1e-6

@@ -1,0 +1,129 @@
+"""ClutterReach-v1's reduced dynamics against full physics, side by side in one process: the end effector's divergence
+over seeded drives in empty space, the proximity field's and the planner reference's closed-loop episodes on held-out
+layouts with the step time each model costs, and both models' steps/s beside panda-gym's PandaReach-v3 (if installed)
+in alternating blocks.
+
+    python -m benchmarks.dynamics.arm_error [--drives 20] [--episodes 100] [--rounds 6]
+
+Prints the tables of docs/speed-vs-error.md, "Reduced dynamics (ClutterReach-v1)".
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from collections.abc import Callable
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+import clutter_gym  # noqa: F401  (registers the envs)
+from benchmarks.dynamics.reduced_error import HELD_OUT
+from benchmarks.harness import EnvRunner
+from benchmarks.learning.baselines import REACH_SENSORS
+from benchmarks.speed.throughput import make_peer
+from clutter_gym.dynamics.arm_check import compare_drives
+from clutter_gym.training.baselines import ProximityFieldReacher
+from clutter_gym.training.joint_planner import JointPlannerReacher
+
+#: seconds after which a drive's divergence is read; s each random command is held
+MARKS, HOLD = (1.0, 5.0, 20.0), 0.25
+#: the closed-loop controllers: name -> (gym.make arguments, policy factory from the env)
+CONTROLLERS: dict[str, tuple[dict[str, Any], Callable[[gym.Env], Any]]] = {
+    "proximity field": ({"observe_directions": True},
+                        lambda env: ProximityFieldReacher.for_env(env, attraction=REACH_SENSORS.residual_gain)),
+    "planner reference": ({}, JointPlannerReacher),
+}
+
+
+def divergence(drives: int) -> dict[float, np.ndarray]:
+    """End-effector gaps (m) between pybullet and the model after each of :data:`MARKS`, one per seeded drive of
+    random joint commands (within 0.7 of full scale, each held :data:`HOLD` s) from the ready pose."""
+    env = gym.make("ClutterReach-v1")
+    arm = env.unwrapped.robot
+    env.close()
+    gaps: dict[float, list[float]] = {mark: [] for mark in MARKS}
+    for seed in range(drives):
+        commands = np.random.default_rng(seed).uniform(-0.7, 0.7, (int(max(MARKS) / HOLD), 7))
+        full, reduced = compare_drives(arm.model, arm.config, 240.0, 10, 20.0, commands, HOLD)
+        for mark in MARKS:
+            i = int(mark * 20.0) - 1
+            gaps[mark].append(float(np.linalg.norm(full[i] - reduced[i])))
+    return {mark: np.array(g) for mark, g in gaps.items()}
+
+
+def closed_loop(controller: str, mode: str, episodes: int) -> dict[str, float]:
+    """A controller's episodes under ``mode``: success, collision episodes, the env's step time (ms) and the share of
+    steps the reduced model ran."""
+    kwargs, make = CONTROLLERS[controller]
+    env = gym.make("ClutterReach-v1", dynamics=mode, **kwargs)
+    policy = make(env)
+    success = collided = steps = 0
+    seconds = 0.0
+    for i in range(episodes):
+        obs, _ = env.reset(seed=HELD_OUT + i)
+        touched = False
+        while True:
+            action = policy(obs)
+            start = time.perf_counter()
+            obs, _, terminated, truncated, info = env.step(action)
+            seconds += time.perf_counter() - start
+            steps += 1
+            touched |= info["cost"] > 0
+            if terminated or truncated:
+                success += bool(info["is_success"])
+                collided += touched
+                break
+    reduced = getattr(env.unwrapped.dynamics, "reduced_steps", 0)
+    env.close()
+    return {"success": success / episodes, "collisions": collided / episodes, "ms": 1e3 * seconds / steps,
+            "reduced": reduced / steps}
+
+
+def versus_peer(rounds: int, steps: int = 1000) -> dict[str, float]:
+    """Median steps/s over ``rounds`` alternating blocks of ``steps`` random actions of ClutterReach-v1 under each
+    model and of PandaReach-v3 (absent when panda-gym is not installed)."""
+    runners = {mode: EnvRunner(gym.make("ClutterReach-v1", dynamics=mode), seed=0) for mode in ("physics", "reduced")}
+    peer = make_peer()
+    if peer is not None:
+        runners["PandaReach-v3"] = peer
+    rates: dict[str, list[float]] = {name: [] for name in runners}
+    for r in range(rounds):
+        for name, runner in runners.items():
+            rng = np.random.default_rng(r)
+            space = runner.env.action_space
+            seconds, _, _ = runner.run(lambda obs, i: rng.uniform(space.low, space.high), steps)
+            rates[name].append(steps / seconds)
+    return {name: float(np.median(values)) for name, values in rates.items()}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--drives", type=int, default=20)
+    parser.add_argument("--episodes", type=int, default=100)
+    parser.add_argument("--rounds", type=int, default=6)
+    args = parser.parse_args()
+    print(f"## End-effector divergence of {args.drives} seeded drives in empty space (commands held {HOLD} s)\n")
+    print("| after | gap median / 90th pct / max (m) |")
+    print("|---|---|")
+    for mark, gaps in divergence(args.drives).items():
+        print(f"| {mark:g} s | {np.median(gaps):.4f} / {np.percentile(gaps, 90):.4f} / {gaps.max():.4f} |")
+    print(f"\n## Closed loop, {args.episodes} held-out layouts (6 obstacles and the shelf)\n")
+    print("| controller | dynamics | success | collision episodes | reduced steps | env step (ms) | speed-up |")
+    print("|---|---|---|---|---|---|---|")
+    for controller in CONTROLLERS:
+        rows = {mode: closed_loop(controller, mode, args.episodes) for mode in ("physics", "reduced")}
+        for mode, row in rows.items():
+            print(f"| {controller} | {mode} | {row['success']:.0%} | {row['collisions']:.0%} | {row['reduced']:.0%} | "
+                  f"{row['ms']:.3f} | {rows['physics']['ms'] / row['ms']:.2f}x |")
+    rates = versus_peer(args.rounds)
+    print(f"\n## Random actions, {args.rounds} alternating blocks of 1,000 steps (median steps/s)\n")
+    peer = rates.get("PandaReach-v3")
+    for name, rate in rates.items():
+        against = f", {rate / peer:.2f}x PandaReach-v3" if peer and name != "PandaReach-v3" else ""
+        print(f"- {name}: {rate:,.0f} steps/s{against}")
+
+
+if __name__ == "__main__":
+    main()
