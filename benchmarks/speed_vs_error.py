@@ -3,10 +3,10 @@ justified by its row.
 
 Choices: collision fidelity (every level, and sphere counts; Panda and diffbot), physics rate and solver iterations,
 ``physics="auto"`` against the fixed defaults on scenes with and without stacks, LIDAR ray count, LIDAR ray caster,
-camera image size, depth camera renderer, noise profile, ClutterFly-v1's aerodynamics. Each section comes from the
-benchmark module that owns the measurement (``collision_fidelity``, ``physics_rate``, ``stacking``,
-``lidar_resolution``, ``cylinder_rays``, ``camera_resolution``, ``camera_renderer``, ``noise_cost``, ``aero_cost``),
-and a headline from ``throughput`` opens the report.
+camera image size, depth camera renderer, noise profile, ClutterFly-v1's aerodynamics, each env's dynamics. Each
+section comes from the benchmark module that owns the measurement (``collision_fidelity``, ``physics_rate``,
+``stacking``, ``lidar_resolution``, ``cylinder_rays``, ``camera_resolution``, ``camera_renderer``, ``noise_cost``,
+``aero_cost``, ``dynamics.choices``), and a headline from ``throughput`` opens the report.
 Writes ``docs/speed-vs-error.md`` and one plot per choice in ``docs/speed-vs-error/``.
 
     python -m benchmarks.speed_vs_error            # or: python3 tasks.py bench (about 3 min on 2 cores)
@@ -28,6 +28,7 @@ import gymnasium as gym
 import numpy as np
 
 from benchmarks.choice import Choice, Row, plot_choice
+from benchmarks.dynamics.choices import fly_choice, nav_choice, reach_choice
 from benchmarks.fidelity import camera_renderer, camera_resolution, collision_fidelity, cylinder_rays, lidar_resolution
 from benchmarks.hard_cases import stacking
 from benchmarks.harness import table_header
@@ -363,6 +364,7 @@ def sections(quick: bool, seed: int) -> dict[str, Callable[[], list[Choice]]]:
         "camera-renderer": lambda: [renderer_choice(quick, seed)],
         "noise": lambda: [noise_choice(quick, seed)],
         "aero": lambda: [aero_choice(quick)],
+        "dynamics": lambda: [nav_choice(quick), fly_choice(quick), reach_choice(quick)],
     }
 
 
@@ -406,7 +408,8 @@ def main() -> None:
               "`benchmarks.speed.vec_throughput` (vector envs), `benchmarks.hard_cases.memory` (memory over many "
               "resets), `benchmarks.fidelity.contact_agreement` and `benchmarks.fidelity.fcl_accuracy` (FCL against "
               "pybullet and closed forms), `benchmarks.learning.main_job` (PPO curves), "
-              "`benchmarks.dynamics.reduced_error` (ClutterNav's reduced dynamics against full physics). Their results "
+              "`benchmarks.dynamics.reduced_error`, `flight_error` and `arm_error` (each env's reduced dynamics against "
+              "full physics at full size, with the peers). Their results "
               "are in "
               "[benchmarks.md](benchmarks.md); those of `benchmarks.hard_cases.large_scenes` (resets and steps with up "
               "to 10,000 obstacles) in [design-notes.md](design-notes.md#large-scenes).", "",

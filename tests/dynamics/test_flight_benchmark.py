@@ -30,3 +30,14 @@ def test_the_attitude_gap_is_the_rotation_angle_whatever_the_quaternions_sign():
     b = np.array([0.0, 0.0, math.sin(0.15), math.cos(0.15)])  # 0.3 rad about z
     assert attitude_gap(a, b) == pytest.approx(0.3) and attitude_gap(a, -b) == pytest.approx(0.3)
     assert attitude_gap(b, b) == 0.0
+
+
+def test_the_reports_dynamics_choice_has_the_default_and_the_reduced_row():
+    """benchmarks/dynamics/choices.py, as the speed-against-error report's "dynamics" section runs it (--quick)."""
+    from benchmarks.dynamics.choices import fly_choice
+
+    choice = fly_choice(quick=True)
+    physics, reduced = choice.rows
+    assert physics.default and physics.error == 0.0 and not reduced.default
+    assert 0.0 <= reduced.error < 1e-3 and reduced.speed < physics.speed
+    assert reduced.extra["reduced steps (%)"] > 50 and "same under both" in choice.why
