@@ -20,7 +20,7 @@ from typing import Any
 from clutter_gym import ENV_IDS
 from clutter_gym.noise.profiles import PROFILE_NAMES
 from clutter_gym.training.config import EVAL_SEED, PPOHyperparams, deep_merge
-from clutter_gym.training.sweep import MIX
+from clutter_gym.training.sweep import MIX, UNDER, split_profile
 from clutter_gym.util.checks import short_repr
 from clutter_gym.util.safe_yaml import load_yaml
 
@@ -71,10 +71,13 @@ def positive_int(text: str) -> int:
 
 
 def profile_list(text: str) -> list[str]:
+    """Comma-separated noise profiles, each optionally under a dynamics model (``nominal@reduced``)."""
     names = [t.strip() for t in text.split(",") if t.strip()]
-    bad = [n for n in names if n not in PROFILE_NAMES]
+    bad = [n for n in names if not _known(*split_profile(n))]
     if not names or bad:
-        raise argparse.ArgumentTypeError(f"must be a comma-separated list of {PROFILE_NAMES}, got {text!r}")
+        raise argparse.ArgumentTypeError(f"must be a comma-separated list of {PROFILE_NAMES}, each optionally "
+                                         f"under a dynamics model of {_dynamics_modes()} (none{UNDER}reduced), got "
+                                         f"{text!r}")
     return names
 
 
@@ -82,14 +85,26 @@ def train_profile_list(text: str) -> list[str]:
     """:func:`profile_list` where an entry may be a mix of distinct profiles, such as ``none+nominal``."""
     names = [t.strip() for t in text.split(",") if t.strip()]
     for name in names:
-        parts = name.split(MIX)
-        if len(set(parts)) != len(parts) or not all(part in PROFILE_NAMES for part in parts):
+        noise, dynamics = split_profile(name)
+        parts = noise.split(MIX)
+        if len(set(parts)) != len(parts) or not all(_known(part, dynamics) for part in parts):
             raise argparse.ArgumentTypeError(
                 f"must be a comma-separated list of {PROFILE_NAMES}, or of mixes of distinct ones joined by "
-                f"{MIX!r} (none{MIX}nominal), got {text!r}")
+                f"{MIX!r} (none{MIX}nominal), each optionally under a dynamics model of {_dynamics_modes()} "
+                f"(none{UNDER}reduced), got {text!r}")
     if not names:
         raise argparse.ArgumentTypeError(f"must name at least one profile of {PROFILE_NAMES}, got {text!r}")
     return names
+
+
+def _known(noise: str, dynamics: str | None) -> bool:
+    return noise in PROFILE_NAMES and (dynamics is None or dynamics in _dynamics_modes())
+
+
+def _dynamics_modes() -> tuple[str, ...]:
+    from clutter_gym.dynamics import DYNAMICS_MODES  # the env side: imported only where a profile names a model
+
+    return DYNAMICS_MODES
 
 
 def _int_tuple(text: str) -> tuple[int, ...]:
@@ -238,9 +253,10 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
                                    "each --eval-noise profile; write sweep.csv and heatmap.png.")
     p.add_argument("--env", choices=ENV_IDS, default="ClutterNav-v1", help="env id")
     p.add_argument("--train-noise", type=train_profile_list, default=["none", "nominal"],
-                   help="comma-separated profiles to train under; a+b trains a share of the envs under each")
+                   help="comma-separated profiles to train under; a+b trains a share of the envs under each, "
+                        "a@reduced trains under the reduced dynamics")
     p.add_argument("--eval-noise", type=profile_list, default=["none", "nominal", "harsh"],
-                   help="comma-separated profiles to evaluate every run under")
+                   help="comma-separated profiles to evaluate every run under; a@reduced under the reduced dynamics")
     p.add_argument("--seeds", type=positive_int, default=2, help="training seeds per train profile (0..N-1)")
     p.add_argument("--timesteps", type=positive_int, default=None,
                    help="env steps per training run (default from the files)")

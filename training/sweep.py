@@ -36,6 +36,15 @@ from clutter_gym.util.checks import short_repr
 from clutter_gym.util.safe_yaml import read_yaml
 
 MIX = "+"  # joins the profiles of a mixed train profile, as in "none+nominal+low-cost"
+#: puts a profile under a dynamics model (clutter_gym.dynamics), as in "none@reduced": the sim-to-sim gap in the
+#: sweep's own terms (train under the reduced model, evaluate under full physics, or the reverse)
+UNDER = "@"
+
+
+def split_profile(name: str) -> tuple[str, str | None]:
+    """(the noise part, the dynamics model or None) of a profile name such as ``"nominal@reduced"``."""
+    noise, _, dynamics = name.partition(UNDER)
+    return noise, dynamics or None
 
 
 @dataclass(frozen=True)
@@ -44,8 +53,9 @@ class SweepSpec:
 
     Attributes:
         env_id: env to train on.
-        train_noise: profiles to train under; ``"a+b"`` trains a share of the envs under each of a and b.
-        eval_noise: profiles to evaluate every run under.
+        train_noise: profiles to train under; ``"a+b"`` trains a share of the envs under each of a and b;
+            ``"a@reduced"`` trains under the env's reduced dynamics (its validations stay under the run's own).
+        eval_noise: profiles to evaluate every run under; ``"a@reduced"`` evaluates under the reduced dynamics.
         seeds: training seeds 0..seeds-1 per train profile.
         timesteps: env steps per training run (None: the env's ppo.yml value).
         episodes: evaluation episodes per (run, eval profile); episode i uses seed 1,000,000 + i.
@@ -68,11 +78,16 @@ class SweepSpec:
 
     def cell_config(self, train_noise: str, seed: int) -> TrainConfig:
         """A cell's training config. A train profile ``"a+b+..."`` is a mix: a share of the training envs under
-        each profile (``train_env_mix``), validations under the first."""
-        profiles = train_noise.split(MIX)
+        each profile (``train_env_mix``), validations under the first; ``"...@model"`` trains every env under that
+        dynamics model (``train_env_mix``), validations under the run's own."""
+        noise, dynamics = split_profile(train_noise)
+        profiles = noise.split(MIX)
         overrides: dict[str, Any] = {"seed": seed, "noise": profiles[0], "final_eval_episodes": 0}
-        if len(profiles) > 1:
-            overrides["train_env_mix"] = {"noise": profiles}
+        mix: dict[str, list[str]] = {"noise": profiles} if len(profiles) > 1 else {}
+        if dynamics is not None:
+            mix["dynamics"] = [dynamics]
+        if mix:
+            overrides["train_env_mix"] = mix
         for key in ("timesteps", "n_envs"):
             if getattr(self, key) is not None:
                 overrides[key] = getattr(self, key)
@@ -114,7 +129,9 @@ def run_cell(spec_data: dict[str, Any], out: str, train_noise: str, seed: int, e
     for profile in spec.eval_noise:
         target = folder / f"eval-{profile}.json"
         if not target.is_file():
-            summary = evaluate(run.root, noise=profile, episodes=spec.episodes, seed=EVAL_SEED)
+            noise, dynamics = split_profile(profile)
+            summary = evaluate(run.root, noise=noise, episodes=spec.episodes, seed=EVAL_SEED,
+                               env_overrides=None if dynamics is None else {"dynamics": dynamics})
             summary.pop("per_episode")
             write_text_atomically(target, json.dumps(summary, indent=2))
     return folder.name

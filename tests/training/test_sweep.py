@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import csv
+import dataclasses
+import json
 import os
 import re
 import secrets
@@ -197,3 +199,33 @@ def test_the_sweep_command_refuses_a_mix_it_cannot_train(text):
     with pytest.raises(argparse.ArgumentTypeError, match="mixes of distinct ones"):
         train_profile_list(text)
     assert train_profile_list("none, none+nominal+low-cost") == ["none", "none+nominal+low-cost"]
+
+
+def test_a_profile_under_the_reduced_dynamics_trains_or_evaluates_under_it(tmp_path):
+    """``none@reduced``: the sim-to-sim gap in the sweep's terms. Trained under the reduced model, the cell's training
+    envs take it (its validations keep the run's own, full physics); evaluated under it, the evaluation does."""
+    spec = SweepSpec(env_id="ClutterNav-v1", train_noise=("none@reduced", "none+nominal@reduced"),
+                     eval_noise=("none", "none@reduced"), seeds=1, timesteps=64, episodes=1, n_envs=2,
+                     settings={"env_kwargs": {"obstacle_density": 0.05}, "ppo": {"n_steps": 32, "batch_size": 32}})
+    mixed = spec.cell_config("none+nominal@reduced", 0)
+    assert mixed.noise == "none" and mixed.train_env_mix == {"noise": ["none", "nominal"], "dynamics": ["reduced"]}
+    assert {mixed.train_kwargs(i)["dynamics"] for i in range(2)} == {"reduced"}
+    assert "dynamics" not in mixed.env_kwargs
+    result = run_sweep(dataclasses.replace(spec, train_noise=("none@reduced",)), tmp_path, workers=1)
+    rows = {row["eval_noise"]: row for row in result["rows"]}
+    assert set(rows) == {"none", "none@reduced"}
+    evaluated = json.loads((cell_dir(tmp_path, "none@reduced", 0) / "eval-none@reduced.json").read_text())
+    assert evaluated["env_overrides"] == {"dynamics": "reduced"}
+
+
+@pytest.mark.parametrize("text", ["none@fast", "loud@reduced", "none+none@reduced"])
+def test_the_sweep_command_refuses_a_dynamics_model_it_does_not_know(text):
+    import argparse
+
+    from clutter_gym.training.commands import profile_list, train_profile_list
+
+    with pytest.raises(argparse.ArgumentTypeError, match="dynamics model of"):
+        train_profile_list(text)
+    with pytest.raises(argparse.ArgumentTypeError, match="dynamics model of"):
+        profile_list(text)
+    assert profile_list("none, nominal@reduced") == ["none", "nominal@reduced"]
