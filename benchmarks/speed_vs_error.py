@@ -408,8 +408,8 @@ def main() -> None:
               "`benchmarks.speed.vec_throughput` (vector envs), `benchmarks.hard_cases.memory` (memory over many "
               "resets), `benchmarks.fidelity.contact_agreement` and `benchmarks.fidelity.fcl_accuracy` (FCL against "
               "pybullet and closed forms), `benchmarks.learning.main_job` (PPO curves), "
-              "`benchmarks.dynamics.reduced_error`, `flight_error` and `arm_error` (each env's reduced dynamics against "
-              "full physics at full size, with the peers). Their results "
+              "`benchmarks.dynamics.reduced_error`, `flight_error` and `arm_error` (each env's reduced dynamics "
+              "against full physics at full size, with the peers). Their results "
               "are in "
               "[benchmarks.md](benchmarks.md); those of `benchmarks.hard_cases.large_scenes` (resets and steps with up "
               "to 10,000 obstacles) in [design-notes.md](design-notes.md#large-scenes).", "",
