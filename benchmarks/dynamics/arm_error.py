@@ -11,7 +11,6 @@ Prints the tables of docs/speed-vs-error.md, "Reduced dynamics (ClutterReach-v1)
 from __future__ import annotations
 
 import argparse
-import time
 from collections.abc import Callable
 from typing import Any
 
@@ -19,8 +18,8 @@ import gymnasium as gym
 import numpy as np
 
 import clutter_gym  # noqa: F401  (registers the envs)
-from benchmarks.dynamics.reduced_error import HELD_OUT
-from benchmarks.harness import EnvRunner
+from benchmarks.dynamics.episodes import alternating_rates
+from benchmarks.dynamics.episodes import closed_loop as episodes_closed_loop
 from benchmarks.learning.baselines import REACH_SENSORS
 from benchmarks.speed.throughput import make_peer
 from clutter_gym.dynamics.arm_check import compare_drives
@@ -58,44 +57,17 @@ def closed_loop(controller: str, mode: str, episodes: int) -> dict[str, float]:
     steps the reduced model ran."""
     kwargs, make = CONTROLLERS[controller]
     env = gym.make("ClutterReach-v1", dynamics=mode, **kwargs)
-    policy = make(env)
-    success = collided = steps = 0
-    seconds = 0.0
-    for i in range(episodes):
-        obs, _ = env.reset(seed=HELD_OUT + i)
-        touched = False
-        while True:
-            action = policy(obs)
-            start = time.perf_counter()
-            obs, _, terminated, truncated, info = env.step(action)
-            seconds += time.perf_counter() - start
-            steps += 1
-            touched |= info["cost"] > 0
-            if terminated or truncated:
-                success += bool(info["is_success"])
-                collided += touched
-                break
-    reduced = getattr(env.unwrapped.dynamics, "reduced_steps", 0)
-    env.close()
-    return {"success": success / episodes, "collisions": collided / episodes, "ms": 1e3 * seconds / steps,
-            "reduced": reduced / steps}
+    return episodes_closed_loop(env, make(env), episodes)
 
 
 def versus_peer(rounds: int, steps: int = 1000) -> dict[str, float]:
     """Median steps/s over ``rounds`` alternating blocks of ``steps`` random actions of ClutterReach-v1 under each
     model and of PandaReach-v3 (absent when panda-gym is not installed)."""
-    runners = {mode: EnvRunner(gym.make("ClutterReach-v1", dynamics=mode), seed=0) for mode in ("physics", "reduced")}
+    envs: dict[str, Any] = {mode: gym.make("ClutterReach-v1", dynamics=mode) for mode in ("physics", "reduced")}
     peer = make_peer()
     if peer is not None:
-        runners["PandaReach-v3"] = peer
-    rates: dict[str, list[float]] = {name: [] for name in runners}
-    for r in range(rounds):
-        for name, runner in runners.items():
-            rng = np.random.default_rng(r)
-            space = runner.env.action_space
-            seconds, _, _ = runner.run(lambda obs, i: rng.uniform(space.low, space.high), steps)
-            rates[name].append(steps / seconds)
-    return {name: float(np.median(values)) for name, values in rates.items()}
+        envs["PandaReach-v3"] = peer
+    return alternating_rates(envs, rounds, steps)
 
 
 def main() -> None:

@@ -11,13 +11,12 @@ from __future__ import annotations
 
 import argparse
 import statistics
-import time
 
 import gymnasium as gym
 import numpy as np
 
 import clutter_gym  # noqa: F401  (registers the envs)
-from benchmarks.dynamics.reduced_error import HELD_OUT
+from benchmarks.dynamics.episodes import closed_loop as episodes_closed_loop
 from benchmarks.harness import alternating_rounds
 from benchmarks.peers.hover import HoverKinPeer
 from benchmarks.speed.fly_throughput import run_block
@@ -61,27 +60,7 @@ def closed_loop(mode: str, episodes: int, density: float) -> dict[str, float]:
     share of steps the reduced model ran."""
     env = gym.make("ClutterFly-v1", dynamics=mode, obstacle_density=density,
                    subgoal_lookahead=FLY.env_kwargs["subgoal_lookahead"])
-    flyer = CascadedFlyer.for_env(env, "subgoal", position_gain=FLY.residual_gain)
-    success = collided = steps = 0
-    seconds = 0.0
-    for i in range(episodes):
-        obs, _ = env.reset(seed=HELD_OUT + i)
-        touched = False
-        while True:
-            action = flyer(obs)
-            start = time.perf_counter()
-            obs, _, terminated, truncated, info = env.step(action)
-            seconds += time.perf_counter() - start
-            steps += 1
-            touched |= info["cost"] > 0
-            if terminated or truncated:
-                success += bool(info["is_success"])
-                collided += touched
-                break
-    reduced = getattr(env.unwrapped.dynamics, "reduced_steps", 0)
-    env.close()
-    return {"success": success / episodes, "collisions": collided / episodes, "ms": 1e3 * seconds / steps,
-            "reduced": reduced / steps}
+    return episodes_closed_loop(env, CascadedFlyer.for_env(env, "subgoal", position_gain=FLY.residual_gain), episodes)
 
 
 def versus_peer(rounds: int, steps: int = 400) -> dict[str, float]:

@@ -11,13 +11,14 @@ from __future__ import annotations
 
 import argparse
 import math
-import time
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
 
 import clutter_gym  # noqa: F401  (registers the envs)
-from benchmarks.harness import EnvRunner
+from benchmarks.dynamics.episodes import alternating_rates
+from benchmarks.dynamics.episodes import closed_loop as episodes_closed_loop
 from benchmarks.speed.throughput import make_peer
 from clutter_gym.training.baselines import PotentialFieldNavigator
 
@@ -26,8 +27,6 @@ MARKS, HOLD = (1.0, 5.0, 20.0), 0.5
 #: the open floor: a 30 m arena without clutter, the base at its centre, the goal in a far corner
 OPEN = {"arena_size": 30.0, "obstacle_density": 0.0}
 CENTRE = {"scene": {"start": [0.0, 0.0, 0.0], "goal": [13.0, 13.0], "obstacles": []}}
-#: held-out layouts: the seeds evaluation uses (docs/learning.md)
-HELD_OUT = 1_000_000
 
 
 def drive(env: gym.Env, commands: np.ndarray) -> np.ndarray:
@@ -64,47 +63,19 @@ def closed_loop(mode: str, episodes: int, density: float, handover: str = "step"
     """The potential field's episodes under ``mode``: success, collision episodes, the env's step time (ms) and the
     share of steps the reduced model ran."""
     env = gym.make("ClutterNav-v1", dynamics=mode, obstacle_density=density)
-    dynamics = env.unwrapped.dynamics
     if handover != "step":
-        dynamics.handover = handover
-    field = PotentialFieldNavigator.for_env(env)
-    success = collided = steps = 0
-    seconds = 0.0
-    for i in range(episodes):
-        obs, _ = env.reset(seed=HELD_OUT + i)
-        touched = False
-        while True:
-            action = field(obs)
-            start = time.perf_counter()
-            obs, _, terminated, truncated, info = env.step(action)
-            seconds += time.perf_counter() - start
-            steps += 1
-            touched |= info["cost"] > 0
-            if terminated or truncated:
-                success += bool(info["is_success"])
-                collided += touched
-                break
-    reduced = getattr(dynamics, "reduced_steps", 0)
-    env.close()
-    return {"success": success / episodes, "collisions": collided / episodes, "ms": 1e3 * seconds / steps,
-            "reduced": reduced / steps}
+        env.unwrapped.dynamics.handover = handover
+    return episodes_closed_loop(env, PotentialFieldNavigator.for_env(env), episodes)
 
 
 def versus_peer(rounds: int, steps: int = 1000) -> dict[str, float]:
     """Median steps/s over ``rounds`` alternating blocks of ``steps`` random actions of ClutterNav-v1 under each model
     and of PandaReach-v3 (absent when panda-gym is not installed)."""
-    runners = {mode: EnvRunner(gym.make("ClutterNav-v1", dynamics=mode), seed=0) for mode in ("physics", "reduced")}
+    envs: dict[str, Any] = {mode: gym.make("ClutterNav-v1", dynamics=mode) for mode in ("physics", "reduced")}
     peer = make_peer()
     if peer is not None:
-        runners["PandaReach-v3"] = peer
-    rates: dict[str, list[float]] = {name: [] for name in runners}
-    for r in range(rounds):
-        for name, runner in runners.items():
-            rng = np.random.default_rng(r)
-            space = runner.env.action_space
-            seconds, _, _ = runner.run(lambda obs, i: rng.uniform(space.low, space.high), steps)
-            rates[name].append(steps / seconds)
-    return {name: float(np.median(values)) for name, values in rates.items()}
+        envs["PandaReach-v3"] = peer
+    return alternating_rates(envs, rounds, steps)
 
 
 def main() -> None:

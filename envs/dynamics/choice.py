@@ -13,12 +13,12 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from functools import partial
 from typing import Any
 
 from clutter_gym.dynamics.arm_check import arm_gap
-from clutter_gym.dynamics.base import DynamicsFactory, FullPhysics
+from clutter_gym.dynamics.base import Dynamics, DynamicsFactory, FullPhysics
 from clutter_gym.dynamics.drive_fit import fit_drive
 from clutter_gym.dynamics.flight_check import flight_gap
 from clutter_gym.dynamics.reduced_arm import ReducedArm
@@ -76,17 +76,9 @@ def flight_dynamics(mode: str, robot: Multirotor, radius: float, physics_hz: flo
     """The dynamics part ``mode`` gives a multirotor whose collision shapes reach ``radius`` metres from its centre of
     mass: a factory of it from the env's Sim and robot. ``"auto"`` takes the reduced model where it flies
     :mod:`~clutter_gym.dynamics.flight_check`'s probe within :data:`AUTO_FLIGHT_BOUND` of pybullet."""
-    check_dynamics_mode(mode)
-    if mode == "physics":
-        return partial(FullPhysics, reason="the env's settings (dynamics='physics')")
-    reason = "the env's settings (dynamics='reduced')"
-    if mode == "auto":
-        gap = flight_gap(robot.model, robot.config, physics_hz, solver_iterations, control_hz)
-        if gap > AUTO_FLIGHT_BOUND:
-            why = f"flies {gap:.2g} m from pybullet over its probe, over the {AUTO_FLIGHT_BOUND:g} m bound"
-            return partial(FullPhysics, reason=f"the reduced model of {robot.name!r} {why} (dynamics='auto')")
-        reason = f"the reduced model of {robot.name!r} flies within {gap:.1g} m of pybullet (dynamics='auto')"
-    return partial(ReducedFlight, radius=radius, contact_tolerance=contact_tolerance, reason=reason)
+    return _probed(mode, robot.name, "its centre of mass",
+                   lambda: flight_gap(robot.model, robot.config, physics_hz, solver_iterations, control_hz),
+                   AUTO_FLIGHT_BOUND, partial(ReducedFlight, radius=radius, contact_tolerance=contact_tolerance))
 
 
 def arm_dynamics(mode: str, robot: Arm, radii: Mapping[str, float], physics_hz: float, solver_iterations: int,
@@ -94,15 +86,23 @@ def arm_dynamics(mode: str, robot: Arm, radii: Mapping[str, float], physics_hz: 
     """The dynamics part ``mode`` gives a fixed-base arm whose links' collision shapes reach ``radii`` (metres, by
     link) from their frames: a factory of it from the env's Sim and robot. ``"auto"`` takes the reduced model where
     it drives :mod:`~clutter_gym.dynamics.arm_check`'s probe within :data:`AUTO_ARM_BOUND` of pybullet."""
+    return _probed(mode, robot.name, "its hand", lambda: arm_gap(robot.model, robot.config, physics_hz,
+                                                                 solver_iterations, control_hz),
+                   AUTO_ARM_BOUND, partial(ReducedArm, radii=radii, contact_tolerance=contact_tolerance))
+
+
+def _probed(mode: str, name: str, what: str, gap: Callable[[], float], bound: float,
+            reduced: Callable[..., Dynamics]) -> DynamicsFactory:
+    """The part ``mode`` gives a robot whose reduced model is checked on a probe: ``gap()`` is how far (m) ``what``
+    ends from pybullet's over it, measured only for ``"auto"``."""
     check_dynamics_mode(mode)
     if mode == "physics":
         return partial(FullPhysics, reason="the env's settings (dynamics='physics')")
-    reason = "the env's settings (dynamics='reduced')"
-    if mode == "auto":
-        gap = arm_gap(robot.model, robot.config, physics_hz, solver_iterations, control_hz)
-        if gap > AUTO_ARM_BOUND:
-            why = f"moves its hand {gap:.3f} m from pybullet's over its probe, over the {AUTO_ARM_BOUND:g} m bound"
-            return partial(FullPhysics, reason=f"the reduced model of {robot.name!r} {why} (dynamics='auto')")
-        reason = f"the reduced model of {robot.name!r} keeps its hand within {gap:.3f} m of pybullet's " \
-                 "(dynamics='auto')"
-    return partial(ReducedArm, radii=radii, contact_tolerance=contact_tolerance, reason=reason)
+    if mode == "reduced":
+        return partial(reduced, reason="the env's settings (dynamics='reduced')")
+    off = gap()
+    if off > bound:
+        return partial(FullPhysics, reason=f"the reduced model of {name!r} moves {what} {off:.2g} m from pybullet's "
+                                           f"over its probe, over the {bound:g} m bound (dynamics='auto')")
+    return partial(reduced, reason=f"the reduced model of {name!r} keeps {what} within {off:.2g} m of pybullet's "
+                                   f"over its probe (dynamics='auto')")

@@ -1,0 +1,55 @@
+"""What the reduced-dynamics benchmarks share: a scripted controller's closed-loop episodes on held-out layouts, and
+envs' random-action rates in alternating blocks."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Mapping
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from benchmarks.harness import EnvRunner
+
+#: held-out layouts: the seeds evaluation uses (docs/learning.md)
+HELD_OUT = 1_000_000
+
+
+def closed_loop(env: gym.Env, policy: Callable[[Any], np.ndarray], episodes: int) -> dict[str, float]:
+    """``policy``'s episodes on the held-out layouts: success, collision episodes, the env's step time (ms, ``step``
+    alone) and the share of steps its reduced model ran. Closes ``env``."""
+    success = collided = steps = 0
+    seconds = 0.0
+    for i in range(episodes):
+        obs, _ = env.reset(seed=HELD_OUT + i)
+        touched = False
+        while True:
+            action = policy(obs)
+            start = time.perf_counter()
+            obs, _, terminated, truncated, info = env.step(action)
+            seconds += time.perf_counter() - start
+            steps += 1
+            touched |= info["cost"] > 0
+            if terminated or truncated:
+                success += bool(info["is_success"])
+                collided += touched
+                break
+    reduced = getattr(env.unwrapped.dynamics, "reduced_steps", 0)
+    env.close()
+    return {"success": success / episodes, "collisions": collided / episodes, "ms": 1e3 * seconds / steps,
+            "reduced": reduced / steps}
+
+
+def alternating_rates(envs: Mapping[str, gym.Env], rounds: int, steps: int) -> dict[str, float]:
+    """Median steps/s (``step`` alone) over ``rounds`` alternating blocks of ``steps`` uniform-random actions per env,
+    each round's actions drawn from one seed for every env."""
+    runners = {name: env if isinstance(env, EnvRunner) else EnvRunner(env, seed=0) for name, env in envs.items()}
+    rates: dict[str, list[float]] = {name: [] for name in runners}
+    for r in range(rounds):
+        for name, runner in runners.items():
+            rng = np.random.default_rng(r)
+            space = runner.env.action_space
+            seconds, _, _ = runner.run(lambda obs, i: rng.uniform(space.low, space.high), steps)
+            rates[name].append(steps / seconds)
+    return {name: float(np.median(values)) for name, values in rates.items()}
