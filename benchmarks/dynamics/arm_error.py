@@ -18,10 +18,9 @@ import gymnasium as gym
 import numpy as np
 
 import clutter_gym  # noqa: F401  (registers the envs)
-from benchmarks.dynamics.episodes import alternating_rates
 from benchmarks.dynamics.episodes import closed_loop as episodes_closed_loop
+from benchmarks.dynamics.episodes import versus_panda
 from benchmarks.learning.baselines import REACH_SENSORS
-from benchmarks.speed.throughput import make_peer
 from clutter_gym.dynamics.arm_check import compare_drives
 from clutter_gym.training.baselines import ProximityFieldReacher
 from clutter_gym.training.joint_planner import JointPlannerReacher
@@ -60,16 +59,6 @@ def closed_loop(controller: str, mode: str, episodes: int) -> dict[str, float]:
     return episodes_closed_loop(env, make(env), episodes)
 
 
-def versus_peer(rounds: int, steps: int = 1000) -> dict[str, float]:
-    """Median steps/s over ``rounds`` alternating blocks of ``steps`` random actions of ClutterReach-v1 under each
-    model and of PandaReach-v3 (absent when panda-gym is not installed)."""
-    envs: dict[str, Any] = {mode: gym.make("ClutterReach-v1", dynamics=mode) for mode in ("physics", "reduced")}
-    peer = make_peer()
-    if peer is not None:
-        envs["PandaReach-v3"] = peer
-    return alternating_rates(envs, rounds, steps)
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--drives", type=int, default=20)
@@ -89,7 +78,7 @@ def main() -> None:
         for mode, row in rows.items():
             print(f"| {controller} | {mode} | {row['success']:.0%} | {row['collisions']:.0%} | {row['reduced']:.0%} | "
                   f"{row['ms']:.3f} | {rows['physics']['ms'] / row['ms']:.2f}x |")
-    rates = versus_peer(args.rounds)
+    rates = versus_panda("ClutterReach-v1", args.rounds)
     print(f"\n## Random actions, {args.rounds} alternating blocks of 1,000 steps (median steps/s)\n")
     peer = rates.get("PandaReach-v3")
     for name, rate in rates.items():

@@ -53,3 +53,15 @@ def alternating_rates(envs: Mapping[str, gym.Env], rounds: int, steps: int) -> d
             seconds, _, _ = runner.run(lambda obs, i: rng.uniform(space.low, space.high), steps)
             rates[name].append(steps / seconds)
     return {name: float(np.median(values)) for name, values in rates.items()}
+
+
+def versus_panda(env_id: str, rounds: int, steps: int = 1000) -> dict[str, float]:
+    """:func:`alternating_rates` of ``env_id`` under each model and of panda-gym's PandaReach-v3 (absent when panda-gym
+    is not installed)."""
+    from benchmarks.speed.throughput import make_peer
+
+    envs: dict[str, Any] = {mode: gym.make(env_id, dynamics=mode) for mode in ("physics", "reduced")}
+    peer = make_peer()
+    if peer is not None:
+        envs["PandaReach-v3"] = peer
+    return alternating_rates(envs, rounds, steps)

@@ -11,15 +11,13 @@ from __future__ import annotations
 
 import argparse
 import math
-from typing import Any
 
 import gymnasium as gym
 import numpy as np
 
 import clutter_gym  # noqa: F401  (registers the envs)
-from benchmarks.dynamics.episodes import alternating_rates
 from benchmarks.dynamics.episodes import closed_loop as episodes_closed_loop
-from benchmarks.speed.throughput import make_peer
+from benchmarks.dynamics.episodes import versus_panda
 from clutter_gym.training.baselines import PotentialFieldNavigator
 
 #: seconds after which a drive's divergence is read; s each random command is held
@@ -68,16 +66,6 @@ def closed_loop(mode: str, episodes: int, density: float, handover: str = "step"
     return episodes_closed_loop(env, PotentialFieldNavigator.for_env(env), episodes)
 
 
-def versus_peer(rounds: int, steps: int = 1000) -> dict[str, float]:
-    """Median steps/s over ``rounds`` alternating blocks of ``steps`` random actions of ClutterNav-v1 under each model
-    and of PandaReach-v3 (absent when panda-gym is not installed)."""
-    envs: dict[str, Any] = {mode: gym.make("ClutterNav-v1", dynamics=mode) for mode in ("physics", "reduced")}
-    peer = make_peer()
-    if peer is not None:
-        envs["PandaReach-v3"] = peer
-    return alternating_rates(envs, rounds, steps)
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--drives", type=int, default=20)
@@ -101,7 +89,7 @@ def main() -> None:
     for name, row in rows.items():
         print(f"| {name} | {row['success']:.0%} | {row['collisions']:.0%} | {row['reduced']:.0%} | {row['ms']:.3f} | "
               f"{rows['physics']['ms'] / row['ms']:.2f}x |")
-    rates = versus_peer(args.rounds)
+    rates = versus_panda("ClutterNav-v1", args.rounds)
     print(f"\n## Random actions, {args.rounds} alternating blocks of 1,000 steps (median steps/s)\n")
     peer = rates.get("PandaReach-v3")
     for name, rate in rates.items():
