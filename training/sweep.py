@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import csv
 import json
+import multiprocessing
 import os
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass, field
@@ -194,7 +195,9 @@ def check_spec(spec: SweepSpec, out: Path) -> None:
 
 def _run_on_pool(spec: SweepSpec, out: Path, todo: list[tuple[str, int]], workers: int | None) -> None:
     workers = min(workers or os.cpu_count() or 1, len(todo))
-    with ProcessPoolExecutor(max_workers=workers) as pool:
+    # forkserver, not fork: a forked worker would inherit this process's forkserver (if a vector env started one) as a
+    # process that is not its child, and its cell's own worker processes could not start
+    with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("forkserver")) as pool:
         futures = [pool.submit(run_cell, spec.to_dict(), str(out), noise, seed) for noise, seed in todo]
         for future in as_completed(futures):
             print(f"  cell {future.result()} done", flush=True)

@@ -50,7 +50,8 @@ def variant(tmp_path: Path, old: str, new: str, source: Path = DIFFBOT, name: st
 def in_a_child(code: str, timeout: float = 120.0) -> dict:
     """Run ``code`` (which may use ``spec(urdf)``, a diffbot-wheeled spec) in a child process capped at
     :data:`ADDRESS_SPACE`; what it printed last as JSON, with ``refused`` (the ValueError's message, or None) and
-    ``peak_mb`` (its resident peak) added. A crash, a runaway or a hang fails the test."""
+    ``peak_mb`` (its resident peak, its own: not the parent's at the fork, which ``ru_maxrss`` carries over) added. A
+    crash, a runaway or a hang fails the test."""
     child = textwrap.dedent("""
         import json, resource, sys
         resource.setrlimit(resource.RLIMIT_AS, ({cap}, {cap}))
@@ -63,7 +64,9 @@ def in_a_child(code: str, timeout: float = 120.0) -> dict:
         {code}
         except ValueError as error:
             out["refused"] = str(error)
-        out["peak_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+        # the resident peak of this process's own memory (VmHWM): ru_maxrss also counts the parent's at the fork
+        hwm = [line for line in open("/proc/self/status") if line.startswith("VmHWM:")]
+        out["peak_mb"] = (int(hwm[0].split()[1]) if hwm else resource.getrusage(resource.RUSAGE_SELF).ru_maxrss) / 1024
         print(json.dumps(out))
     """).format(cap=ADDRESS_SPACE, base=json.dumps(BASE), code=textwrap.indent(textwrap.dedent(code), "    "))
     result = subprocess.run([sys.executable, "-c", child], capture_output=True, text=True, timeout=timeout,

@@ -203,7 +203,14 @@ def test_the_sweep_command_refuses_a_mix_it_cannot_train(text):
 
 def test_a_profile_under_the_reduced_dynamics_trains_or_evaluates_under_it(tmp_path):
     """``none@reduced``: the sim-to-sim gap in the sweep's terms. Trained under the reduced model, the cell's training
-    envs take it (its validations keep the run's own, full physics); evaluated under it, the evaluation does."""
+    envs take it (its validations keep the run's own, full physics); evaluated under it, the evaluation does. A
+    vector env made first starts a forkserver in this process: the sweep's cells, each stepping two envs over worker
+    processes, still start theirs (forked cells inherited that forkserver and could not)."""
+    import gymnasium as gym
+
+    vector = gym.make_vec("ClutterNav-v1", num_envs=2)
+    vector.reset(seed=0)
+    vector.close()
     spec = SweepSpec(env_id="ClutterNav-v1", train_noise=("none@reduced", "none+nominal@reduced"),
                      eval_noise=("none", "none@reduced"), seeds=1, timesteps=64, episodes=1, n_envs=2,
                      settings={"env_kwargs": {"obstacle_density": 0.05}, "ppo": {"n_steps": 32, "batch_size": 32}})
