@@ -6,9 +6,9 @@ rate loop (inertia-scaled PI with the gyroscopic term) turns the held command in
 thrusts within their range (PX4's order of giving up: yaw, then collective, then roll and pitch together), the
 motors follow with a first-order lag, and the thrusts, their drag-reaction torque, the optional rotor drag and ground
 effect and gravity move the body by semi-implicit Euler (velocities first, then positions, as Bullet's), the
-attitude by the exact rotation of the tick's angular velocity. Nothing is fitted: every number comes from the
-robot's model and URDF, so any multirotor a spec describes gets it. docs/speed-vs-error.md gives its divergence from
-pybullet.
+attitude by the exact rotation of the tick's angular velocity, each velocity coordinate within Bullet's bound. Nothing
+is fitted: every number comes from the robot's model and URDF, so any multirotor a spec describes gets it.
+docs/benchmarks.md ("Reduced dynamics, ClutterFly-v1") gives its divergence from pybullet.
 """
 
 from __future__ import annotations
