@@ -19,7 +19,7 @@ import numpy as np
 
 import clutter_gym  # noqa: F401  (registers the envs)
 from benchmarks.dynamics.episodes import closed_loop as episodes_closed_loop
-from benchmarks.dynamics.episodes import versus_panda
+from benchmarks.dynamics.episodes import loop_cells, print_versus_panda
 from benchmarks.learning.baselines import REACH_SENSORS
 from clutter_gym.dynamics.arm_check import compare_drives
 from clutter_gym.training.baselines import ProximityFieldReacher
@@ -76,14 +76,8 @@ def main() -> None:
     for controller in CONTROLLERS:
         rows = {mode: closed_loop(controller, mode, args.episodes) for mode in ("physics", "reduced")}
         for mode, row in rows.items():
-            print(f"| {controller} | {mode} | {row['success']:.0%} | {row['collisions']:.0%} | {row['reduced']:.0%} | "
-                  f"{row['ms']:.3f} | {rows['physics']['ms'] / row['ms']:.2f}x |")
-    rates = versus_panda("ClutterReach-v1", args.rounds)
-    print(f"\n## Random actions, {args.rounds} alternating blocks of 1,000 steps (median steps/s)\n")
-    peer = rates.get("PandaReach-v3")
-    for name, rate in rates.items():
-        against = f", {rate / peer:.2f}x PandaReach-v3" if peer and name != "PandaReach-v3" else ""
-        print(f"- {name}: {rate:,.0f} steps/s{against}")
+            print(f"| {controller} | {mode} | {loop_cells(row, rows['physics']['ms'])}")
+    print_versus_panda("ClutterReach-v1", args.rounds)
 
 
 if __name__ == "__main__":

@@ -55,6 +55,22 @@ def alternating_rates(envs: Mapping[str, gym.Env], rounds: int, steps: int) -> d
     return {name: float(np.median(values)) for name, values in rates.items()}
 
 
+def loop_cells(row: dict[str, float], physics_ms: float) -> str:
+    """A :func:`closed_loop` row's cells, from success to the speed-up over full physics' step time."""
+    return (f"{row['success']:.0%} | {row['collisions']:.0%} | {row['reduced']:.0%} | {row['ms']:.3f} | "
+            f"{physics_ms / row['ms']:.2f}x |")
+
+
+def print_versus_panda(env_id: str, rounds: int, steps: int = 1000) -> None:
+    """Print :func:`versus_panda`'s rates, each model's against PandaReach-v3 where it is installed."""
+    rates = versus_panda(env_id, rounds, steps)
+    print(f"\n## Random actions, {rounds} alternating blocks of {steps:,} steps (median steps/s)\n")
+    peer = rates.get("PandaReach-v3")
+    for name, rate in rates.items():
+        against = f", {rate / peer:.2f}x PandaReach-v3" if peer and name != "PandaReach-v3" else ""
+        print(f"- {name}: {rate:,.0f} steps/s{against}")
+
+
 def versus_panda(env_id: str, rounds: int, steps: int = 1000) -> dict[str, float]:
     """:func:`alternating_rates` of ``env_id`` under each model and of panda-gym's PandaReach-v3 (absent when panda-gym
     is not installed)."""

@@ -17,6 +17,7 @@ import numpy as np
 
 import clutter_gym  # noqa: F401  (registers the envs)
 from benchmarks.dynamics.episodes import closed_loop as episodes_closed_loop
+from benchmarks.dynamics.episodes import loop_cells
 from benchmarks.harness import alternating_rounds
 from benchmarks.peers.hover import HoverKinPeer
 from benchmarks.speed.fly_throughput import run_block
@@ -103,8 +104,7 @@ def main() -> None:
     print("|---|---|---|---|---|---|")
     rows = {mode: closed_loop(mode, args.episodes, args.density) for mode in ("physics", "reduced")}
     for mode, row in rows.items():
-        print(f"| {mode} | {row['success']:.0%} | {row['collisions']:.0%} | {row['reduced']:.0%} | {row['ms']:.3f} | "
-              f"{rows['physics']['ms'] / row['ms']:.2f}x |")
+        print(f"| {mode} | {loop_cells(row, rows['physics']['ms'])}")
     rates = versus_peer(args.rounds)
     share = rates.pop("reduced share")
     peer = rates["peer: HoverAviary KIN (rebuilt)"]

@@ -17,7 +17,7 @@ import numpy as np
 
 import clutter_gym  # noqa: F401  (registers the envs)
 from benchmarks.dynamics.episodes import closed_loop as episodes_closed_loop
-from benchmarks.dynamics.episodes import versus_panda
+from benchmarks.dynamics.episodes import loop_cells, print_versus_panda
 from clutter_gym.training.baselines import PotentialFieldNavigator
 
 #: seconds after which a drive's divergence is read; s each random command is held
@@ -87,14 +87,8 @@ def main() -> None:
             (("physics", "physics", "step"), ("reduced, hand-over per step", "reduced", "step"),
              ("reduced, hand-over for the episode", "reduced", "episode"))}
     for name, row in rows.items():
-        print(f"| {name} | {row['success']:.0%} | {row['collisions']:.0%} | {row['reduced']:.0%} | {row['ms']:.3f} | "
-              f"{rows['physics']['ms'] / row['ms']:.2f}x |")
-    rates = versus_panda("ClutterNav-v1", args.rounds)
-    print(f"\n## Random actions, {args.rounds} alternating blocks of 1,000 steps (median steps/s)\n")
-    peer = rates.get("PandaReach-v3")
-    for name, rate in rates.items():
-        against = f", {rate / peer:.2f}x PandaReach-v3" if peer and name != "PandaReach-v3" else ""
-        print(f"- {name}: {rate:,.0f} steps/s{against}")
+        print(f"| {name} | {loop_cells(row, rows['physics']['ms'])}")
+    print_versus_panda("ClutterNav-v1", args.rounds)
 
 
 if __name__ == "__main__":

@@ -65,6 +65,11 @@ class FullPhysics(Dynamics):
 
     def advance(self, command: np.ndarray, substeps: int) -> None:
         self.robot.apply_action(command)
+        self.run(substeps)
+
+    def run(self, substeps: int) -> None:
+        """Step the world ``substeps`` ticks under the command the robot holds (a reduced part that has applied the
+        action already hands its step over here)."""
         if self._before_tick is None:
             self.sim.step(substeps)
         else:

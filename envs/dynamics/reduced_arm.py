@@ -82,7 +82,7 @@ class ReducedArm(Dynamics):
                 return
         self.full_steps += 1
         self.full = True
-        sim.step(substeps)  # the action is applied (FullPhysics.advance would apply it a second time)
+        self.physics.run(substeps)
 
     def _moves(self, turned: np.ndarray) -> np.ndarray:
         """Metres, per link: how far any point of its collision shapes can have moved while each joint turned through

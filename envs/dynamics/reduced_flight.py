@@ -101,7 +101,7 @@ class ReducedFlight(Dynamics):
             self._to_body()
         self.full_steps += 1
         self.full = True
-        self.physics.advance(command, substeps)
+        self.physics.run(substeps)
 
     def state(self) -> RobotState:
         if self._on_body:
