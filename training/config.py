@@ -183,6 +183,10 @@ class TrainConfig:
         check_mix(self.env_id, self.train_env_mix)
         if self.ppo.lstm_hidden_size:
             self._check_recurrent()
+        if self.ppo.scan_conv and (not self.teacher.name or self.recurrent or self.frame_stack > 1):
+            raise ValueError("ppo.scan_conv is a distilled student's (it needs a teacher, ppo.lstm_hidden_size 0 and "
+                             f"frame_stack 1), got teacher {self.teacher.name!r}, lstm_hidden_size "
+                             f"{self.ppo.lstm_hidden_size}, frame_stack {self.frame_stack}")
         if self.ppo.batch_size > self.ppo.n_steps * self.n_envs:
             raise ValueError(f"ppo.batch_size must be in [2, n_steps * n_envs = {self.ppo.n_steps * self.n_envs}], "
                              f"got {self.ppo.batch_size}")
@@ -238,6 +242,7 @@ class TrainConfig:
     def to_dict(self) -> dict[str, Any]:
         data = asdict(self)
         data["ppo"]["net_arch"] = list(self.ppo.net_arch)
+        data["ppo"]["scan_conv"] = list(self.ppo.scan_conv)
         data["critic_inputs"] = list(self.critic_inputs)
         return data
 
@@ -248,8 +253,9 @@ class TrainConfig:
         reject_unknown("config key(s)", data, {f.name for f in fields(cls)})
         ppo = dict(data.pop("ppo", {}) or {})
         reject_unknown("ppo key(s)", ppo, {f.name for f in fields(PPOHyperparams)})
-        if "net_arch" in ppo:
-            ppo["net_arch"] = tuple(ppo["net_arch"])
+        for key in ("net_arch", "scan_conv"):
+            if key in ppo:
+                ppo[key] = tuple(ppo[key] or ())
         data["env_kwargs"] = dict(data.get("env_kwargs") or {})
         if data.get("residual_base") is None:  # an empty YAML block reads as None
             data.pop("residual_base", None)

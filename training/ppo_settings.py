@@ -30,6 +30,8 @@ class PPOHyperparams:
         lstm_hidden_size: 0: a memoryless policy (SB3's PPO); n > 0: a recurrent one, sb3-contrib's
             ``RecurrentPPO`` with an LSTM of n units between the observation and the hidden layers, whose state an
             agent carries through its episode.
+        scan_conv: a student's LIDAR read by 1D convolution layers of these widths along the beams' azimuth before
+            the hidden layers (empty: the scan flattened with the other entries); students only.
         log_std_init: initial log standard deviation of the Gaussian actions (0: std 1, i.e. actions in [-1, 1]
             start as mostly noise).
         normalize_obs: normalise the float observation entries by running mean and std (SB3 VecNormalize).
@@ -48,6 +50,7 @@ class PPOHyperparams:
     max_grad_norm: float = 0.5
     net_arch: tuple[int, ...] = (64, 64)
     lstm_hidden_size: int = 0
+    scan_conv: tuple[int, ...] = ()
     log_std_init: float = 0.0
     normalize_obs: bool = True
     normalize_reward: bool = True
@@ -68,15 +71,20 @@ class PPOHyperparams:
         if not self.net_arch or any(not isinstance(n, int) or not 1 <= n <= 4096 for n in self.net_arch):
             raise ValueError("ppo.net_arch must be 1 or more layer sizes in [1, 4096], got "
                              f"{short_repr(self.net_arch)}")
+        if len(self.scan_conv) > 8 or any(not isinstance(n, int) or not 1 <= n <= 256 for n in self.scan_conv):
+            raise ValueError("ppo.scan_conv must be at most 8 layer widths in [1, 256] (empty: no convolution), got "
+                             f"{short_repr(self.scan_conv)}")
 
     def sb3_kwargs(self) -> dict[str, Any]:
         """Keyword arguments for ``stable_baselines3.PPO`` (normalisation is applied to the env, not here)."""
         kwargs = asdict(self)
-        for key in ("net_arch", "lstm_hidden_size", "log_std_init", "normalize_obs", "normalize_reward"):
+        for key in ("net_arch", "lstm_hidden_size", "scan_conv", "log_std_init", "normalize_obs", "normalize_reward"):
             kwargs.pop(key)
         kwargs["policy_kwargs"] = {"net_arch": list(self.net_arch), "log_std_init": self.log_std_init}
         if self.lstm_hidden_size:
             kwargs["policy_kwargs"]["lstm_hidden_size"] = self.lstm_hidden_size
+        if self.scan_conv:
+            kwargs["policy_kwargs"]["scan_conv"] = list(self.scan_conv)
         return kwargs
 
 

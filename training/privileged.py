@@ -30,6 +30,7 @@ from stable_baselines3.common.torch_layers import BaseFeaturesExtractor
 from torch import nn
 
 from clutter_gym.training.binned_actions import soft_targets
+from clutter_gym.training.scan_features import ScanFeatures
 
 
 class SelectKeys(BaseFeaturesExtractor):
@@ -77,10 +78,13 @@ class PrivilegedCriticPolicy(MultiInputActorCriticPolicy):
     Args:
         critic_inputs: the observation entries only the critic reads.
         net_arch: hidden layer sizes, the same for the actor and the critic.
+        scan_conv: the actor's LIDAR read by convolution layers of these widths
+            (:mod:`clutter_gym.training.scan_features`); empty: flattened with the rest.
     """
 
     def __init__(self, observation_space: spaces.Dict, action_space: spaces.Space, lr_schedule: Any,
-                 critic_inputs: Sequence[str] = (), net_arch: list[int] | None = None, **kwargs: Any) -> None:
+                 critic_inputs: Sequence[str] = (), net_arch: list[int] | None = None,
+                 scan_conv: Sequence[int] = (), **kwargs: Any) -> None:
         missing = sorted(set(critic_inputs) - set(observation_space.spaces))
         if missing:
             raise ValueError(f"critic_inputs {missing} are not observation entries; the env gives "
@@ -88,8 +92,13 @@ class PrivilegedCriticPolicy(MultiInputActorCriticPolicy):
         self.critic_inputs = tuple(sorted(critic_inputs))
         self.actor_keys = tuple(k for k in sorted(observation_space.spaces) if k not in self.critic_inputs)
         self._hidden = list(net_arch or [64, 64])
-        kwargs.update(share_features_extractor=False, features_extractor_class=SelectKeys,
-                      features_extractor_kwargs={"keys": self.actor_keys})
+        self.scan_conv = tuple(scan_conv)
+        if self.scan_conv:
+            kwargs.update(features_extractor_class=ScanFeatures,
+                          features_extractor_kwargs={"keys": self.actor_keys, "widths": self.scan_conv})
+        else:
+            kwargs.update(features_extractor_class=SelectKeys, features_extractor_kwargs={"keys": self.actor_keys})
+        kwargs["share_features_extractor"] = False
         super().__init__(observation_space, action_space, lr_schedule, net_arch=self._hidden, **kwargs)
 
     def _build_mlp_extractor(self) -> None:
@@ -98,7 +107,8 @@ class PrivilegedCriticPolicy(MultiInputActorCriticPolicy):
                                           self.vf_features_extractor.features_dim, self._hidden, self.activation_fn)
 
     def _get_constructor_parameters(self) -> dict[str, Any]:
-        return {**super()._get_constructor_parameters(), "critic_inputs": self.critic_inputs}
+        return {**super()._get_constructor_parameters(), "critic_inputs": self.critic_inputs,
+                "scan_conv": list(self.scan_conv)}
 
     @property
     def actor_space(self) -> spaces.Dict:

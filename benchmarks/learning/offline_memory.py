@@ -1,4 +1,5 @@
-"""Does a recurrent student fit its teacher better than a memoryless one? Offline, on teacher-driven data.
+"""Which student fits its teacher best, and generalises: memory, or a convolution over the scan? Offline, on
+teacher-driven data.
 
 The teacher of the env's shipped ``sensors`` block drives its 16 training envs (after a warm-up that fits the
 observation normalisation, then frozen, as the distillation does) and labels every state; the first ``--fit``
@@ -8,9 +9,11 @@ on and on the held-out episodes: a student that fits well and generalises badly 
 
     python -m benchmarks.learning.offline_memory --env ClutterFly-v1
 
-Variants: ``mlp`` (the shipped memoryless student), ``between-E-L`` (sb3-contrib's recurrent policy, the LSTM
-between the features and the hidden layers, E epochs, sequences of L steps, 8 a batch), ``beside-E-L`` (the project's
-recurrent policy, the hidden layers reading the features beside the LSTM; :mod:`clutter_gym.training.recurrent_policy`).
+Variants: ``mlp`` (the shipped memoryless student), ``conv-W-W..`` (the same with its LIDAR read by convolution
+layers of widths W, ``ppo.scan_conv``; :mod:`clutter_gym.training.scan_features`), ``between-E-L`` (sb3-contrib's
+recurrent policy, the LSTM between the features and the hidden layers, E epochs, sequences of L steps, 8 a batch),
+``beside-E-L`` (the project's recurrent policy, the hidden layers reading the features beside the LSTM;
+:mod:`clutter_gym.training.recurrent_policy`).
 Sequences are of one episode each, cut at L steps (later pieces start from zeros here: the data is the teacher's
 and no student held a state while collecting it).
 """
@@ -125,6 +128,9 @@ def main() -> None:
         t0 = time.perf_counter()
         if variant == "mlp":
             losses = memoryless(shipped(args.env), fit_on, held)
+        elif variant.startswith("conv-"):
+            widths = [int(w) for w in variant.split("-")[1:]]
+            losses = memoryless(shipped(args.env, ppo={"scan_conv": widths}), fit_on, held)
         else:
             kind, epochs, length = variant.split("-")
             config = shipped(args.env, ppo={"lstm_hidden_size": args.lstm})
