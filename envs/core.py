@@ -108,6 +108,11 @@ class ClutterEnv(gym.Env):
         self._command_hooks, self._actuate_hooks, self._physics_hooks, self._checked_hooks, self._info_hooks = (
             hooks(stages, name) for name in ("command", "actuate", "physics_done", "checked", "step_info"))
 
+    def robot_state(self) -> RobotState:
+        """The robot's state as the env's dynamics has it: read this, not ``robot.state()``, which reads pybullet's
+        bodies, and a reduced dynamics model moves the robot without moving them."""
+        return self.dynamics.state()
+
     @property
     def movable_bodies(self) -> list[int]:
         """pybullet body ids of this episode's movable obstacles, in scene order."""

@@ -78,7 +78,7 @@ def _monitor_text(info: dict) -> str:
 
 
 def _pose(base: Any) -> tuple[float, float, float]:
-    state = base.robot.state()
+    state = base.robot_state()
     return float(state.position[0]), float(state.position[1]), float(state.yaw)
 
 

@@ -88,7 +88,7 @@ class SeenMapNavigator(_OnWhatIsKnown, PlannerNavigator):
         from clutter_gym.worlds.floor.scene import Scene
 
         env = self.env
-        state = env.robot.state()
+        state = env.robot_state()
         x, y, yaw = float(state.position[0]), float(state.position[1]), state.yaw
         ranges = np.asarray(info["lidar_ranges"], dtype=float)
         hit = np.isfinite(ranges) & (ranges < self.max_range - 1e-3)
@@ -124,7 +124,7 @@ class SeenMapFlyer(_OnWhatIsKnown, PlannerFlyer):
         from clutter_gym.worlds.volume.scene import VolumeScene
 
         env = self.env
-        state = env.robot.state()
+        state = env.robot_state()
         row = state.link(self.link)
         ranges = np.asarray(info["lidar_ranges"], dtype=float).reshape(-1)
         hit = np.isfinite(ranges) & (ranges < self.max_range - 1e-3)

@@ -72,7 +72,7 @@ class TautFlyer(PlannerFlyer):
         return gap - env.task.robot_radius - MARGIN
 
     def __call__(self, obs: dict[str, np.ndarray], info: dict[str, Any]) -> np.ndarray:
-        state = self.env.robot.state()
+        state = self.env.robot_state()
         position = np.asarray(state.position, dtype=float)
         point = taut_point(self.env.task.planned_path(position), self._clearance)
         offset = state.rotation.T @ (point - position)

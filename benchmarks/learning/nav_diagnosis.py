@@ -44,15 +44,15 @@ def trace(env: gym.Env, policy, seed: int) -> dict:
     """One episode: positions, the policy's commands, the monitor's interventions, the raw observations."""
     obs, _ = env.reset(seed=seed)
     base = env.unwrapped
-    start = base.robot.state().position[:2].copy()
-    path0 = base.task.path_distance(base.robot.state())
+    start = base.robot_state().position[:2].copy()
+    path0 = base.task.path_distance(base.robot_state())
     state, xy, actions, scales, spins, observations = None, [start], [], [], [], [obs]
     goal = np.asarray(base.scene.goal, dtype=float)
     success = collided = False
     while True:
         action, state = policy(obs, state)
         obs, _, terminated, truncated, info = env.step(action)
-        xy.append(base.robot.state().position[:2].copy())
+        xy.append(base.robot_state().position[:2].copy())
         actions.append(np.asarray(action, dtype=float))
         scales.append(float(info.get("safety_scale", 1.0)))
         spins.append(bool(info.get("safety_recovery", False)))

@@ -54,7 +54,7 @@ def at_wall(env: gym.Env) -> bool:
     """Whether a piece of one of ClutterFly's walls (a box as thick as the volume's walls) is within
     :data:`WALL_NEAR` of the drone."""
     u = env.unwrapped
-    position = np.asarray(u.robot.state().position)
+    position = np.asarray(u.robot_state().position)
     thickness = u.task.spec.wall_thickness
     return any(o.shape == "box" and math.isclose(min(o.size[:2]), thickness) and o.distance3d(position) < WALL_NEAR
                for o in u.scene.obstacles)

@@ -287,3 +287,21 @@ def test_labels_sent_astray_are_the_teachers_rounded_to_the_bins_and_move_at_mos
     astray = Astray(Fixed(), 5, share=1.0, spread=1)
     moved = np.array([astray({}, {}) for _ in range(200)])
     assert set(np.round(moved[:, 0], 6)) == {0.0, 0.5, 1.0} and set(np.round(moved[:, 1], 6)) == {-1.0, -0.5}
+
+
+@pytest.mark.parametrize("dynamics", ["physics", "reduced"])
+def test_the_seen_map_teacher_drives_from_where_the_dynamics_has_the_robot(make_env, dynamics):
+    """Under the reduced model pybullet's bodies stay where the episode began; a teacher reading them planned from
+    the start for the whole episode (2% success). It reads ``robot_state()``, the env's own state."""
+    env = make_env("ClutterNav-v1", sensors=["lidar"], obstacle_density=0.05, reverse=False, subgoal_lookahead=0.5,
+                   dynamics=dynamics)
+    labelled = TeacherLabels(env, make_teacher("ClutterNav-v1", "seen-map", env), teacher_share=1.0)
+    finished = []
+    for seed in (3, 4):
+        labelled.reset(seed=seed)
+        while True:
+            *_, terminated, truncated, info = labelled.step(np.zeros(2, dtype=np.float32))
+            if terminated or truncated:
+                break
+        finished.append(info["is_success"])
+    assert finished == [True, True]
