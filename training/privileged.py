@@ -30,7 +30,7 @@ from stable_baselines3.common.torch_layers import BaseFeaturesExtractor
 from torch import nn
 
 from clutter_gym.training.binned_actions import soft_targets
-from clutter_gym.training.scan_features import ScanFeatures
+from clutter_gym.training.scan_features import SCAN_KEY, ScanFeatures
 
 
 class SelectKeys(BaseFeaturesExtractor):
@@ -80,11 +80,12 @@ class PrivilegedCriticPolicy(MultiInputActorCriticPolicy):
         net_arch: hidden layer sizes, the same for the actor and the critic.
         scan_conv: the actor's LIDAR read by convolution layers of these widths
             (:mod:`clutter_gym.training.scan_features`); empty: flattened with the rest.
+        scans: the entries the convolution reads, channels stacked (the LIDAR, and a polar scan memory).
     """
 
     def __init__(self, observation_space: spaces.Dict, action_space: spaces.Space, lr_schedule: Any,
                  critic_inputs: Sequence[str] = (), net_arch: list[int] | None = None,
-                 scan_conv: Sequence[int] = (), **kwargs: Any) -> None:
+                 scan_conv: Sequence[int] = (), scans: Sequence[str] = (SCAN_KEY,), **kwargs: Any) -> None:
         missing = sorted(set(critic_inputs) - set(observation_space.spaces))
         if missing:
             raise ValueError(f"critic_inputs {missing} are not observation entries; the env gives "
@@ -92,10 +93,10 @@ class PrivilegedCriticPolicy(MultiInputActorCriticPolicy):
         self.critic_inputs = tuple(sorted(critic_inputs))
         self.actor_keys = tuple(k for k in sorted(observation_space.spaces) if k not in self.critic_inputs)
         self._hidden = list(net_arch or [64, 64])
-        self.scan_conv = tuple(scan_conv)
+        self.scan_conv, self.scans = tuple(scan_conv), tuple(scans)
         if self.scan_conv:
-            kwargs.update(features_extractor_class=ScanFeatures,
-                          features_extractor_kwargs={"keys": self.actor_keys, "widths": self.scan_conv})
+            kwargs.update(features_extractor_class=ScanFeatures, features_extractor_kwargs={
+                "keys": self.actor_keys, "widths": self.scan_conv, "scans": self.scans})
         else:
             kwargs.update(features_extractor_class=SelectKeys, features_extractor_kwargs={"keys": self.actor_keys})
         kwargs["share_features_extractor"] = False
@@ -108,7 +109,7 @@ class PrivilegedCriticPolicy(MultiInputActorCriticPolicy):
 
     def _get_constructor_parameters(self) -> dict[str, Any]:
         return {**super()._get_constructor_parameters(), "critic_inputs": self.critic_inputs,
-                "scan_conv": list(self.scan_conv)}
+                "scan_conv": list(self.scan_conv), "scans": list(self.scans)}
 
     @property
     def actor_space(self) -> spaces.Dict:

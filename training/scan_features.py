@@ -36,31 +36,40 @@ def scan_layout(space: spaces.Box) -> tuple[int, int]:
 
 
 class ScanFeatures(BaseFeaturesExtractor):
-    """The entries ``keys`` of a Dict observation, :data:`SCAN_KEY` through the convolution (module docstring).
+    """The entries ``keys`` of a Dict observation, those in ``scans`` through the convolution (module docstring).
 
     Args:
         observation_space: the policy's observation space.
         keys: the entries read; must include :data:`SCAN_KEY`.
         widths: output channels of each convolution layer.
+        scans: the entries read as scans, their channels stacked: :data:`SCAN_KEY` first, then any entry laid out
+            beam by beam as the LIDAR is (a polar scan memory, :mod:`clutter_gym.training.scan_memory`).
     """
 
-    def __init__(self, observation_space: spaces.Dict, keys: Sequence[str], widths: Sequence[int]) -> None:
+    def __init__(self, observation_space: spaces.Dict, keys: Sequence[str], widths: Sequence[int],
+                 scans: Sequence[str] = (SCAN_KEY,)) -> None:
         keys = tuple(sorted(keys))
-        if SCAN_KEY not in keys:
-            raise ValueError(f"ppo.scan_conv needs a {SCAN_KEY!r} entry in what the policy reads; it reads "
+        missing = [k for k in dict.fromkeys((SCAN_KEY, *scans)) if k not in keys]
+        if missing:
+            raise ValueError(f"ppo.scan_conv needs the entries {missing} in what the policy reads; it reads "
                              f"{list(keys)}")
-        channels, beams = scan_layout(observation_space[SCAN_KEY])
-        others = [k for k in keys if k != SCAN_KEY]
+        layouts = [scan_layout(observation_space[k]) for k in scans]
+        beams = layouts[0][1]
+        if any(n != beams for _, n in layouts):
+            raise ValueError(f"ppo.scan_conv reads {list(scans)} beam by beam, but their beams differ: "
+                             f"{[n for _, n in layouts]}")
+        others = [k for k in keys if k not in scans]
         super().__init__(observation_space,
                          widths[-1] * beams + sum(get_flattened_obs_dim(observation_space[k]) for k in others))
+        channels = sum(c for c, _ in layouts)
         layers: list[nn.Module] = []
         for width in widths:
             layers += [nn.Conv1d(channels, width, KERNEL, padding=KERNEL // 2), nn.ReLU()]
             channels = width
         self.conv = nn.Sequential(*layers, nn.Flatten())
-        self.others, self.channels = tuple(others), scan_layout(observation_space[SCAN_KEY])[0]
+        self.scans, self.others, self.beams = tuple(scans), tuple(others), beams
 
     def forward(self, observations: dict[str, th.Tensor]) -> th.Tensor:
-        scan = observations[SCAN_KEY]
-        scan = self.conv(scan.reshape(scan.shape[0], self.channels, -1))
-        return th.cat([scan, *(th.flatten(observations[k], start_dim=1) for k in self.others)], dim=1)
+        batch = observations[SCAN_KEY].shape[0]
+        scan = th.cat([observations[k].reshape(batch, -1, self.beams) for k in self.scans], dim=1)
+        return th.cat([self.conv(scan), *(th.flatten(observations[k], start_dim=1) for k in self.others)], dim=1)

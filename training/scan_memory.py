@@ -24,6 +24,8 @@ import gymnasium as gym
 import numpy as np
 
 MEMORY_KINDS = ("polar", "grid")
+#: the observation entry the memory is given as
+MEMORY_KEY = "memory"
 #: metres: returns closer than this to a kept one add nothing
 VOXEL = 0.05
 
@@ -115,14 +117,15 @@ class MemoryObservation(gym.Wrapper):
     def __init__(self, env: gym.Env, kind: str) -> None:
         super().__init__(env)
         self.memory = memory_for(env, kind)
-        self.observation_space = gym.spaces.Dict({**env.observation_space.spaces, "memory": gym.spaces.Box(
+        self.observation_space = gym.spaces.Dict({**env.observation_space.spaces, MEMORY_KEY: gym.spaces.Box(
             0.0, 1.0, (self.memory.size,), np.float32)})
 
     def reset(self, **kwargs: Any) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
         obs, info = self.env.reset(**kwargs)
         self.memory.reset()
-        return {**obs, "memory": self.memory.update(obs["lidar"], None)}, info
+        return {**obs, MEMORY_KEY: self.memory.update(obs["lidar"], None)}, info
 
     def step(self, action: Any) -> tuple[dict[str, np.ndarray], float, bool, bool, dict[str, Any]]:
         obs, reward, terminated, truncated, info = self.env.step(action)
-        return {**obs, "memory": self.memory.update(obs["lidar"], obs["velocity"])}, reward, terminated, truncated, info
+        memory = self.memory.update(obs["lidar"], obs["velocity"])
+        return {**obs, MEMORY_KEY: memory}, reward, terminated, truncated, info

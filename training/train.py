@@ -30,6 +30,8 @@ from clutter_gym.training.policy_file import load_ppo, saved_step
 from clutter_gym.training.privileged import DistilledPPO, LabelRecorder, PrivilegedCriticPolicy
 from clutter_gym.training.recurrent_policy import recurrent_policy
 from clutter_gym.training.run_dir import MODEL_FILE, IncompatibleRunError, RunDir
+from clutter_gym.training.scan_features import SCAN_KEY
+from clutter_gym.training.scan_memory import MEMORY_KEY
 from clutter_gym.training.vec_env import policy_name, training_env
 from clutter_gym.util.atomic import write_text_atomically
 
@@ -84,6 +86,8 @@ def build_model(config: TrainConfig, venv: VecEnv) -> OnPolicyAlgorithm:
     if not config.teacher.name:
         return PPO(policy_name(venv.observation_space), venv, seed=config.seed, device="cpu", verbose=0, **kwargs)
     kwargs["policy_kwargs"]["critic_inputs"] = config.critic_inputs
+    if config.ppo.scan_conv and config.scan_memory == "polar":  # the memory, beam by beam, as a second channel
+        kwargs["policy_kwargs"]["scans"] = [SCAN_KEY, MEMORY_KEY]
     return DistilledPPO(PrivilegedCriticPolicy, venv, seed=config.seed, device="cpu", verbose=0,
                         **distilled_kwargs(config), **kwargs)
 

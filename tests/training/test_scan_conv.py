@@ -53,13 +53,28 @@ def test_what_a_scan_convolution_cannot_have_is_refused_by_name(settings, messag
 
 def test_a_policy_reading_no_lidar_refuses_the_convolution():
     space = spaces.Dict({"goal": spaces.Box(-1, 1, (2,))})
-    with pytest.raises(ValueError, match="ppo.scan_conv needs a 'lidar' entry"):
+    with pytest.raises(ValueError, match=r"ppo.scan_conv needs the entries \['lidar'\]"):
         ScanFeatures(space, ["goal"], widths=[4])
 
 
-def test_a_convolutional_student_is_a_run_that_loads_and_acts_from_its_scan(tmp_path):
+def test_a_memory_laid_out_beam_by_beam_is_read_as_a_second_channel_of_the_scan():
+    space = spaces.Dict({"lidar": spaces.Box(0, 1, (16,)), "memory": spaces.Box(0, 1, (16,)),
+                         "goal": spaces.Box(-1, 1, (2,))})
+    features = ScanFeatures(space, ["goal", "lidar", "memory"], widths=[4], scans=["lidar", "memory"])
+    assert features.conv[0].in_channels == 2 and features.features_dim == 4 * 16 + 2
+    obs = {"lidar": th.rand(1, 16), "memory": th.rand(1, 16), "goal": th.zeros(1, 2)}
+    with th.no_grad():
+        assert not th.allclose(features(obs), features(dict(obs, memory=th.ones(1, 16))))
+    wrong = spaces.Dict({**space.spaces, "memory": spaces.Box(0, 1, (20,))})
+    with pytest.raises(ValueError, match=r"their beams differ: \[16, 20\]"):
+        ScanFeatures(wrong, ["goal", "lidar", "memory"], widths=[4], scans=["lidar", "memory"])
+
+
+@pytest.mark.parametrize(("memory", "channels"), [("", 1), ("polar", 2)])
+def test_a_convolutional_student_is_a_run_that_loads_and_acts_from_its_scan(tmp_path, memory, channels):
     config = config_for("ClutterNav-v1", {
-        **BASE, "n_envs": 2, "env_workers": 1, "timesteps": 600, "validate_episodes": 1, "final_eval_episodes": 0,
+        **BASE, "scan_memory": memory, "n_envs": 2, "env_workers": 1, "timesteps": 600, "validate_episodes": 1,
+        "final_eval_episodes": 0,
         "distill": {"rounds": 2, "round_steps": 256, "warmup_steps": 88, "epochs": 2},
         "ppo": {"net_arch": [16], "scan_conv": [4]}})
     run = start(config, tmp_path / "run")
@@ -68,6 +83,7 @@ def test_a_convolutional_student_is_a_run_that_loads_and_acts_from_its_scan(tmp_
     agent = load(run.root)
     policy = agent.model.policy
     assert isinstance(policy, PrivilegedCriticPolicy) and isinstance(policy.pi_features_extractor, ScanFeatures)
+    assert policy.pi_features_extractor.conv[0].in_channels == channels  # a polar memory is the second channel
     env = agent.make_env()
     obs, _ = env.reset(seed=0)
     action, _ = agent.predict(obs)
@@ -75,6 +91,8 @@ def test_a_convolutional_student_is_a_run_that_loads_and_acts_from_its_scan(tmp_
     env.close()
 
     def bins(o):
+        if memory:
+            o, _ = agent._remember(o, True, None)
         tensor, _ = policy.obs_to_tensor(agent._normalizer.normalize_obs(o))
         with th.no_grad():
             return th.cat([d.probs for d in policy.get_distribution(tensor).distribution], dim=1)
