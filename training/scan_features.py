@@ -4,9 +4,10 @@ An MLP on a flattened scan must learn what a gap or a wall edge looks like at ea
 separately; a 1D convolution along the azimuth learns one local filter and applies it at every angle, as
 LIDAR-reading navigation policies in the literature do. The ``lidar`` entry is read as (channels, beams): a 2D
 LIDAR's (beams,) is one channel, a multi-channel LIDAR's (channels, beams) keeps its elevation rows as input
-channels. Each layer is a ``Conv1d`` of kernel :data:`KERNEL`, zero-padded to keep the beam count, and a ReLU; the
-last layer's maps are flattened (so the hidden layers still know at which angle a feature lies) and concatenated
-with the other entries, flattened, in sorted key order (SB3's ``CombinedExtractor`` order).
+channels; a polar scan memory, laid out beam by beam, adds its own channel (``scans``). Each layer is a ``Conv1d``
+of kernel :data:`KERNEL`, zero-padded to keep the beam count, and a ReLU; the last layer's maps are flattened (so
+the hidden layers still know at which angle a feature lies) and concatenated with the other entries, flattened, in
+sorted key order (SB3's ``CombinedExtractor`` order).
 """
 
 from __future__ import annotations
